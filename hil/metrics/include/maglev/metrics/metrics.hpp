@@ -1,0 +1,93 @@
+// Metrics of the HIL bench, in their own module so the report and the tests
+// compute every number the same way. Host-only; plain doubles in SI units.
+//
+// Definitions follow the papers where they define a quantity:
+//  * step metrics (overshoot, rise/peak/2%-settling time): paper 000 Fig. 7,
+//    classical definitions, stated per function below;
+//  * CCQ: paper 003 Section 3.3, CCQ = t_p * (p-p perturbation / primary
+//    displacement), units from its Table 3;
+//  * loop margins from a frequency response measured on the running loop.
+#pragma once
+
+#include <complex>
+#include <cstddef>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace maglev::metrics {
+
+// Root-mean-square about the mean (the "rms noise" of paper 000 Fig. 7(a)).
+double rms_about_mean(std::span<const double> v);
+// Root-mean-square about a given value (tracking error about zero, etc.).
+double rms_about(std::span<const double> v, double reference);
+double peak_to_peak(std::span<const double> v);
+double max_abs(std::span<const double> v);
+double mean(std::span<const double> v);
+
+// Indices [first, last) of the samples with t in [t_begin, t_end).
+struct Window {
+  std::size_t first;
+  std::size_t last;
+  [[nodiscard]] std::size_t size() const { return last - first; }
+};
+Window window(std::span<const double> t_s, double t_begin_s, double t_end_s);
+std::span<const double> slice(std::span<const double> v, Window w);
+
+struct StepMetrics {
+  double initial_value;      // mean over the pre-step window
+  double final_value;        // mean over the last 10% of the analysis window
+  double step_size;          // commanded: target - initial
+  double overshoot_percent;  // max excursion beyond final_value, % of |step|; >= 0
+  double rise_time_s;        // 10% -> 90% of the step
+  double peak_time_s;        // from the step command to the peak (see .cpp)
+  double settling_time_s;    // last entry into the +-2% band of |step| around final_value
+  bool rise_found;
+  bool settled;              // response stays inside the 2% band by the window end
+};
+
+// y sampled at t; the step is commanded at t_step_s from `initial` to
+// `target`; analysis runs to t_end_s. `pre_window_s` before the step
+// gives the initial value. The 2% band is 2% of |target - initial|.
+StepMetrics analyze_step(std::span<const double> t_s, std::span<const double> y,
+                         double t_step_s, double t_end_s, double target,
+                         double pre_window_s = 0.05);
+
+enum class AxisKind { kTranslational, kRotational };
+
+struct Ccq {
+  double value;      // SI: s, rad*s/m, m*s/rad
+  std::string unit;  // paper 003 Table 3
+};
+
+// CCQ = t_p * pp_perturbed / |primary_displacement| (paper 003 Sec. 3.3).
+Ccq cross_coupling_quantity(double peak_time_s, double perturbed_peak_to_peak,
+                            double primary_displacement, AxisKind primary,
+                            AxisKind perturbed);
+std::string ccq_unit(AxisKind primary, AxisKind perturbed);
+
+// Complex response of `output` relative to `input` at each frequency, by
+// correlation with sin/cos over the largest whole number of periods that
+// fits the samples (uniform sampling at fs_Hz assumed). Exact for sinusoids
+// whose period fits a whole number of times; multisines with frequencies on
+// the grid k/T_record are separated exactly.
+std::vector<std::complex<double>> frequency_response(std::span<const double> input,
+                                                     std::span<const double> output,
+                                                     double fs_Hz,
+                                                     std::span<const double> freqs_Hz);
+
+struct LoopMargins {
+  double crossover_Hz;        // |L| = 1 (first crossing from above, log-interpolated)
+  double phase_margin_deg;    // 180 + angle(L) at crossover
+  double closed_loop_bandwidth_Hz;  // |T| = L/(1+L) first falls below -3 dB
+  double closed_loop_peak_dB;       // max |T|
+  double closed_loop_peak_Hz;
+  bool crossover_found;
+  bool bandwidth_found;
+};
+
+// From open-loop samples L(j w_k) at increasing frequencies.
+LoopMargins loop_margins(std::span<const double> freqs_Hz,
+                         std::span<const std::complex<double>> open_loop);
+
+}  // namespace maglev::metrics

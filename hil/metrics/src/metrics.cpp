@@ -1,0 +1,191 @@
+#include "maglev/metrics/metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace maglev::metrics {
+
+double mean(std::span<const double> v) {
+  if (v.empty()) return 0.0;
+  double s = 0.0;
+  for (double x : v) s += x;
+  return s / static_cast<double>(v.size());
+}
+
+double rms_about(std::span<const double> v, double reference) {
+  if (v.empty()) return 0.0;
+  double s = 0.0;
+  for (double x : v) s += (x - reference) * (x - reference);
+  return std::sqrt(s / static_cast<double>(v.size()));
+}
+
+double rms_about_mean(std::span<const double> v) { return rms_about(v, mean(v)); }
+
+double peak_to_peak(std::span<const double> v) {
+  if (v.empty()) return 0.0;
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  return *hi - *lo;
+}
+
+double max_abs(std::span<const double> v) {
+  double m = 0.0;
+  for (double x : v) m = std::max(m, std::abs(x));
+  return m;
+}
+
+Window window(std::span<const double> t_s, double t_begin_s, double t_end_s) {
+  const auto first = std::lower_bound(t_s.begin(), t_s.end(), t_begin_s);
+  const auto last = std::lower_bound(first, t_s.end(), t_end_s);
+  return {static_cast<std::size_t>(first - t_s.begin()), static_cast<std::size_t>(last - t_s.begin())};
+}
+
+std::span<const double> slice(std::span<const double> v, Window w) {
+  return v.subspan(w.first, w.last - w.first);
+}
+
+StepMetrics analyze_step(std::span<const double> t_s, std::span<const double> y,
+                         double t_step_s, double t_end_s, double target,
+                         double pre_window_s) {
+  StepMetrics m{};
+  const Window pre = window(t_s, t_step_s - pre_window_s, t_step_s);
+  const Window post = window(t_s, t_step_s, t_end_s);
+  m.initial_value = pre.size() > 0 ? mean(slice(y, pre)) : (post.size() > 0 ? y[post.first] : 0.0);
+  m.step_size = target - m.initial_value;
+  if (post.size() < 2 || m.step_size == 0.0) return m;
+
+  const std::size_t tail = std::max<std::size_t>(1, post.size() / 10);
+  m.final_value = mean(y.subspan(post.last - tail, tail));
+
+  // Work in the normalized direction of the step: 0 = initial, 1 = target.
+  const double dir = m.step_size > 0 ? 1.0 : -1.0;
+  const double mag = std::abs(m.step_size);
+  auto progress = [&](std::size_t i) { return dir * (y[i] - m.initial_value) / mag; };
+  const double final_progress = dir * (m.final_value - m.initial_value) / mag;
+
+  // Rise time 10% -> 90% of the commanded step: first crossings.
+  double t10 = -1.0, t90 = -1.0;
+  for (std::size_t i = post.first; i < post.last; ++i) {
+    const double p = progress(i);
+    if (t10 < 0 && p >= 0.1) t10 = t_s[i];
+    if (t90 < 0 && p >= 0.9) { t90 = t_s[i]; break; }
+  }
+  m.rise_found = t10 >= 0 && t90 >= 0;
+  m.rise_time_s = m.rise_found ? t90 - t10 : 0.0;
+
+  // Overshoot: largest excursion beyond the final value, in % of the step.
+  std::size_t i_peak = post.first;
+  double p_peak = -1e300;
+  for (std::size_t i = post.first; i < post.last; ++i) {
+    if (progress(i) > p_peak) { p_peak = progress(i); i_peak = i; }
+  }
+  m.overshoot_percent = std::max(0.0, (p_peak - final_progress) * 100.0);
+
+  // 2% settling: after the last sample outside the band.
+  const double band = 0.02;
+  std::size_t last_out = post.first;
+  bool any_out = false;
+  for (std::size_t i = post.first; i < post.last; ++i) {
+    if (std::abs(progress(i) - final_progress) > band) { last_out = i; any_out = true; }
+  }
+  m.settled = !any_out || last_out + 1 < post.last;
+  m.settling_time_s = any_out ? (last_out + 1 < post.last ? t_s[last_out + 1] : t_s[post.last - 1]) - t_step_s : 0.0;
+
+  // Peak time: time of the overshoot peak when the response overshoots by more
+  // than the 2% band's quarter (0.5% of the step: above interferometer noise);
+  // a response that does not overshoot (shaped moves, paper 003 Figs 17, 20)
+  // has its "peak" where it first reaches the 2% band around its final value.
+  if (m.overshoot_percent > 0.5) {
+    m.peak_time_s = t_s[i_peak] - t_step_s;
+  } else {
+    m.peak_time_s = m.settling_time_s;
+    for (std::size_t i = post.first; i < post.last; ++i) {
+      if (std::abs(progress(i) - final_progress) <= band) { m.peak_time_s = t_s[i] - t_step_s; break; }
+    }
+  }
+  return m;
+}
+
+std::string ccq_unit(AxisKind primary, AxisKind perturbed) {
+  if (primary == AxisKind::kTranslational && perturbed == AxisKind::kTranslational) return "s";
+  if (primary == AxisKind::kTranslational && perturbed == AxisKind::kRotational) return "rad*s/m";
+  if (primary == AxisKind::kRotational && perturbed == AxisKind::kTranslational) return "m*s/rad";
+  return "s";
+}
+
+Ccq cross_coupling_quantity(double peak_time_s, double perturbed_peak_to_peak,
+                            double primary_displacement, AxisKind primary,
+                            AxisKind perturbed) {
+  const double d = std::abs(primary_displacement);
+  return {d > 0 ? peak_time_s * perturbed_peak_to_peak / d : 0.0, ccq_unit(primary, perturbed)};
+}
+
+std::vector<std::complex<double>> frequency_response(std::span<const double> input,
+                                                     std::span<const double> output,
+                                                     double fs_Hz,
+                                                     std::span<const double> freqs_Hz) {
+  std::vector<std::complex<double>> h;
+  h.reserve(freqs_Hz.size());
+  const std::size_t n_all = std::min(input.size(), output.size());
+  for (double f : freqs_Hz) {
+    // Largest whole number of periods of f in the record (correlation over
+    // whole periods makes the sin/cos basis orthogonal to DC and to f).
+    const double samples_per_period = fs_Hz / f;
+    const auto periods = static_cast<std::size_t>(std::floor(static_cast<double>(n_all) / samples_per_period));
+    const auto n = static_cast<std::size_t>(std::llround(static_cast<double>(periods) * samples_per_period));
+    const std::size_t start = n_all - std::min(n, n_all);  // use the END of the record: transients decayed
+    std::complex<double> x{0, 0}, yv{0, 0};
+    for (std::size_t i = start; i < n_all; ++i) {
+      const double ph = 2.0 * std::numbers::pi * f * static_cast<double>(i) / fs_Hz;
+      const std::complex<double> e{std::cos(ph), -std::sin(ph)};
+      x += input[i] * e;
+      yv += output[i] * e;
+    }
+    h.push_back(std::abs(x) > 0 ? yv / x : std::complex<double>{0, 0});
+  }
+  return h;
+}
+
+LoopMargins loop_margins(std::span<const double> f, std::span<const std::complex<double>> L) {
+  LoopMargins m{};
+  const std::size_t n = std::min(f.size(), L.size());
+  // Crossover: first k with |L_k| >= 1 > |L_k+1|; interpolate log|L| vs log f.
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const double a0 = std::abs(L[k]), a1 = std::abs(L[k + 1]);
+    if (a0 >= 1.0 && a1 < 1.0) {
+      const double s = std::log(a0) / (std::log(a0) - std::log(a1));
+      m.crossover_Hz = std::exp(std::log(f[k]) + s * (std::log(f[k + 1]) - std::log(f[k])));
+      // Phase: interpolate the unwrapped difference between neighbours.
+      const double p0 = std::arg(L[k]);
+      double p1 = std::arg(L[k + 1]);
+      while (p1 - p0 > std::numbers::pi) p1 -= 2 * std::numbers::pi;
+      while (p1 - p0 < -std::numbers::pi) p1 += 2 * std::numbers::pi;
+      double ph = p0 + s * (p1 - p0);
+      while (ph > 0) ph -= 2 * std::numbers::pi;
+      while (ph <= -2 * std::numbers::pi) ph += 2 * std::numbers::pi;
+      m.phase_margin_deg = 180.0 + ph * 180.0 / std::numbers::pi;
+      m.crossover_found = true;
+      break;
+    }
+  }
+  // Closed loop T = L / (1 + L).
+  double peak = -1e300;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t_db = 20.0 * std::log10(std::abs(L[k] / (1.0 + L[k])));
+    if (t_db > peak) { peak = t_db; m.closed_loop_peak_Hz = f[k]; }
+  }
+  m.closed_loop_peak_dB = n > 0 ? peak : 0.0;
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const double t0 = 20.0 * std::log10(std::abs(L[k] / (1.0 + L[k])));
+    const double t1 = 20.0 * std::log10(std::abs(L[k + 1] / (1.0 + L[k + 1])));
+    if (t0 >= -3.0 && t1 < -3.0) {
+      const double s = (t0 + 3.0) / (t0 - t1);
+      m.closed_loop_bandwidth_Hz = std::exp(std::log(f[k]) + s * (std::log(f[k + 1]) - std::log(f[k])));
+      m.bandwidth_found = true;
+      break;
+    }
+  }
+  return m;
+}
+
+}  // namespace maglev::metrics
