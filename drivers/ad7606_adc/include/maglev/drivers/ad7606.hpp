@@ -1,0 +1,97 @@
+// Two AD7606 8-channel 16-bit simultaneous-sampling ADCs on one SPI bus
+// (separate CS lines, CONVST A/B of both tied to one timer output, BUSY of
+// device 0 on an EXTI line). RANGE pin high: +-10 V input range.
+//
+// Read sequence (AD7606 datasheet Rev. C, "Conversion control", "Serial
+// interface", "Reading during/after conversion"):
+//   1. A timer's PWM output drives CONVST A/B; the rising edge starts all 16
+//      track-and-holds at the same instant, BUSY goes high (t_CONV ~4 us).
+//   2. BUSY falling edge -> the top-priority interrupt -> read().
+//   3. Per device: CS low, 128 SCLKs on DOUTA only (the serial interface
+//      clocks V1..V8 out of DOUTA in order when DOUTB is unused), MSB first,
+//      the MSB is valid at CS falling and each further bit after an SCLK
+//      falling edge -> SPI mode 2 (CPOL = 1, CPHA = 0). We clock it as four
+//      32-bit words: word w = V(2w+1) << 16 | V(2w+2).
+//   4. Codes are two's complement: 0x7FFF = +FS * 32767/32768, 0x8000 = -FS.
+//
+// Channel map (ours; docs/PINMAP in firmware/board/stm32h743/README.md):
+//   ADC0 V1..V3 : laser displacement sensors 0..2   -> SensorSample::displacement_adc[0..2]
+//   ADC0 V4..V7 : Hall A.Bx, A.By, B.Bx, B.By      -> SensorSample::hall_adc[0..3]
+//   ADC0 V8     : spare (read, not mapped)
+//   ADC1 V1..V8 : coil current monitors i_1..i_8    -> SensorSample::coil_current_adc[0..7]
+// Both devices sample simultaneously, so every coil current and every
+// position signal of one tick belongs to the same instant.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "maglev/drivers/bus.hpp"
+#include "maglev/io/sensor_sample.hpp"
+
+namespace maglev::drivers::ad7606 {
+
+inline constexpr std::size_t kChannelsPerDevice = 8;
+inline constexpr std::size_t kDevices = 2;
+inline constexpr std::uint8_t kWordBits = 32;  // two channels per SPI word
+
+enum class Status : std::uint8_t { kOk = 0, kStillBusy, kBusError };
+
+struct Codes {
+  std::int16_t channel[kDevices][kChannelsPerDevice];
+};
+
+struct State {
+  std::uint32_t reads = 0;
+  std::uint32_t busy_faults = 0;
+  std::uint32_t bus_errors = 0;
+};
+
+class Adc {
+ public:
+  // cs_device[d] = the SPI master's chip-select index of ADC d.
+  Adc(SpiMaster& spi, const std::uint8_t (&cs_device)[kDevices], InputPin& busy) : spi_(spi), busy_(busy) {
+    for (std::size_t d = 0; d < kDevices; ++d) cs_[d] = cs_device[d];
+  }
+
+  Status read(Codes& out) {
+    if (busy_.read()) {  // conversion not finished: never read a half-converted result
+      ++state_.busy_faults;
+      return Status::kStillBusy;
+    }
+    for (std::size_t d = 0; d < kDevices; ++d) {
+      std::uint32_t rx[kChannelsPerDevice / 2];
+      const BusStatus bs = spi_.transfer(SpiTransfer{cs_[d], kWordBits, nullptr, rx, kChannelsPerDevice / 2});
+      if (bs != BusStatus::kOk) {
+        ++state_.bus_errors;
+        return Status::kBusError;
+      }
+      for (std::size_t w = 0; w < kChannelsPerDevice / 2; ++w) {
+        out.channel[d][2 * w] = static_cast<std::int16_t>(static_cast<std::uint16_t>(rx[w] >> 16));
+        out.channel[d][2 * w + 1] = static_cast<std::int16_t>(static_cast<std::uint16_t>(rx[w] & 0xFFFFu));
+      }
+    }
+    ++state_.reads;
+    return Status::kOk;
+  }
+
+  const State& state() const { return state_; }
+
+ private:
+  SpiMaster& spi_;
+  InputPin& busy_;
+  std::uint8_t cs_[kDevices]{};
+  State state_{};
+};
+
+// The channel map above, as code.
+inline void map_to_sample(const Codes& codes, io::SensorSample& sample) {
+  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kDisplacementSensors); ++i) sample.displacement_adc[i] = codes.channel[0][i];
+  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kHallChannels); ++i) sample.hall_adc[i] = codes.channel[0][3 + i];
+  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kCoils); ++i) sample.coil_current_adc[i] = codes.channel[1][i];
+}
+
+// Volts at the ADC input for a code (+-10 V range).
+constexpr double code_to_V(std::int16_t code) { return 10.0 * code / 32768.0; }
+
+}  // namespace maglev::drivers::ad7606

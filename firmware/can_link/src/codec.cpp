@@ -1,0 +1,193 @@
+#include "maglev/can_link/codec.hpp"
+
+#include "maglev/can_link/e2e.hpp"
+
+namespace maglev::can {
+
+const char* to_string(RxStatus s) {
+  switch (s) {
+    case RxStatus::kOk: return "ok";
+    case RxStatus::kUnknownId: return "unknown_id";
+    case RxStatus::kWrongLength: return "wrong_length";
+    case RxStatus::kWrongFormat: return "wrong_format";
+    case RxStatus::kBadCrc: return "bad_crc";
+    case RxStatus::kRepeated: return "repeated";
+    case RxStatus::kOutOfOrder: return "out_of_order";
+    case RxStatus::kSequenceJump: return "sequence_jump";
+    case RxStatus::kOutOfRange: return "out_of_range";
+    case RxStatus::kCount: break;
+  }
+  return "?";
+}
+
+std::int64_t read_signal(const Signal& s, const std::uint8_t* data) {
+  std::uint64_t v = 0;
+  for (std::uint32_t i = 0; i < s.length_bits; ++i) {
+    const std::uint32_t bit = s.start_bit + i;
+    if ((data[bit / 8u] >> (bit % 8u)) & 1u) v |= std::uint64_t{1} << i;
+  }
+  if (s.is_signed && s.length_bits < 64 && ((v >> (s.length_bits - 1u)) & 1u) != 0) {
+    v |= ~std::uint64_t{0} << s.length_bits;  // sign-extend
+  }
+  return static_cast<std::int64_t>(v);
+}
+
+void write_signal(const Signal& s, std::int64_t raw, std::uint8_t* data) {
+  const auto v = static_cast<std::uint64_t>(raw);
+  for (std::uint32_t i = 0; i < s.length_bits; ++i) {
+    const std::uint32_t bit = s.start_bit + i;
+    const auto mask = static_cast<std::uint8_t>(1u << (bit % 8u));
+    if (((v >> i) & 1u) != 0) {
+      data[bit / 8u] = static_cast<std::uint8_t>(data[bit / 8u] | mask);
+    } else {
+      data[bit / 8u] = static_cast<std::uint8_t>(data[bit / 8u] & ~mask);
+    }
+  }
+}
+
+void pack_raw(const Message& m, const std::int64_t* raw, std::uint8_t* data) {
+  for (std::size_t i = 0; i < m.length; ++i) data[i] = 0;
+  for (std::size_t i = 0; i < m.signal_count; ++i) write_signal(m.signals[i], raw[i], data);
+}
+
+void unpack_raw(const Message& m, const std::uint8_t* data, std::int64_t* raw) {
+  for (std::size_t i = 0; i < m.signal_count; ++i) raw[i] = read_signal(m.signals[i], data);
+}
+
+void encode_raw(const Message& m, const std::int64_t* raw, std::uint8_t counter, CanFrame& frame) {
+  frame.id = m.can_id;
+  frame.len = m.length;
+  frame.flags = static_cast<std::uint8_t>(kFlagFd | kFlagBrs);
+  for (auto& b : frame.data) b = 0;
+  pack_raw(m, raw, frame.data);
+  e2e_protect(frame.data, m.length, m.data_id, counter);
+}
+
+namespace {
+// Raw bounds from the physical [min, max]; compared in raw units so no
+// floating point is needed at run time on the target for full-range signals.
+bool raw_in_range(const Signal& s, std::int64_t raw) {
+  const double phys = static_cast<double>(raw) * s.factor + s.offset;
+  // Half an LSB of slack against rounding of factor * raw.
+  const double slack = 0.5 * (s.factor < 0 ? -s.factor : s.factor);
+  return phys >= s.min - slack && phys <= s.max + slack;
+}
+}  // namespace
+
+RxStatus check_frame(const CanFrame& frame, const Message* expected, const Message** found) {
+  if (found != nullptr) *found = nullptr;
+  if ((frame.flags & (kFlagExtendedId | kFlagErrorFrame)) != 0) return RxStatus::kWrongFormat;
+  const Message* m = find_message(frame.id);
+  if (m == nullptr || (expected != nullptr && m != expected)) return RxStatus::kUnknownId;
+  if (found != nullptr) *found = m;
+  if ((frame.flags & kFlagFd) == 0) return RxStatus::kWrongFormat;
+  if (frame.len != m->length) return RxStatus::kWrongLength;
+  if (!e2e_crc_ok(frame.data, m->length, m->data_id)) return RxStatus::kBadCrc;
+  for (std::size_t i = 0; i < m->signal_count; ++i) {
+    const Signal& s = m->signals[i];
+    if (!raw_in_range(s, read_signal(s, frame.data))) return RxStatus::kOutOfRange;
+  }
+  return RxStatus::kOk;
+}
+
+// ---- typed -----------------------------------------------------------------------
+namespace {
+constexpr std::size_t kHdr = 2;  // raw[0] crc, raw[1] counter, payload from raw[2]
+}
+
+void encode_sync(const SyncFrame& v, std::uint8_t counter, CanFrame& f) {
+  std::int64_t raw[kSyncSignals.size()] = {0, counter, v.tick, v.time_us};
+  encode_raw(message(MessageKind::kSync), raw, counter, f);
+}
+void decode_sync(const CanFrame& f, SyncFrame& out) {
+  std::int64_t raw[kSyncSignals.size()];
+  unpack_raw(message(MessageKind::kSync), f.data, raw);
+  out.tick = static_cast<std::uint32_t>(raw[kHdr + 0]);
+  out.time_us = static_cast<std::uint32_t>(raw[kHdr + 1]);
+}
+
+void encode_actuator(const io::ActuatorCommand& v, std::uint8_t counter, CanFrame& f) {
+  std::int64_t raw[kActuatorSignals.size()] = {0, counter};
+  for (std::size_t j = 0; j < io::kCoils; ++j) raw[kHdr + j] = v.dac_code[j];
+  raw[kHdr + io::kCoils] = v.amplifier_enable ? 1 : 0;
+  encode_raw(message(MessageKind::kActuator), raw, counter, f);
+}
+void decode_actuator(const CanFrame& f, io::ActuatorCommand& out) {
+  std::int64_t raw[kActuatorSignals.size()];
+  unpack_raw(message(MessageKind::kActuator), f.data, raw);
+  for (std::size_t j = 0; j < io::kCoils; ++j) out.dac_code[j] = static_cast<std::int16_t>(raw[kHdr + j]);
+  out.amplifier_enable = raw[kHdr + io::kCoils] != 0;
+}
+
+void encode_sensor(const io::SensorSample& v, std::uint8_t counter, CanFrame& f) {
+  std::int64_t raw[kSensorSignals.size()] = {0, counter};
+  std::size_t k = kHdr;
+  for (auto c : v.interferometer_counts) raw[k++] = c;
+  for (auto c : v.displacement_adc) raw[k++] = c;
+  for (auto c : v.hall_adc) raw[k++] = c;
+  raw[k++] = v.status_flags;
+  encode_raw(message(MessageKind::kSensor), raw, counter, f);
+}
+void decode_sensor(const CanFrame& f, io::SensorSample& out) {
+  std::int64_t raw[kSensorSignals.size()];
+  unpack_raw(message(MessageKind::kSensor), f.data, raw);
+  std::size_t k = kHdr;
+  for (auto& c : out.interferometer_counts) c = static_cast<std::uint32_t>(raw[k++]);
+  for (auto& c : out.displacement_adc) c = static_cast<std::int16_t>(raw[k++]);
+  for (auto& c : out.hall_adc) c = static_cast<std::int16_t>(raw[k++]);
+  out.status_flags = static_cast<std::uint16_t>(raw[k++]);
+}
+
+void encode_current_monitor(const CurrentMonitorFrame& v, std::uint8_t counter, CanFrame& f) {
+  std::int64_t raw[kCurrentMonitorSignals.size()] = {0, counter};
+  for (std::size_t j = 0; j < io::kCoils; ++j) raw[kHdr + j] = v.coil_current_adc[j];
+  encode_raw(message(MessageKind::kCurrentMonitor), raw, counter, f);
+}
+void decode_current_monitor(const CanFrame& f, CurrentMonitorFrame& out) {
+  std::int64_t raw[kCurrentMonitorSignals.size()];
+  unpack_raw(message(MessageKind::kCurrentMonitor), f.data, raw);
+  for (std::size_t j = 0; j < io::kCoils; ++j) {
+    out.coil_current_adc[j] = static_cast<std::int16_t>(raw[kHdr + j]);
+  }
+}
+
+void encode_controller_status(const ControllerStatusFrame& v, std::uint8_t counter, CanFrame& f) {
+  std::int64_t raw[kControllerStatusSignals.size()] = {0, counter};
+  std::size_t k = kHdr;
+  for (auto p : v.pose_nm_nrad) raw[k++] = p;
+  raw[k++] = v.sequencer_state;
+  raw[k++] = v.fault_code;
+  raw[k++] = v.saturation_flags;
+  raw[k++] = v.scale_k_e4;
+  for (auto c : v.current_command_mA) raw[k++] = c;
+  raw[k++] = v.tick;
+  encode_raw(message(MessageKind::kControllerStatus), raw, counter, f);
+}
+void decode_controller_status(const CanFrame& f, ControllerStatusFrame& out) {
+  std::int64_t raw[kControllerStatusSignals.size()];
+  unpack_raw(message(MessageKind::kControllerStatus), f.data, raw);
+  std::size_t k = kHdr;
+  for (auto& p : out.pose_nm_nrad) p = static_cast<std::int32_t>(raw[k++]);
+  out.sequencer_state = static_cast<std::uint8_t>(raw[k++]);
+  out.fault_code = static_cast<std::uint16_t>(raw[k++]);
+  out.saturation_flags = static_cast<std::uint8_t>(raw[k++]);
+  out.scale_k_e4 = static_cast<std::uint16_t>(raw[k++]);
+  for (auto& c : out.current_command_mA) c = static_cast<std::int16_t>(raw[k++]);
+  out.tick = static_cast<std::uint32_t>(raw[k++]);
+}
+
+void encode_heartbeat(MessageKind which, const HeartbeatFrame& v, std::uint8_t counter, CanFrame& f) {
+  std::int64_t raw[kHeartbeatSignals.size()] = {0, counter, static_cast<std::uint8_t>(v.node_state),
+                                                 v.uptime_ms, v.rx_rejected, v.bus_errors};
+  encode_raw(message(which), raw, counter, f);
+}
+void decode_heartbeat(const CanFrame& f, HeartbeatFrame& out) {
+  std::int64_t raw[kHeartbeatSignals.size()];
+  unpack_raw(kCatalog[static_cast<std::size_t>(MessageKind::kHeartbeatPlant)], f.data, raw);
+  out.node_state = static_cast<NodeState>(raw[kHdr + 0]);
+  out.uptime_ms = static_cast<std::uint32_t>(raw[kHdr + 1]);
+  out.rx_rejected = static_cast<std::uint16_t>(raw[kHdr + 2]);
+  out.bus_errors = static_cast<std::uint16_t>(raw[kHdr + 3]);
+}
+
+}  // namespace maglev::can

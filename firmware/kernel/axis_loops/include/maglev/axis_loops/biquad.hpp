@@ -1,0 +1,166 @@
+// Optional second-order filter stages in series with an axis loop's output
+// (up to kMaxBiquadStages per axis): notch, 2nd-order low-pass, lead-lag.
+// Designed at apply time in double by the bilinear (Tustin) transform with
+// prewarping (the notch/low-pass centre, and each lead-lag corner, land at
+// exactly the requested frequency), run in Scalar as direct form I:
+//   y_k = b0 x_k + b1 x_{k-1} + b2 x_{k-2} - a1 y_{k-1} - a2 y_{k-2}
+// with all five products summed in the wide accumulator (Q31.32 for fixed
+// point, double for float) and rounded once. Direct form I keeps the states
+// equal to past inputs/outputs, so they never overflow internally.
+//
+// Continuous prototypes (w0 prewarped):
+//   notch     (s^2 + 2 zeta_z w0 s + w0^2) / (s^2 + 2 zeta_p w0 s + w0^2),
+//             zeta_p = 1/(2Q), zeta_z = zeta_p * 10^(-depth_dB/20)
+//   low-pass  w0^2 / (s^2 + (w0/Q) s + w0^2)
+//   lead-lag  (1 + s/wz) / (1 + s/wp)      (unity dc gain)
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "maglev/axis_loops/design_error.hpp"
+#include "maglev/numeric/scalar_traits.hpp"
+
+namespace maglev::kernel {
+
+inline constexpr int kMaxBiquadStages = 2;
+
+enum class BiquadType : std::uint8_t { kNone = 0, kNotch, kLowPass, kLeadLag };
+
+struct BiquadConfig {
+  BiquadType type = BiquadType::kNone;
+  float frequency_Hz = 0.0f;   // notch / low-pass: f0. lead-lag: zero frequency
+  float q = 0.7071f;           // notch / low-pass quality factor
+  float depth_dB = 0.0f;       // notch depth at f0 (>= 0); 0 dB = no notch
+  float pole_Hz = 0.0f;        // lead-lag: pole frequency
+};
+
+template <typename Scalar>
+struct BiquadCoefficients {
+  using Coeff = typename numeric::ScalarTraits<Scalar>::Coeff;
+  bool enabled = false;  // false: pass-through
+  Coeff b0{}, b1{}, b2{}, a1{}, a2{};
+};
+
+template <typename Scalar>
+struct BiquadState {
+  Scalar x1{}, x2{}, y1{}, y2{};
+};
+
+// Double-precision design result (also used by tests for the exact response).
+struct BiquadDesign {
+  double b0 = 1.0, b1 = 0.0, b2 = 0.0, a1 = 0.0, a2 = 0.0;
+  bool enabled = false;
+};
+
+inline LoopDesignError design_biquad_double(const BiquadConfig& config, double servo_rate_Hz, BiquadDesign* out) {
+  constexpr double kPi = 3.14159265358979323846;
+  const double f0 = static_cast<double>(config.frequency_Hz);
+  const double q = static_cast<double>(config.q);
+  const double depth = static_cast<double>(config.depth_dB);
+  const double fp = static_cast<double>(config.pole_Hz);
+  if (!std::isfinite(f0) || !std::isfinite(q) || !std::isfinite(depth) || !std::isfinite(fp) ||
+      !std::isfinite(servo_rate_Hz)) {
+    return LoopDesignError::kNonFinite;
+  }
+  if (servo_rate_Hz <= 0.0) return LoopDesignError::kBadServoRate;
+  BiquadDesign d;
+  if (config.type == BiquadType::kNone) {
+    *out = d;
+    return LoopDesignError::kOk;
+  }
+  const double T = 1.0 / servo_rate_Hz;
+  const double nyq = 0.5 * servo_rate_Hz;
+  if (f0 <= 0.0 || f0 >= nyq) return LoopDesignError::kFilterAboveNyquist;
+  const double K = 2.0 / T;  // s = K (z-1)/(z+1)
+  auto warp = [&](double f) { return K * std::tan(kPi * f * T); };
+  // Bilinear of (n2 s^2 + n1 s + n0)/(d2 s^2 + d1 s + d0).
+  auto bilinear = [&](double n2, double n1, double n0, double d2, double d1, double d0) {
+    const double A0 = d2 * K * K + d1 * K + d0;
+    d.b0 = (n2 * K * K + n1 * K + n0) / A0;
+    d.b1 = (2.0 * n0 - 2.0 * n2 * K * K) / A0;
+    d.b2 = (n2 * K * K - n1 * K + n0) / A0;
+    d.a1 = (2.0 * d0 - 2.0 * d2 * K * K) / A0;
+    d.a2 = (d2 * K * K - d1 * K + d0) / A0;
+  };
+  switch (config.type) {
+    case BiquadType::kNotch: {
+      if (q <= 0.0 || depth < 0.0) return LoopDesignError::kBadQuality;
+      const double w0 = warp(f0);
+      const double zp = 1.0 / (2.0 * q);
+      const double zz = zp * std::pow(10.0, -depth / 20.0);
+      bilinear(1.0, 2.0 * zz * w0, w0 * w0, 1.0, 2.0 * zp * w0, w0 * w0);
+      break;
+    }
+    case BiquadType::kLowPass: {
+      if (q <= 0.0) return LoopDesignError::kBadQuality;
+      const double w0 = warp(f0);
+      bilinear(0.0, 0.0, w0 * w0, 1.0, w0 / q, w0 * w0);
+      break;
+    }
+    case BiquadType::kLeadLag: {
+      if (fp <= 0.0 || fp >= nyq) return LoopDesignError::kFilterAboveNyquist;
+      const double wz = warp(f0);
+      const double wp = warp(fp);
+      bilinear(0.0, 1.0 / wz, 1.0, 0.0, 1.0 / wp, 1.0);
+      break;
+    }
+    case BiquadType::kNone:
+      break;
+  }
+  d.enabled = true;
+  *out = d;
+  return LoopDesignError::kOk;
+}
+
+template <typename Scalar>
+LoopDesignError design_biquad(const BiquadConfig& config, double servo_rate_Hz, BiquadCoefficients<Scalar>* out) {
+  using Traits = numeric::ScalarTraits<Scalar>;
+  BiquadDesign d;
+  const LoopDesignError err = design_biquad_double(config, servo_rate_Hz, &d);
+  if (err != LoopDesignError::kOk) return err;
+  const double all[] = {d.b0, d.b1, d.b2, d.a1, d.a2};
+  for (double v : all) {
+    if (!Traits::coeff_fits(v)) return LoopDesignError::kCoefficientOutOfRange;
+  }
+  BiquadCoefficients<Scalar> c;
+  c.enabled = d.enabled;
+  c.b0 = Traits::coeff_from_double(d.b0);
+  c.b1 = Traits::coeff_from_double(d.b1);
+  c.b2 = Traits::coeff_from_double(d.b2);
+  c.a1 = Traits::coeff_from_double(d.a1);
+  c.a2 = Traits::coeff_from_double(d.a2);
+  *out = c;
+  return LoopDesignError::kOk;
+}
+
+// One tick of one stage. Disabled stages pass x through (and track it, so
+// enabling a stage later starts from the current signal, not from zero).
+template <typename Scalar>
+Scalar biquad_update(const BiquadCoefficients<Scalar>& c, BiquadState<Scalar>& s, Scalar x) {
+  using Traits = numeric::ScalarTraits<Scalar>;
+  Scalar y = x;
+  if (c.enabled) {
+    auto acc = Traits::acc_zero();
+    Traits::mac(acc, c.b0, x);
+    Traits::mac(acc, c.b1, s.x1);
+    Traits::mac(acc, c.b2, s.x2);
+    Traits::mac(acc, c.a1, -s.y1);
+    Traits::mac(acc, c.a2, -s.y2);
+    y = Traits::acc_to_scalar(acc);
+  }
+  s.x2 = s.x1;
+  s.x1 = x;
+  s.y2 = s.y1;
+  s.y1 = y;
+  return y;
+}
+
+// Sets a stage's state to its steady state for a constant input x (dc gain g).
+template <typename Scalar>
+void biquad_reset(BiquadState<Scalar>& s, Scalar x, Scalar y) {
+  s.x1 = s.x2 = x;
+  s.y1 = s.y2 = y;
+}
+
+}  // namespace maglev::kernel

@@ -1,0 +1,183 @@
+// maglev::kernel::Controller<Scalar>: one servo tick of the whole kernel.
+//
+//   SensorSample -> sensors_to_pose (int64 pose) -> supervisor -> sequencer
+//   -> references (int64) -> axis loops (Scalar, kernel units) + feed-forward
+//   -> force_allocation (i = 2 S_xy B U, whole-vector current limit k)
+//   -> anti-windup (k U back to the loops) -> DAC codes -> ActuatorCommand
+//
+// All state lives inside the object; the caller places it statically. No heap,
+// no exceptions. step() runs every loop every tick and selects outputs with the
+// sequencer's closed-axis mask, so its cost does not depend on the data
+// (homing's one-off Hall solve is the documented exception, docs/KERNEL.md).
+#pragma once
+
+#include <cstdint>
+
+#include "maglev/axis_loops/axis.hpp"
+#include "maglev/axis_loops/defaults.hpp"
+#include "maglev/force_allocation/force_allocation.hpp"
+#include "maglev/io/actuator_command.hpp"
+#include "maglev/io/sensor_sample.hpp"
+#include "maglev/numeric/scalar_traits.hpp"
+#include "maglev/sensors_to_pose/sensors_to_pose.hpp"
+#include "maglev/sequencer/sequencer.hpp"
+#include "maglev/supervisor/supervisor.hpp"
+
+namespace maglev::kernel {
+
+static_assert(kSequencedAxes == kAxisCount, "sequencer masks and Axis disagree");
+
+// Limits every motion command is checked against (SI). The stage is never
+// commanded beyond them; they must lie inside the supervisor's window.
+struct ReferenceLimits {
+  float position_min[kAxisCount] = {-0.027f, -0.0165f, -4e-3f, 10e-6f, -200e-6f, -200e-6f};
+  float position_max[kAxisCount] = {0.027f, 0.0165f, 4e-3f, 38e-6f, 200e-6f, 200e-6f};
+  float max_velocity[kAxisCount] = {0.15f, 0.15f, 0.05f, 200e-6f, 1e-3f, 1e-3f};
+  float max_acceleration[kAxisCount] = {1.5f, 1.5f, 0.5f, 5e-3f, 0.05f, 0.05f};
+  // Steps are applied in one tick: bounded so the error fits the Scalar range (128 um).
+  float max_step[kAxisCount] = {100e-6f, 100e-6f, 100e-6f, 10e-6f, 20e-6f, 20e-6f};
+};
+
+struct KernelConfig {
+  float servo_rate_Hz;
+  SensorsToPoseConfig measurement;
+  AxisLoopConfig axis[kAxisCount];
+  ForceAllocationConfig allocation;
+  ReferenceLimits references;
+  SequencerConfig sequencer;
+  SupervisorConfig supervisor;
+  float payload_mass_kg;
+  // Allows changing axis-loop gains while levitated (all other fields stay locked).
+  bool live_tuning;
+};
+
+KernelConfig default_kernel_config();
+
+enum class ConfigError : std::uint8_t {
+  kOk = 0,
+  kBadServoRate,
+  kMeasurement,        // sensors_to_pose refused its part
+  kAxisLoop,           // an axis loop design failed (see status().config_axis)
+  kUnsupportedLoopType,
+  kAllocation,         // force_allocation refused its part
+  kReferenceLimits,    // limits outside the supervisor window / non-positive rates
+  kSequencer,
+  kSupervisor,
+  kPayload,
+  kLockedWhileLevitated,  // an unsafe-to-change field differs while not on rest
+  kGainsLockedWhileLevitated,  // gains differ while levitated and live_tuning is off
+};
+
+enum class MotionType : std::uint8_t {
+  kHome = 0, kLevitate, kLand, kStop, kClearFault,
+  kMoveTo,             // trapezoid: axis, target, velocity, acceleration
+  kMoveJerkLimited,    // axis, target, velocity, acceleration, jerk
+  kStep,               // axis, delta
+  kCircle,             // diameter, period, turns (x, y)
+  kSinusoid,           // axis, amplitude, frequency
+  kHold,               // every axis holds its present reference
+};
+
+struct MotionCommand {
+  MotionType type = MotionType::kHold;
+  Axis axis = Axis::kX;
+  double target = 0.0;        // m or rad (absolute, magnet frame) / step delta
+  double velocity = 0.0;      // m/s or rad/s
+  double acceleration = 0.0;  // m/s^2 or rad/s^2
+  double jerk = 0.0;
+  double amplitude = 0.0;
+  double frequency_Hz = 0.0;
+  double diameter_m = 0.0;
+  double period_s = 0.0;
+  double turns = 0.0;
+};
+
+enum class CommandResult : std::uint8_t {
+  kAccepted = 0,
+  kAlreadyThere,
+  kRefusedBusy,
+  kRefusedNotLevitated,
+  kRefusedFaultLatched,
+  kRefusedNotFaulted,
+  kRefusedFaultActive,
+  kRefusedNotReady,       // motion commands need Ready
+  kRefusedOutOfRange,     // target / step beyond ReferenceLimits
+  kRefusedBadProfile,     // v, a, jerk <= 0 or beyond the limits
+  kUnsupported,           // profile type not available in this build
+};
+
+struct ControllerStatus {
+  Pose64 pose{};
+  Pose64 reference{};
+  std::uint8_t pose_valid = 0;
+  SequencerState state = SequencerState::kIdle;
+  TransitionReason last_reason = TransitionReason::kPowerOn;
+  std::uint8_t closed_axes = 0;
+  float feedforward_fraction = 0.0f;
+  FaultCode fault = FaultCode::kNone;      // latched first fault
+  FaultRecord first_fault{};
+  FaultReaction reaction = FaultReaction::kNone;
+  bool saturated = false;
+  float scale_k = 1.0f;
+  float coil_current_A[io::kCoils] = {};
+  float effort_A[kAxisCount] = {};
+  std::uint32_t tick = 0;
+  ConfigError last_config_error = ConfigError::kOk;
+  std::uint8_t config_axis = 0xFF;
+};
+
+template <typename Scalar>
+class Controller {
+ public:
+  using Traits = numeric::ScalarTraits<Scalar>;
+
+  Controller();  // applies default_kernel_config()
+
+  ConfigError apply_config(const KernelConfig& config);
+  CommandResult command(const MotionCommand& cmd);
+  io::ActuatorCommand step(const io::SensorSample& sample, bool tick_overrun);
+
+  const ControllerStatus& status() const { return status_; }
+  const KernelConfig& config() const { return config_; }
+
+ private:
+  // A one-axis trapezoidal profile, evaluated in double from its start (pm).
+  struct Profile {
+    bool active = false;
+    std::int64_t start_pm = 0;
+    double distance = 0.0;  // m (rad), signed
+    double v = 0.0, a = 0.0, t_acc = 0.0, t_flat = 0.0, t_total = 0.0;
+    std::uint32_t tick = 0;
+  };
+  struct Applied {
+    Pid2DofCoefficients<Scalar> pid[kAxisCount];
+    BiquadCoefficients<Scalar> filter[kAxisCount][kMaxBiquadStages];
+    ForceAllocationState<Scalar> allocation;
+    Scalar inertia_over_two_b_star[kAxisCount];  // (m or I) / (2 b*): A per (m/s^2)
+  };
+
+  bool levitated_or_busy() const;
+
+  KernelConfig config_{};
+  Applied applied_[2]{};
+  int active_ = 0;
+  SensorsToPoseState s2p_{};
+  Sequencer sequencer_{};
+  Supervisor supervisor_{};
+  Pid2DofState<Scalar> pid_state_[kAxisCount]{};
+  BiquadState<Scalar> filter_state_[kAxisCount][kMaxBiquadStages]{};
+  Profile profile_[kAxisCount]{};
+  std::int64_t reference_pm_[kAxisCount] = {};
+  std::int64_t pending_step_pm_[kAxisCount] = {};  // step() applies and reports it
+  std::int64_t measured_pm_[kAxisCount] = {};
+  double profile_accel_[kAxisCount] = {};
+  float last_current_A_[io::kCoils] = {};
+  std::uint32_t homing_ticks_ = 0;
+  std::uint32_t homing_needed_ticks_ = 1;
+  ControllerStatus status_{};
+};
+
+extern template class Controller<float>;
+extern template class Controller<numeric::Q7_24>;
+
+}  // namespace maglev::kernel

@@ -1,0 +1,416 @@
+#include "maglev/controller/controller.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include "maglev/io/stage_parameters.hpp"
+#include "maglev/numeric/saturation.hpp"
+
+namespace maglev::kernel {
+namespace {
+
+namespace stage = io::stage;
+
+void pose_to_axes(const Pose64& p, std::int64_t out[kAxisCount]) {
+  out[0] = p.x_pm;
+  out[1] = p.y_pm;
+  out[2] = p.theta_z_prad;
+  out[3] = p.z_pm;
+  out[4] = p.theta_x_prad;
+  out[5] = p.theta_y_prad;
+}
+
+Pose64 axes_to_pose(const std::int64_t a[kAxisCount]) {
+  return Pose64{a[0], a[1], a[3], a[4], a[5], a[2]};
+}
+
+float pico_to_si(std::int64_t v) { return static_cast<float>(static_cast<double>(v) * 1e-12); }
+
+template <typename T>
+bool same_bytes(const T& a, const T& b) {
+  return std::memcmp(&a, &b, sizeof(T)) == 0;
+}
+
+bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
+
+}  // namespace
+
+KernelConfig default_kernel_config() {
+  KernelConfig c{};
+  c.servo_rate_Hz = static_cast<float>(stage::kServoRate_Hz);
+  c.measurement = DefaultSensorsToPoseConfig();
+  for (Axis a : kAllAxes) c.axis[axis_index(a)] = default_axis_loop_config(a);
+  c.allocation = DefaultForceAllocationConfig();
+  c.references = ReferenceLimits{};
+  c.sequencer = SequencerConfig{};
+  c.sequencer.nominal_height_m = static_cast<float>(stage::kNominalHeight_m);
+  c.supervisor = SupervisorConfig{};
+  c.supervisor.peak_current_A = static_cast<float>(stage::kPeakCoilCurrent_A);
+  c.supervisor.rms_current_A = static_cast<float>(stage::kRmsCoilCurrent_A);
+  c.supervisor.interferometer_lsb_m = static_cast<float>(stage::kInterferometerLsb_m);
+  c.payload_mass_kg = 0.0f;
+  c.live_tuning = false;
+  return c;
+}
+
+template <typename Scalar>
+Controller<Scalar>::Controller() {
+  sequencer_.reset();
+  supervisor_.reset();
+  const ConfigError e = apply_config(default_kernel_config());
+  status_.last_config_error = e;
+}
+
+template <typename Scalar>
+bool Controller<Scalar>::levitated_or_busy() const {
+  const SequencerState s = sequencer_.output().state;
+  return s != SequencerState::kIdle && s != SequencerState::kFault;
+}
+
+template <typename Scalar>
+ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
+  status_.config_axis = 0xFF;
+  auto refuse = [this](ConfigError e) {
+    status_.last_config_error = e;
+    return e;
+  };
+  // --- 1. validate the whole config into the scratch slot; nothing live changes.
+  const double rate = static_cast<double>(c.servo_rate_Hz);
+  if (!(rate >= 500.0 && rate <= 20000.0)) return refuse(ConfigError::kBadServoRate);
+  if (std::fabs(c.measurement.servo_rate_Hz - rate) > 1e-6 * rate) return refuse(ConfigError::kMeasurement);
+  SensorsToPoseState s2p_scratch = s2p_;
+  if (ApplySensorsToPoseConfig(c.measurement, &s2p_scratch) != SensorsToPoseError::kOk) {
+    return refuse(ConfigError::kMeasurement);
+  }
+  Applied& scratch = applied_[1 - active_];
+  for (int a = 0; a < kAxisCount; ++a) {
+    if (c.axis[a].type != LoopType::kPid2Dof) {
+      status_.config_axis = static_cast<std::uint8_t>(a);
+      return refuse(ConfigError::kUnsupportedLoopType);
+    }
+    if (design_pid2dof<Scalar>(c.axis[a].pid, rate, &scratch.pid[a]) != LoopDesignError::kOk) {
+      status_.config_axis = static_cast<std::uint8_t>(a);
+      return refuse(ConfigError::kAxisLoop);
+    }
+    for (int f = 0; f < kMaxBiquadStages; ++f) {
+      if (design_biquad<Scalar>(c.axis[a].filters[f], rate, &scratch.filter[a][f]) != LoopDesignError::kOk) {
+        status_.config_axis = static_cast<std::uint8_t>(a);
+        return refuse(ConfigError::kAxisLoop);
+      }
+    }
+  }
+  if (!(c.payload_mass_kg >= 0.0f && c.payload_mass_kg <= 1.5f)) return refuse(ConfigError::kPayload);
+  ForceAllocationConfig alloc = c.allocation;
+  alloc.payload_kg = static_cast<double>(c.payload_mass_kg);
+  if (ApplyForceAllocationConfig<Scalar>(alloc, &scratch.allocation) != ForceAllocationError::kOk) {
+    return refuse(ConfigError::kAllocation);
+  }
+  const double two_b_star = scratch.allocation.two_b_star_N_per_A;
+  const double inertia[kAxisCount] = {alloc.mass_kg + alloc.payload_kg, alloc.mass_kg + alloc.payload_kg,
+                                      stage::kIz_kgm2, alloc.mass_kg + alloc.payload_kg,
+                                      stage::kIx_kgm2, stage::kIy_kgm2};
+  for (int a = 0; a < kAxisCount; ++a) {
+    // Feed-forward effort per kernel acceleration unit (um/s^2): A per um/s^2.
+    scratch.inertia_over_two_b_star[a] = Traits::from_double(inertia[a] / two_b_star);
+  }
+  // Reference limits: inside the supervisor window, positive rates.
+  const ReferenceLimits& r = c.references;
+  const SupervisorConfig& sv = c.supervisor;
+  for (int a = 0; a < kAxisCount; ++a) {
+    if (!(r.position_min[a] < r.position_max[a]) || !finite_positive(r.max_velocity[a]) ||
+        !finite_positive(r.max_acceleration[a]) || !finite_positive(r.max_step[a]) || r.max_step[a] > 100e-6f) {
+      return refuse(ConfigError::kReferenceLimits);
+    }
+  }
+  if (r.position_min[0] < sv.x_min_m || r.position_max[0] > sv.x_max_m || r.position_min[1] < sv.y_min_m ||
+      r.position_max[1] > sv.y_max_m || r.position_min[2] < -sv.theta_z_limit_rad ||
+      r.position_max[2] > sv.theta_z_limit_rad || r.position_min[3] < sv.z_min_m ||
+      r.position_max[3] > sv.z_max_m || r.position_min[4] < -sv.tilt_limit_rad ||
+      r.position_max[4] > sv.tilt_limit_rad || r.position_min[5] < -sv.tilt_limit_rad ||
+      r.position_max[5] > sv.tilt_limit_rad) {
+    return refuse(ConfigError::kReferenceLimits);
+  }
+  if (validate(c.sequencer, c.servo_rate_Hz) != SequencerConfigError::kOk) return refuse(ConfigError::kSequencer);
+  if (validate(c.supervisor, c.servo_rate_Hz) != SupervisorConfigError::kOk) return refuse(ConfigError::kSupervisor);
+  // The nominal height must sit inside the reference and supervisor z range.
+  if (c.sequencer.nominal_height_m > sv.z_max_m) return refuse(ConfigError::kSequencer);
+
+  // --- 2. while not on rest only gains may change, and only with live_tuning.
+  if (levitated_or_busy()) {
+    const bool locked_same = c.servo_rate_Hz == config_.servo_rate_Hz &&
+                             same_bytes(c.measurement, config_.measurement) &&
+                             same_bytes(c.allocation, config_.allocation) &&
+                             same_bytes(c.references, config_.references) &&
+                             same_bytes(c.sequencer, config_.sequencer) &&
+                             same_bytes(c.supervisor, config_.supervisor) &&
+                             c.payload_mass_kg == config_.payload_mass_kg;
+    if (!locked_same) return refuse(ConfigError::kLockedWhileLevitated);
+    bool gains_same = true;
+    for (int a = 0; a < kAxisCount; ++a) gains_same = gains_same && same_bytes(c.axis[a], config_.axis[a]);
+    if (!gains_same && !c.live_tuning) return refuse(ConfigError::kGainsLockedWhileLevitated);
+  }
+
+  // --- 3. swap. Measurement state is only replaced when its config changed
+  // (re-seeding the counters would lose the interferometer zero).
+  if (!same_bytes(c.measurement, config_.measurement) || !s2p_.lsb_den) s2p_ = s2p_scratch;
+  active_ = 1 - active_;
+  config_ = c;
+  sequencer_.configure(c.sequencer, c.servo_rate_Hz);
+  supervisor_.configure(c.supervisor, c.servo_rate_Hz);
+  homing_needed_ticks_ = static_cast<std::uint32_t>(c.sequencer.homing_time_s * c.servo_rate_Hz) + 1u;
+  status_.last_config_error = ConfigError::kOk;
+  return ConfigError::kOk;
+}
+
+template <typename Scalar>
+CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
+  auto seq = [this](SequencerCommand sc) {
+    const SequencerCommandResult r = sequencer_.command(sc, supervisor_.cause_present());
+    if (sc == SequencerCommand::kClearFault && r == SequencerCommandResult::kAccepted) supervisor_.clear_fault();
+    switch (r) {
+      case SequencerCommandResult::kAccepted: return CommandResult::kAccepted;
+      case SequencerCommandResult::kAlreadyThere: return CommandResult::kAlreadyThere;
+      case SequencerCommandResult::kRefusedBusy: return CommandResult::kRefusedBusy;
+      case SequencerCommandResult::kRefusedNotLevitated: return CommandResult::kRefusedNotLevitated;
+      case SequencerCommandResult::kRefusedFaultLatched: return CommandResult::kRefusedFaultLatched;
+      case SequencerCommandResult::kRefusedNotFaulted: return CommandResult::kRefusedNotFaulted;
+      case SequencerCommandResult::kRefusedFaultActive: return CommandResult::kRefusedFaultActive;
+    }
+    return CommandResult::kRefusedBusy;
+  };
+  switch (cmd.type) {
+    case MotionType::kHome: return seq(SequencerCommand::kHome);
+    case MotionType::kLevitate: return seq(SequencerCommand::kLevitate);
+    case MotionType::kLand: return seq(SequencerCommand::kLand);
+    case MotionType::kStop: return seq(SequencerCommand::kStop);
+    case MotionType::kClearFault: return seq(SequencerCommand::kClearFault);
+    default: break;
+  }
+  if (cmd.type == MotionType::kHold) {
+    for (Profile& p : profile_) p.active = false;
+    return CommandResult::kAccepted;
+  }
+  if (cmd.type == MotionType::kMoveJerkLimited || cmd.type == MotionType::kCircle ||
+      cmd.type == MotionType::kSinusoid) {
+    return CommandResult::kUnsupported;
+  }
+  if (!sequencer_.output().motion_allowed) return CommandResult::kRefusedNotReady;
+  const int a = axis_index(cmd.axis);
+  if (a < 0 || a >= kAxisCount) return CommandResult::kRefusedOutOfRange;
+  const ReferenceLimits& lim = config_.references;
+  const double now_si = static_cast<double>(reference_pm_[a]) * 1e-12;
+  const double target = cmd.type == MotionType::kStep ? now_si + cmd.target : cmd.target;
+  if (!std::isfinite(target) || target < static_cast<double>(lim.position_min[a]) ||
+      target > static_cast<double>(lim.position_max[a])) {
+    return CommandResult::kRefusedOutOfRange;
+  }
+  Profile& p = profile_[a];
+  if (cmd.type == MotionType::kStep) {
+    if (!(std::fabs(cmd.target) <= static_cast<double>(lim.max_step[a]))) return CommandResult::kRefusedOutOfRange;
+    p.active = false;
+    // Applied on the next tick and handed to the loop as an explicit step, so
+    // its setpoint weighting b acts on it (pid2dof.hpp).
+    pending_step_pm_[a] += numeric::si_to_pico(cmd.target);
+    return CommandResult::kAccepted;
+  }
+  // kMoveTo: trapezoidal velocity (paper 000 Fig. 10).
+  const double v = cmd.velocity, acc = cmd.acceleration;
+  if (!(v > 0.0) || !(acc > 0.0) || v > static_cast<double>(lim.max_velocity[a]) ||
+      acc > static_cast<double>(lim.max_acceleration[a])) {
+    return CommandResult::kRefusedBadProfile;
+  }
+  const double d = target - now_si;
+  const double dist = std::fabs(d);
+  double t_acc = v / acc;
+  double v_peak = v;
+  if (acc * t_acc * t_acc > dist) {  // triangle: never reaches v
+    t_acc = std::sqrt(dist / acc);
+    v_peak = acc * t_acc;
+  }
+  const double flat = dist - acc * t_acc * t_acc;
+  p.start_pm = reference_pm_[a];
+  p.distance = d;
+  p.v = v_peak;
+  p.a = acc;
+  p.t_acc = t_acc;
+  p.t_flat = v_peak > 0.0 ? flat / v_peak : 0.0;
+  p.t_total = 2.0 * t_acc + p.t_flat;
+  p.tick = 0;
+  p.active = true;
+  return CommandResult::kAccepted;
+}
+
+template <typename Scalar>
+io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, bool tick_overrun) {
+  const Applied& ap = applied_[active_];
+  const double dt = 1.0 / static_cast<double>(config_.servo_rate_Hz);
+  ++status_.tick;
+
+  // --- 1. sensors -> pose (integer, constant work) ---------------------------------
+  PoseMeasurement m = SensorsToPoseStep(sample, &s2p_);
+  pose_to_axes(m.pose, measured_pm_);
+
+  // --- 2. supervisor: checks on this sample and last tick's commands --------------
+  SupervisorInputs si;
+  si.sample = &sample;
+  si.tick_overrun = tick_overrun;
+  si.tick = status_.tick;
+  const SequencerOutput& prev = sequencer_.output();
+  si.positions_valid = prev.homed;
+  si.envelope_active = (prev.closed_axes & kAxisBitZ) != 0;
+  si.closed_axes = prev.closed_axes;
+  float abs_err[kAxisCount];
+  for (int a = 0; a < kAxisCount; ++a) {
+    si.pose[a] = pico_to_si(measured_pm_[a]);
+    si.following_error[a] = pico_to_si(reference_pm_[a] - measured_pm_[a]);
+    abs_err[a] = std::fabs(si.following_error[a]);
+  }
+  for (int j = 0; j < io::kCoils; ++j) {
+    si.coil_current_cmd_A[j] = last_current_A_[j];
+    si.coil_current_measured_A[j] =
+        Traits::to_float(MonitorCodeToCurrent_A<Scalar>(sample.coil_current_adc[j], ap.allocation));
+  }
+  const SupervisorStatus& sup = supervisor_.step(si);
+
+  // --- 3. homing (Hall phase + interferometer zero) --------------------------------
+  SequencerInputs qi;
+  if (prev.homing_active) {
+    if (homing_ticks_ == 0) ReseedInterferometers(&s2p_);
+    ++homing_ticks_;
+    if (homing_ticks_ >= homing_needed_ticks_) {
+      // One-off double solve at the end of the averaging window (not per tick).
+      const HallPhase h = HallToPhase(sample, s2p_);
+      if (h.plausible) {
+        SetHomingOffsets(ComputeHomingOffsets(h, m.pose_unhomed, s2p_), &s2p_);
+        // Re-evaluate this sample with the new zero (same raw counts: no
+        // counter motion) so that references start from the homed pose.
+        m = SensorsToPoseStep(sample, &s2p_);
+        pose_to_axes(m.pose, measured_pm_);
+        qi.homing_done = true;
+      } else {
+        qi.homing_failed = true;
+      }
+    }
+  } else {
+    homing_ticks_ = 0;
+  }
+
+  // --- 4. sequencer ----------------------------------------------------------------
+  qi.z_valid = sup.z_sensors_valid && (m.valid_axes & kPoseValidZ) != 0;
+  qi.z_m = pico_to_si(measured_pm_[3]);
+  for (int a = 0; a < kAxisCount; ++a) qi.abs_error[a] = abs_err[a];
+  qi.fault_reaction = sup.reaction;
+  const SequencerOutput& so = sequencer_.step(qi);
+
+  // --- 5. references (int64) -------------------------------------------------------
+  // Open axes: reference = measurement (bumpless closing). Profiles advance
+  // only while motion is allowed; z follows the sequencer until Ready.
+  Scalar accel_ff[kAxisCount];
+  std::int64_t step_pm[kAxisCount];
+  for (int a = 0; a < kAxisCount; ++a) {
+    const bool closed = (so.closed_axes & (1u << a)) != 0;
+    Profile& p = profile_[a];
+    double acc_now = 0.0;
+    if (p.active && so.motion_allowed) {
+      ++p.tick;
+      const double t = static_cast<double>(p.tick) * dt;
+      const double sgn = p.distance < 0.0 ? -1.0 : 1.0;
+      double s = 0.0;
+      if (t < p.t_acc) {
+        s = 0.5 * p.a * t * t;
+        acc_now = p.a;
+      } else if (t < p.t_acc + p.t_flat) {
+        s = 0.5 * p.a * p.t_acc * p.t_acc + p.v * (t - p.t_acc);
+      } else if (t < p.t_total) {
+        const double tr = p.t_total - t;
+        s = std::fabs(p.distance) - 0.5 * p.a * tr * tr;
+        acc_now = -p.a;
+      } else {
+        s = std::fabs(p.distance);
+        p.active = false;
+      }
+      reference_pm_[a] = p.start_pm + numeric::si_to_pico(sgn * s);
+      acc_now *= sgn;
+    } else if (!so.motion_allowed) {
+      p.active = false;
+    }
+    step_pm[a] = closed ? pending_step_pm_[a] : 0;
+    reference_pm_[a] += step_pm[a];
+    pending_step_pm_[a] = 0;
+    const bool newly_closed = closed && (si.closed_axes & (1u << a)) == 0;
+    if (!closed || newly_closed) {
+      reference_pm_[a] = measured_pm_[a];  // bumpless: close on the present position
+    } else if (a == axis_index(Axis::kZ) && !so.motion_allowed) {
+      reference_pm_[a] = numeric::si_to_pico(static_cast<double>(so.z_reference_m));
+    }
+    profile_accel_[a] = acc_now;
+    // m a / (2 b*), acceleration in kernel units (um/s^2 -> scaled by 1e6 below).
+    accel_ff[a] = Traits::from_double(acc_now * 1e6) * ap.inertia_over_two_b_star[a];
+  }
+
+  // --- 6. axis loops (all run; outputs selected by the closed mask) ----------------
+  const Scalar ff_fraction = Traits::from_float(so.feedforward_fraction);
+  // The sequencer's fraction may exceed 1 (cable stiffness, payload margin);
+  // GravityFeedForward_A clamps its ramp to [0, 1], so scale the full value.
+  const Scalar gravity_A = ff_fraction * GravityFeedForward_A<Scalar>(Traits::one(), ap.allocation);
+  Scalar effort[kAxisCount];
+  Scalar loop_out[kAxisCount];
+  for (int a = 0; a < kAxisCount; ++a) {
+    // Only the error (and this tick's explicit step) become Scalar: +-128 um.
+    const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_pm_[a] - measured_pm_[a]);
+    const Scalar dr_um = numeric::pico_to_micro<Scalar>(step_pm[a]);
+    const Scalar ff = a == axis_index(Axis::kZ) ? gravity_A + accel_ff[a] : accel_ff[a];
+    Pid2Dof<Scalar> pid(&ap.pid[a], &pid_state_[a]);
+    Scalar v = pid.update(e_um, dr_um, ff);
+    for (int f = 0; f < kMaxBiquadStages; ++f) v = biquad_update(ap.filter[a][f], filter_state_[a][f], v);
+    loop_out[a] = pid.saturate(v);
+    const bool closed = (so.closed_axes & (1u << a)) != 0;
+    // Open axis: no feedback, only the feed-forward (the gravity lift of z).
+    effort[a] = closed ? loop_out[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
+    if (!closed) pid.reset(Traits::zero(), e_um);
+  }
+
+  // --- 7. force allocation with the whole-vector current limit ----------------------
+  AllocationOutput<Scalar> out;
+  AllocateCurrents<Scalar>(effort, measured_pm_[0], measured_pm_[1], ap.allocation, &out);
+
+  // --- 8. anti-windup: the loops learn what was really applied (k U) ----------------
+  for (int a = 0; a < kAxisCount; ++a) {
+    Pid2Dof<Scalar> pid(&ap.pid[a], &pid_state_[a]);
+    const bool closed = (so.closed_axes & (1u << a)) != 0;
+    // Open axes: applied == last output, i.e. no correction (their state was reset).
+    pid.apply_limit(closed ? out.applied_effort_A[a] : pid.state().last_output);
+  }
+
+  // --- 9. DAC codes; amplifiers only when the sequencer says so ---------------------
+  io::ActuatorCommand cmd = io::kSafeActuatorCommand;
+  const bool enable = so.amplifier_enable;
+  for (int j = 0; j < io::kCoils; ++j) {
+    const std::int16_t code = CurrentToDacCode<Scalar>(out.current_A[j], ap.allocation);
+    cmd.dac_code[j] = enable ? code : std::int16_t{0};
+    last_current_A_[j] = enable ? Traits::to_float(out.current_A[j]) : 0.0f;
+    status_.coil_current_A[j] = last_current_A_[j];
+  }
+  cmd.amplifier_enable = enable;
+
+  // --- 10. status ------------------------------------------------------------------------
+  status_.pose = m.pose;
+  status_.reference = axes_to_pose(reference_pm_);
+  status_.pose_valid = m.valid_axes;
+  status_.state = so.state;
+  status_.last_reason = so.last_reason;
+  status_.closed_axes = so.closed_axes;
+  status_.feedforward_fraction = so.feedforward_fraction;
+  status_.fault = sup.first_fault.code;
+  status_.first_fault = sup.first_fault;
+  status_.reaction = sup.reaction;
+  status_.saturated = out.saturated;
+  status_.scale_k = Traits::to_float(out.scale_k);
+  for (int a = 0; a < kAxisCount; ++a) status_.effort_A[a] = enable ? Traits::to_float(effort[a]) : 0.0f;
+  return cmd;
+}
+
+template class Controller<float>;
+template class Controller<numeric::Q7_24>;
+
+}  // namespace maglev::kernel

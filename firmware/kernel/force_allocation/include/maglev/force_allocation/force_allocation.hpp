@@ -1,0 +1,171 @@
+// force_allocation: control efforts U -> coil currents -> DAC codes.
+//
+//   eq (18)  A (6 x 8): forcer forces -> platen wrench [Fx Fy Tz Fz Tx Ty]
+//   eq (21)  B = pinv(A), computed once per Config (double, no heap)
+//   eq (23)  S_xy(x, y): the 8 x 8 commutation matrix WITHOUT its 1/b* factor
+//   eq (24)  i = 2 S_xy B U           (U = [ux uy uthz uz uthx uthy], in A)
+//   eq (22)  => wrench = 2 b*(z0) U   (b* only converts force <-> effort)
+//
+// Per tick (AllocateCurrents): G = B U (Scalar), integer commutation phases
+// from the int64 pm position, 8 table sin/cos, i_j = 2 (sin psi_j G_h + cos
+// psi_j G_z), one common current-limit factor k, constant work.
+// docs/EQUATIONS.md explains why the 1/b* of eq (23) cancels.
+#pragma once
+
+#include <cstdint>
+
+#include "maglev/io/sensor_sample.hpp"
+#include "maglev/numeric/scalar_traits.hpp"
+
+namespace maglev::kernel {
+
+inline constexpr int kEfforts = 6;                 // U order = maglev::kernel::Axis order
+inline constexpr int kForcers = 4;                 // two coils each; forcer k = coils 2k, 2k+1
+inline constexpr int kForcerForces = 2 * kForcers;  // [F_h, F_z] per forcer, eq (21) order
+
+enum class ForceLayout : std::uint8_t {
+  kCross = 0,       // paper 000 eq (18) (the seed stage); paper 003 Fig. 7
+  kSquare = 1,      // paper 003 Fig. 6: forcers at the corners (+-l, +-l)
+  kTriangular = 2,  // paper 003 eq (8), Fig. 8 (Y shape, alpha): 3 forcers, coils 7, 8 unused
+};
+
+struct ForceAllocationConfig {
+  ForceLayout layout;
+  double lever_arm_m;         // l
+  double triangle_alpha_rad;  // alpha of eq (8) (pi/6 for Fig. 8)
+  // Commutation, eqs (19)/(23): coil j's force is b* i_j (sin psi_j, cos psi_j)
+  // along (its forcer's horizontal axis, Z) with psi_j = gamma_1 * (base point
+  // along that axis) + coil_phase_rad[j]. Coils of one forcer must differ by
+  // +-pi/2 (then each 2x2 block is orthogonal and S^-1 = S^T, paper 003).
+  double pitch_m;
+  double coil_phase_rad[io::kCoils];
+  double base_point_x_m;  // x2 - x (platen frame)
+  double base_point_y_m;  // y8 - y
+  // b*(z0): eq (20) when magnetization_A_per_m > 0, else the identified
+  // 2 b*(z0) of eq (29).
+  double two_b_star_identified_N_per_A;
+  double magnetization_A_per_m;  // M0 of eq (3); 0 = use the identified value
+  double coil_effective_length_m;  // p
+  double coil_side_width_m;        // a
+  double coil_thickness_m;         // d
+  int coil_turns;                  // N
+  double magnet_thickness_m;       // Delta
+  double nominal_gap_m;            // z0
+  // Limits and gravity feed-forward.
+  double peak_current_A;
+  double mass_kg;
+  double payload_kg;
+  double gravity_m_per_s2;
+  // Electronics: DAC code = round(i / gain / FS * 32768); monitor A = code * FS / 32768 / gain.
+  double amplifier_gain_A_per_V;
+  double dac_full_scale_V;
+  double current_monitor_gain_V_per_A;
+  double adc_full_scale_V;
+};
+
+ForceAllocationConfig DefaultForceAllocationConfig();
+
+// b*(z0) of eq (20) (N/A per coil), from M0 and the coil/magnet geometry.
+double BStarFromGeometry(const ForceAllocationConfig& config);
+
+enum class ForceAllocationError : std::uint8_t {
+  kOk = 0,
+  kBadGeometry,         // l <= 0, pitch <= 0, ...
+  kSingularLayout,      // A A^T not invertible
+  kPseudoInverseCheck,  // |A B - I| > 1e-9
+  kBadCoilPhases,       // a forcer's coils are not +-pi/2 apart
+  kBadBStar,
+  kBadLimits,
+  kScalarRange,         // a B entry (or another constant) does not fit the Scalar
+};
+
+// Double-precision tables (configuration time; kept for diagnostics/tests).
+struct ForceAllocationTablesDouble {
+  double a[kEfforts][kForcerForces];  // eq (18) / (6)-(8) in [Fx Fy Tz Fz Tx Ty] row order
+  double b[kForcerForces][kEfforts];  // pinv(A)
+  double max_abs_ab_minus_i;          // measured |A B - I|_max
+  double two_b_star_N_per_A;
+  double h_dir[kForcers][2];          // forcer horizontal thrust direction (world XY)
+  bool forcer_used[kForcers];
+};
+
+ForceAllocationError ComputeForceAllocationTables(const ForceAllocationConfig& config,
+                                                  ForceAllocationTablesDouble* out);
+
+// Integer commutation (shared by every Scalar): per-coil phase, 2^32 = one turn.
+struct CommutationTables {
+  std::int64_t pitch_pm;
+  std::int64_t base_x_pm;
+  std::int64_t base_y_pm;
+  std::int64_t h_q30[kForcers][2];  // direction cosines, Q2.30 (exactly +-2^30 for X/Y axes)
+  std::uint32_t coil_offset_turn[io::kCoils];
+};
+
+// x, y (pm, magnet frame) -> per-coil phase psi_j (uint32, 2^32 = one turn):
+// exact integer modulo of the pitch, floor rounding (< 2^-32 turn).
+void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& tables,
+                       std::uint32_t coil_phase_turn[io::kCoils]);
+
+// Fraction of a pitch, Q32: floor(FloorMod(pos, pitch) * 2^32 / pitch), exact.
+std::uint32_t PositionToTurn(std::int64_t pos_pm, std::int64_t pitch_pm);
+// Whole turns too: floor(pos * 2^32 / pitch) as int64 (exact, pitch < 2^36 pm).
+std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm);
+
+template <typename Scalar>
+struct ForceAllocationState {
+  ForceAllocationTablesDouble tables;
+  CommutationTables commutation;
+  Scalar b[kForcerForces][kEfforts];
+  Scalar peak_current_A;
+  Scalar half_peak_current_A;
+  Scalar gravity_effort_A;  // (m + payload) g / (2 b*)
+  Scalar inv_two_b_star_A_per_N;
+  double two_b_star_N_per_A;
+  // DAC / monitor scaling
+  double dac_codes_per_A;
+  std::int64_t dac_q32_per_raw;    // Fixed only: codes per raw LSB, Q32
+  double monitor_A_per_code;
+  std::int64_t monitor_raw_per_code_q16;  // Fixed only
+  bool configured;
+};
+
+template <typename Scalar>
+struct AllocationOutput {
+  Scalar current_A[io::kCoils];
+  Scalar applied_effort_A[kEfforts];  // k * U: what the loops' anti-windup must see
+  Scalar scale_k;                     // 1 when not limited
+  bool saturated;
+};
+
+// ---- configuration ------------------------------------------------------------
+template <typename Scalar>
+ForceAllocationError ApplyForceAllocationConfig(const ForceAllocationConfig& config,
+                                                ForceAllocationState<Scalar>* state);
+
+// ---- per tick -------------------------------------------------------------------
+// x_pm, y_pm: magnet-frame position (after homing) for the commutation.
+// Q7.24 headroom: |G| = |B U| and |i|/2 must stay < 128 A; with the seed
+// layout that holds for |U_axis| <= 20 A (the loops saturate U well below).
+template <typename Scalar>
+void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::int64_t y_pm,
+                      const ForceAllocationState<Scalar>& state, AllocationOutput<Scalar>* out);
+
+// U_z,ff = ramp_fraction * (m + payload) g / (2 b*)  (ramp in [0, 1], set by the sequencer).
+template <typename Scalar>
+Scalar GravityFeedForward_A(Scalar ramp_fraction, const ForceAllocationState<Scalar>& state);
+
+// Feed-forward conversion: force (N) or torque (N*m) -> effort (A): U = F / (2 b*).
+template <typename Scalar>
+Scalar EffortFromForce_A(Scalar force, const ForceAllocationState<Scalar>& state);
+
+// Coil current (A) -> AD5764 code, round half away from zero, saturated to int16.
+template <typename Scalar>
+std::int16_t CurrentToDacCode(Scalar current_A, const ForceAllocationState<Scalar>& state);
+
+// Amplifier current-monitor ADC code -> A.
+template <typename Scalar>
+Scalar MonitorCodeToCurrent_A(std::int16_t code, const ForceAllocationState<Scalar>& state);
+
+}  // namespace maglev::kernel
+
+#include "maglev/force_allocation/force_allocation_impl.hpp"

@@ -1,0 +1,147 @@
+// Template bodies of force_allocation.hpp (included at its end).
+#pragma once
+
+#include <cstdint>
+
+#include "maglev/numeric/fixed.hpp"
+#include "maglev/numeric/scalar_traits.hpp"
+
+namespace maglev::kernel {
+
+namespace detail_fa {
+ForceAllocationError FillCommon(const ForceAllocationConfig& c, const ForceAllocationTablesDouble& t,
+                                CommutationTables* ct);
+
+template <typename Scalar>
+constexpr Scalar AbsScalar(Scalar v) {
+  return v < numeric::ScalarTraits<Scalar>::zero() ? -v : v;
+}
+template <typename Scalar>
+constexpr Scalar MaxScalar(Scalar a, Scalar b) {
+  return a < b ? b : a;
+}
+}  // namespace detail_fa
+
+template <typename Scalar>
+ForceAllocationError ApplyForceAllocationConfig(const ForceAllocationConfig& config,
+                                                ForceAllocationState<Scalar>* state) {
+  using Traits = numeric::ScalarTraits<Scalar>;
+  ForceAllocationState<Scalar> s{};
+  ForceAllocationError e = ComputeForceAllocationTables(config, &s.tables);
+  if (e != ForceAllocationError::kOk) return e;
+  e = detail_fa::FillCommon(config, s.tables, &s.commutation);
+  if (e != ForceAllocationError::kOk) return e;
+  // Every Scalar constant must be representable (Q7.24: |v| < 128) and not
+  // lose more than 1e-4 of itself to quantisation when non-zero.
+  const auto fits = [](double v) { return v < Traits::kMaxMagnitude && v > -Traits::kMaxMagnitude; };
+  for (int r = 0; r < kForcerForces; ++r)
+    for (int c = 0; c < kEfforts; ++c) {
+      const double v = s.tables.b[r][c];
+      if (!fits(v)) return ForceAllocationError::kScalarRange;
+      s.b[r][c] = Traits::from_double(v);
+    }
+  s.two_b_star_N_per_A = s.tables.two_b_star_N_per_A;
+  const double gravity_A = (config.mass_kg + config.payload_kg) * config.gravity_m_per_s2 / s.two_b_star_N_per_A;
+  if (!fits(config.peak_current_A) || !fits(gravity_A) || !fits(1.0 / s.two_b_star_N_per_A)) {
+    return ForceAllocationError::kScalarRange;
+  }
+  s.peak_current_A = Traits::from_double(config.peak_current_A);
+  s.half_peak_current_A = Traits::from_double(config.peak_current_A / 2.0);
+  s.gravity_effort_A = Traits::from_double(gravity_A);
+  s.inv_two_b_star_A_per_N = Traits::from_double(1.0 / s.two_b_star_N_per_A);
+  s.dac_codes_per_A = 32768.0 / (config.amplifier_gain_A_per_V * config.dac_full_scale_V);
+  s.monitor_A_per_code = config.adc_full_scale_V / 32768.0 / config.current_monitor_gain_V_per_A;
+  if constexpr (Traits::kIsFixed) {
+    // codes = raw * 2^-F * codes_per_A  ->  (raw * q32) >> 32, q32 < 2^31 for any sane gain.
+    const double q32 = s.dac_codes_per_A * numeric::detail::pow2(32 - Scalar::kFracBits);
+    const double q16 = s.monitor_A_per_code * numeric::detail::pow2(Scalar::kFracBits + 16);
+    if (!(q32 < 2147483647.0) || !(q16 < 2147483647.0)) return ForceAllocationError::kScalarRange;
+    s.dac_q32_per_raw = static_cast<std::int64_t>(q32 + 0.5);
+    s.monitor_raw_per_code_q16 = static_cast<std::int64_t>(q16 + 0.5);
+  }
+  s.configured = true;
+  *state = s;
+  return ForceAllocationError::kOk;
+}
+
+template <typename Scalar>
+void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::int64_t y_pm,
+                      const ForceAllocationState<Scalar>& state, AllocationOutput<Scalar>* out) {
+  using Traits = numeric::ScalarTraits<Scalar>;
+  // G = B U  (eq (21) without its 2 b*: G is the forcer force in units of 2 b*).
+  Scalar g[kForcerForces];
+  for (int r = 0; r < kForcerForces; ++r) {
+    Scalar acc = Traits::zero();
+    for (int c = 0; c < kEfforts; ++c) acc += state.b[r][c] * effort_A[c];
+    g[r] = acc;
+  }
+  // i = 2 S_xy G, eq (24). Row j of S_xy (eq 23) is (sin psi_j, cos psi_j) on
+  // its forcer's (F_h, F_z): the transpose of column j of eq (19).
+  std::uint32_t phase[io::kCoils];
+  CommutationPhases(x_pm, y_pm, state.commutation, phase);
+  // Work with half-currents h = i / 2 until the limit is applied: doubles
+  // the Q7.24 headroom (|h| < 128 A), so efforts up to ~20 A per axis never
+  // saturate an intermediate (which would bend the wrench direction).
+  Scalar half_i[io::kCoils];
+  Scalar max_abs = Traits::zero();
+  for (int j = 0; j < io::kCoils; ++j) {
+    const auto sc = Traits::sin_cos(phase[j]);
+    const int k = j / 2;
+    half_i[j] = sc.sin * g[2 * k] + sc.cos * g[2 * k + 1];
+    max_abs = detail_fa::MaxScalar(max_abs, detail_fa::AbsScalar(half_i[j]));
+  }
+  // One common factor k <= 1 keeps the wrench direction: saturation never
+  // becomes a cross-axis force. k = (peak/2) / max(max|h|, peak/2) is exactly
+  // 1 when nothing is limited (x / x == 1 in float and in Fixed).
+  const Scalar k = state.half_peak_current_A / detail_fa::MaxScalar(max_abs, state.half_peak_current_A);
+  out->saturated = state.half_peak_current_A < max_abs;
+  out->scale_k = k;
+  for (int j = 0; j < io::kCoils; ++j) {
+    const Scalar scaled = k * half_i[j];
+    out->current_A[j] = scaled + scaled;
+  }
+  for (int c = 0; c < kEfforts; ++c) out->applied_effort_A[c] = k * effort_A[c];
+}
+
+template <typename Scalar>
+Scalar GravityFeedForward_A(Scalar ramp_fraction, const ForceAllocationState<Scalar>& state) {
+  using Traits = numeric::ScalarTraits<Scalar>;
+  const Scalar zero = Traits::zero();
+  const Scalar one = Traits::one();
+  const Scalar r = ramp_fraction < zero ? zero : (one < ramp_fraction ? one : ramp_fraction);
+  return r * state.gravity_effort_A;
+}
+
+template <typename Scalar>
+Scalar EffortFromForce_A(Scalar force, const ForceAllocationState<Scalar>& state) {
+  return force * state.inv_two_b_star_A_per_N;
+}
+
+template <typename Scalar>
+std::int16_t CurrentToDacCode(Scalar current_A, const ForceAllocationState<Scalar>& state) {
+  using Traits = numeric::ScalarTraits<Scalar>;
+  std::int64_t code = 0;
+  if constexpr (Traits::kIsFixed) {
+    // raw (|.| < 2^31) * q32 (< 2^31) < 2^62: exact, then round half away from zero.
+    code = numeric::detail::shift_round(std::int64_t{current_A.raw()} * state.dac_q32_per_raw, 32);
+  } else {
+    const double v = static_cast<double>(current_A) * state.dac_codes_per_A;
+    const double c = v > 40000.0 ? 40000.0 : (v < -40000.0 ? -40000.0 : v);  // NaN -> 0 below
+    code = (c == c) ? static_cast<std::int64_t>(c >= 0.0 ? c + 0.5 : c - 0.5) : 0;
+  }
+  code = code > 32767 ? 32767 : (code < -32768 ? -32768 : code);
+  return static_cast<std::int16_t>(code);
+}
+
+template <typename Scalar>
+Scalar MonitorCodeToCurrent_A(std::int16_t code, const ForceAllocationState<Scalar>& state) {
+  using Traits = numeric::ScalarTraits<Scalar>;
+  if constexpr (Traits::kIsFixed) {
+    return Scalar::from_raw(static_cast<std::int32_t>(
+        numeric::detail::shift_round(std::int64_t{code} * state.monitor_raw_per_code_q16, 16)));
+  } else {
+    return static_cast<float>(static_cast<double>(code) * state.monitor_A_per_code);
+  }
+}
+
+}  // namespace maglev::kernel

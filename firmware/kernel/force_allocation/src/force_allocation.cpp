@@ -1,0 +1,298 @@
+#include "maglev/force_allocation/force_allocation.hpp"
+
+#include <cmath>
+#include <cstdint>
+
+#include "maglev/io/stage_parameters.hpp"
+#include "maglev/numeric/fixed.hpp"
+
+namespace maglev::kernel {
+namespace {
+
+namespace stage = io::stage;
+
+struct ForcerGeometry {
+  double px, py;  // acting point, platen frame
+  double hx, hy;  // horizontal thrust direction
+  bool used;
+};
+
+// Layout geometry. A follows from it by r x F (see BuildA); the cross layout
+// reproduces eq (18) of paper 000 entry by entry, the triangle eq (8) of
+// paper 003 (tests/kernel/force_allocation checks both against the printed
+// matrices).
+void LayoutGeometry(const ForceAllocationConfig& c, ForcerGeometry g[kForcers]) {
+  const double l = c.lever_arm_m;
+  switch (c.layout) {
+    case ForceLayout::kCross:
+      // Forcers 1&2 (x) at (0,-l), 3&4 (y) at (l,0), 5&6 (x) at (0,l), 7&8 (y) at (-l,0).
+      g[0] = {0.0, -l, 1.0, 0.0, true};
+      g[1] = {l, 0.0, 0.0, 1.0, true};
+      g[2] = {0.0, l, 1.0, 0.0, true};
+      g[3] = {-l, 0.0, 0.0, 1.0, true};
+      break;
+    case ForceLayout::kSquare:
+      // Forcers at the corners, thrust lines at distance l from the centre;
+      // the Fx, Fy, Tz and Fz rows equal paper 003 eq (6). Its printed Tx/Ty
+      // rows are not those of any rigid layout (see docs/EQUATIONS.md), so
+      // they come from r x F here.
+      g[0] = {l, l, 1.0, 0.0, true};
+      g[1] = {-l, l, 0.0, 1.0, true};
+      g[2] = {-l, -l, 1.0, 0.0, true};
+      g[3] = {l, -l, 0.0, 1.0, true};
+      break;
+    case ForceLayout::kTriangular: {
+      const double s = std::sin(c.triangle_alpha_rad);
+      const double co = std::cos(c.triangle_alpha_rad);
+      g[0] = {l * co, l * s, -s, co, true};
+      g[1] = {-l * co, l * s, -s, -co, true};
+      g[2] = {0.0, -l, 1.0, 0.0, true};
+      g[3] = {0.0, 0.0, 0.0, 0.0, false};  // coils 7, 8 unused: zero columns, zero B rows
+      break;
+    }
+  }
+}
+
+void BuildA(const ForcerGeometry g[kForcers], double a[kEfforts][kForcerForces]) {
+  for (int r = 0; r < kEfforts; ++r)
+    for (int c = 0; c < kForcerForces; ++c) a[r][c] = 0.0;
+  for (int k = 0; k < kForcers; ++k) {
+    if (!g[k].used) continue;
+    const int h = 2 * k;
+    const int z = 2 * k + 1;
+    // Horizontal force F_h (hx, hy, 0) at (px, py): Tz = px Fy - py Fx.
+    a[0][h] = g[k].hx;
+    a[1][h] = g[k].hy;
+    a[2][h] = g[k].px * g[k].hy - g[k].py * g[k].hx;
+    // Vertical force F_z at (px, py): Tx = py Fz, Ty = -px Fz. The horizontal
+    // force acts in the coil plane, through the centre of mass height
+    // (paper 000 Sec. IV neglects its Tx/Ty lever): no Tx/Ty from F_h.
+    a[3][z] = 1.0;
+    a[4][z] = g[k].py;
+    a[5][z] = -g[k].px;
+  }
+}
+
+// Solve M X = R for 6x6 M (Gauss-Jordan, partial pivoting), R 6 x 8 in place.
+bool Solve6(double m[6][6], double rhs[6][kForcerForces]) {
+  double scale = 0.0;
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) scale = std::fmax(scale, std::fabs(m[r][c]));
+  if (!(scale > 0.0)) return false;
+  for (int col = 0; col < 6; ++col) {
+    int piv = col;
+    for (int r = col + 1; r < 6; ++r)
+      if (std::fabs(m[r][col]) > std::fabs(m[piv][col])) piv = r;
+    if (!(std::fabs(m[piv][col]) > 1e-12 * scale)) return false;
+    if (piv != col) {
+      for (int c = 0; c < 6; ++c) {
+        const double t = m[col][c];
+        m[col][c] = m[piv][c];
+        m[piv][c] = t;
+      }
+      for (int c = 0; c < kForcerForces; ++c) {
+        const double t = rhs[col][c];
+        rhs[col][c] = rhs[piv][c];
+        rhs[piv][c] = t;
+      }
+    }
+    const double inv = 1.0 / m[col][col];
+    for (int c = 0; c < 6; ++c) m[col][c] *= inv;
+    for (int c = 0; c < kForcerForces; ++c) rhs[col][c] *= inv;
+    for (int r = 0; r < 6; ++r) {
+      if (r == col) continue;
+      const double f = m[r][col];
+      for (int c = 0; c < 6; ++c) m[r][c] -= f * m[col][c];
+      for (int c = 0; c < kForcerForces; ++c) rhs[r][c] -= f * rhs[col][c];
+    }
+  }
+  return true;
+}
+
+std::int64_t RoundToInt64(double v) { return static_cast<std::int64_t>(std::llround(v)); }
+
+std::uint32_t RadToTurn(double rad) {
+  double t = rad / (2.0 * stage::kPi);
+  t -= std::floor(t);
+  const double scaled = std::floor(t * 4294967296.0 + 0.5);
+  return static_cast<std::uint32_t>(static_cast<std::uint64_t>(scaled) & 0xffffffffu);
+}
+
+}  // namespace
+
+ForceAllocationConfig DefaultForceAllocationConfig() {
+  ForceAllocationConfig c{};
+  c.layout = ForceLayout::kCross;
+  c.lever_arm_m = stage::kLeverArm_m;
+  c.triangle_alpha_rad = stage::kPi / 6.0;
+  c.pitch_m = stage::kPitch_m;
+  for (int j = 0; j < io::kCoils; ++j) c.coil_phase_rad[j] = stage::kCoilPhase_rad[j];
+  c.base_point_x_m = stage::kBasePointX2_m;
+  c.base_point_y_m = stage::kBasePointY8_m;
+  c.two_b_star_identified_N_per_A = stage::kTwoBStarIdentified_N_per_A;
+  c.magnetization_A_per_m = 0.0;
+  c.coil_effective_length_m = stage::kCoilEffectiveLength_m;
+  c.coil_side_width_m = stage::kCoilSideWidth_m;
+  c.coil_thickness_m = stage::kCoilThickness_m;
+  c.coil_turns = stage::kCoilTurns;
+  c.magnet_thickness_m = stage::kMagnetThickness_m;
+  c.nominal_gap_m = stage::kRestGap_m;
+  c.peak_current_A = stage::kPeakCoilCurrent_A;
+  c.mass_kg = stage::kMass_kg;
+  c.payload_kg = 0.0;
+  c.gravity_m_per_s2 = stage::kGravity_m_per_s2;
+  c.amplifier_gain_A_per_V = stage::kAmplifierGain_A_per_V;
+  c.dac_full_scale_V = stage::kDacFullScale_V;
+  c.current_monitor_gain_V_per_A = stage::kCurrentMonitorGain_V_per_A;
+  c.adc_full_scale_V = stage::kAdcFullScale_V;
+  return c;
+}
+
+double BStarFromGeometry(const ForceAllocationConfig& c) {
+  // eq (3), n = 1:  c_1(z) = 2 sqrt(2) mu0 M0 / pi (1 - e^{-g Delta}) e^{-g z}
+  // eq (20):        b*(z)  = p c_1(z) 4N / (d a g^2) sin(g a / 2) (1 - e^{-g d})
+  const double g = 2.0 * stage::kPi / c.pitch_m;
+  const double c1 = 2.0 * std::sqrt(2.0) * stage::kMu0 * c.magnetization_A_per_m / stage::kPi *
+                    (1.0 - std::exp(-g * c.magnet_thickness_m)) * std::exp(-g * c.nominal_gap_m);
+  return c.coil_effective_length_m * c1 * 4.0 * c.coil_turns /
+         (c.coil_thickness_m * c.coil_side_width_m * g * g) * std::sin(g * c.coil_side_width_m / 2.0) *
+         (1.0 - std::exp(-g * c.coil_thickness_m));
+}
+
+ForceAllocationError ComputeForceAllocationTables(const ForceAllocationConfig& c,
+                                                  ForceAllocationTablesDouble* out) {
+  ForceAllocationTablesDouble t{};
+  if (!(c.lever_arm_m >= 0.0 && c.lever_arm_m < 10.0) || !(c.pitch_m > 1e-4 && c.pitch_m < 1.0)) {
+    return ForceAllocationError::kBadGeometry;
+  }
+  ForcerGeometry g[kForcers];
+  LayoutGeometry(c, g);
+  BuildA(g, t.a);
+  for (int k = 0; k < kForcers; ++k) {
+    t.h_dir[k][0] = g[k].hx;
+    t.h_dir[k][1] = g[k].hy;
+    t.forcer_used[k] = g[k].used;
+  }
+  // B = A^T (A A^T)^-1: solve (A A^T) X = A, then B = X^T.
+  double aat[6][6];
+  for (int r = 0; r < 6; ++r)
+    for (int s = 0; s < 6; ++s) {
+      double acc = 0.0;
+      for (int k = 0; k < kForcerForces; ++k) acc += t.a[r][k] * t.a[s][k];
+      aat[r][s] = acc;
+    }
+  double x[6][kForcerForces];
+  for (int r = 0; r < 6; ++r)
+    for (int k = 0; k < kForcerForces; ++k) x[r][k] = t.a[r][k];
+  if (!Solve6(aat, x)) return ForceAllocationError::kSingularLayout;
+  for (int k = 0; k < kForcerForces; ++k)
+    for (int r = 0; r < 6; ++r) t.b[k][r] = x[r][k];
+  double worst = 0.0;
+  for (int r = 0; r < 6; ++r)
+    for (int s = 0; s < 6; ++s) {
+      double acc = 0.0;
+      for (int k = 0; k < kForcerForces; ++k) acc += t.a[r][k] * t.b[k][s];
+      worst = std::fmax(worst, std::fabs(acc - (r == s ? 1.0 : 0.0)));
+    }
+  t.max_abs_ab_minus_i = worst;
+  if (!(worst <= 1e-9)) return ForceAllocationError::kPseudoInverseCheck;
+
+  // Coil pairs must be in quadrature (orthogonal 2x2 commutation blocks).
+  for (int k = 0; k < kForcers; ++k) {
+    if (!t.forcer_used[k]) continue;
+    if (!(std::fabs(std::cos(c.coil_phase_rad[2 * k] - c.coil_phase_rad[2 * k + 1])) < 1e-9)) {
+      return ForceAllocationError::kBadCoilPhases;
+    }
+  }
+
+  t.two_b_star_N_per_A =
+      c.magnetization_A_per_m > 0.0 ? 2.0 * BStarFromGeometry(c) : c.two_b_star_identified_N_per_A;
+  if (!(t.two_b_star_N_per_A > 1e-3 && t.two_b_star_N_per_A < 1e3)) return ForceAllocationError::kBadBStar;
+  *out = t;
+  return ForceAllocationError::kOk;
+}
+
+std::uint32_t PositionToTurn(std::int64_t pos_pm, std::int64_t pitch_pm) {
+  return static_cast<std::uint32_t>(static_cast<std::uint64_t>(PositionToTurnsQ32(pos_pm, pitch_pm)) & 0xffffffffu);
+}
+
+std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm) {
+  // pos = q * pitch + r, r in [0, pitch), pitch < 2^36. floor(r * 2^32 / pitch)
+  // in two exact steps so that no intermediate exceeds 2^63:
+  //   r * 2^26 < 2^62;  remainder * 2^6 < 2^42.
+  std::int64_t q = pos_pm / pitch_pm;
+  std::int64_t r = pos_pm - q * pitch_pm;
+  q -= r < 0 ? 1 : 0;
+  r += r < 0 ? pitch_pm : 0;
+  const std::int64_t n1 = r << 26;
+  const std::int64_t f1 = n1 / pitch_pm;
+  const std::int64_t r1 = n1 - f1 * pitch_pm;
+  const std::int64_t f2 = (r1 << 6) / pitch_pm;
+  // q * 2^32 + frac: |q| < 2^31 for any position below 1e8 m.
+  return static_cast<std::int64_t>(static_cast<std::uint64_t>(q) << 32) + (f1 << 6) + f2;
+}
+
+void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
+                       std::uint32_t coil_phase_turn[io::kCoils]) {
+  // Turns of each coordinate (Q32, NOT reduced: for a direction cosine h that
+  // is not an integer, h * (x mod L) != h * x mod L), projected on each
+  // forcer's axis as (turns * h_q30) >> 30 taken mod 2^32. The product is
+  // formed in wrapping uint64, whose bits 30..61 are exact for any sign, so
+  // the projection is exact mod one turn up to the Q30 rounding of h (for
+  // h = +-1, 0 it is exactly the identity / zero).
+  const std::uint64_t tx = static_cast<std::uint64_t>(PositionToTurnsQ32(x_pm + t.base_x_pm, t.pitch_pm));
+  const std::uint64_t ty = static_cast<std::uint64_t>(PositionToTurnsQ32(y_pm + t.base_y_pm, t.pitch_pm));
+  for (int k = 0; k < kForcers; ++k) {
+    const std::uint64_t px = tx * static_cast<std::uint64_t>(t.h_q30[k][0]);
+    const std::uint64_t py = ty * static_cast<std::uint64_t>(t.h_q30[k][1]);
+    const std::uint32_t psi = static_cast<std::uint32_t>((px + py) >> 30);
+    coil_phase_turn[2 * k] = psi + t.coil_offset_turn[2 * k];
+    coil_phase_turn[2 * k + 1] = psi + t.coil_offset_turn[2 * k + 1];
+  }
+}
+
+namespace detail_fa {
+
+ForceAllocationError FillCommon(const ForceAllocationConfig& c, const ForceAllocationTablesDouble& t,
+                                CommutationTables* ct) {
+  ct->pitch_pm = RoundToInt64(c.pitch_m * 1e12);
+  if (ct->pitch_pm >= (std::int64_t{1} << 36)) return ForceAllocationError::kBadGeometry;
+  ct->base_x_pm = RoundToInt64(c.base_point_x_m * 1e12);
+  ct->base_y_pm = RoundToInt64(c.base_point_y_m * 1e12);
+  for (int k = 0; k < kForcers; ++k) {
+    ct->h_q30[k][0] = RoundToInt64(t.h_dir[k][0] * 1073741824.0);
+    ct->h_q30[k][1] = RoundToInt64(t.h_dir[k][1] * 1073741824.0);
+  }
+  for (int j = 0; j < io::kCoils; ++j) ct->coil_offset_turn[j] = RadToTurn(c.coil_phase_rad[j]);
+  if (!(c.peak_current_A > 0.0 && c.peak_current_A < 100.0) || !(c.mass_kg > 0.0) || !(c.payload_kg >= 0.0) ||
+      !(c.amplifier_gain_A_per_V > 0.0) || !(c.dac_full_scale_V > 0.0) ||
+      !(c.current_monitor_gain_V_per_A > 0.0) || !(c.adc_full_scale_V > 0.0)) {
+    return ForceAllocationError::kBadLimits;
+  }
+  return ForceAllocationError::kOk;
+}
+
+}  // namespace detail_fa
+
+// Instantiate the templates here so the strict warnings check them.
+template ForceAllocationError ApplyForceAllocationConfig<float>(const ForceAllocationConfig&,
+                                                                ForceAllocationState<float>*);
+template ForceAllocationError ApplyForceAllocationConfig<numeric::Q7_24>(const ForceAllocationConfig&,
+                                                                         ForceAllocationState<numeric::Q7_24>*);
+template void AllocateCurrents<float>(const float[kEfforts], std::int64_t, std::int64_t,
+                                      const ForceAllocationState<float>&, AllocationOutput<float>*);
+template void AllocateCurrents<numeric::Q7_24>(const numeric::Q7_24[kEfforts], std::int64_t, std::int64_t,
+                                               const ForceAllocationState<numeric::Q7_24>&,
+                                               AllocationOutput<numeric::Q7_24>*);
+template std::int16_t CurrentToDacCode<float>(float, const ForceAllocationState<float>&);
+template std::int16_t CurrentToDacCode<numeric::Q7_24>(numeric::Q7_24, const ForceAllocationState<numeric::Q7_24>&);
+template float MonitorCodeToCurrent_A<float>(std::int16_t, const ForceAllocationState<float>&);
+template numeric::Q7_24 MonitorCodeToCurrent_A<numeric::Q7_24>(std::int16_t,
+                                                               const ForceAllocationState<numeric::Q7_24>&);
+template float GravityFeedForward_A<float>(float, const ForceAllocationState<float>&);
+template numeric::Q7_24 GravityFeedForward_A<numeric::Q7_24>(numeric::Q7_24,
+                                                             const ForceAllocationState<numeric::Q7_24>&);
+template float EffortFromForce_A<float>(float, const ForceAllocationState<float>&);
+template numeric::Q7_24 EffortFromForce_A<numeric::Q7_24>(numeric::Q7_24, const ForceAllocationState<numeric::Q7_24>&);
+
+}  // namespace maglev::kernel

@@ -1,0 +1,250 @@
+// Saturating fixed-point arithmetic for the control kernel.
+//
+// Fixed<F>   : int32 storage, Q(31-F).F. The kernel default is Q7.24
+//              (range +-128, LSB 2^-24 = 5.96e-8): in kernel units (um, urad,
+//              A) every servo signal is O(1), see docs/SCALING.md.
+// Wide<F>    : int64 storage, Q(63-F).F, the accumulator for integrator and
+//              filter states (default Q31.32, LSB 2.3e-10), so that tiny
+//              per-tick increments (1 nm * Ki*T ~ 2.4e-7 A) are not lost.
+//
+// Every operation saturates to the symmetric range [-INT32_MAX, INT32_MAX]
+// (resp. [-INT64_MAX, INT64_MAX]) and never invokes undefined behaviour:
+// products and quotients use int64 intermediates (|a*b| < 2^62).
+//
+// ROUNDING (stated and tested): multiply, divide, conversion from double and
+// narrowing a Wide to a Fixed all round to nearest, ties AWAY FROM ZERO, so
+// the error is symmetric in sign (no drift towards -inf in integrators fed by
+// a zero-mean signal). The one exception is Wide * coefficient
+// (Wide::mul), which rounds ties towards +inf (floor(x + 1/2)); it is only
+// used on the internal-model resonator states where the tie case has
+// probability 2^-28.
+#pragma once
+
+#include <compare>
+#include <cstdint>
+#include <limits>
+
+namespace maglev::numeric {
+
+namespace detail {
+
+inline constexpr std::int32_t kRaw32Max = std::numeric_limits<std::int32_t>::max();
+inline constexpr std::int32_t kRaw32Min = -kRaw32Max;  // symmetric: -x never overflows
+inline constexpr std::int64_t kRaw64Max = std::numeric_limits<std::int64_t>::max();
+inline constexpr std::int64_t kRaw64Min = -kRaw64Max;
+
+constexpr std::int32_t saturate32(std::int64_t v) {
+  if (v > kRaw32Max) return kRaw32Max;
+  if (v < kRaw32Min) return kRaw32Min;
+  return static_cast<std::int32_t>(v);
+}
+
+constexpr std::int64_t saturate64_add(std::int64_t a, std::int64_t b) {
+  std::int64_t r = 0;
+  if (__builtin_add_overflow(a, b, &r)) return a > 0 ? kRaw64Max : kRaw64Min;
+  if (r < kRaw64Min) return kRaw64Min;
+  return r;
+}
+
+// Right shift by s >= 0 bits, rounding to nearest, ties away from zero.
+// Valid for every v in [-INT64_MAX, INT64_MAX] (works on the magnitude in
+// uint64, so v + half can never overflow).
+constexpr std::int64_t shift_round(std::int64_t v, int s) {
+  if (s <= 0) return v;
+  const std::uint64_t half = std::uint64_t{1} << (s - 1);
+  if (v >= 0) {
+    return static_cast<std::int64_t>((static_cast<std::uint64_t>(v) + half) >> s);
+  }
+  const std::uint64_t mag = std::uint64_t{0} - static_cast<std::uint64_t>(v);
+  return -static_cast<std::int64_t>((mag + half) >> s);
+}
+
+// Left shift by s >= 0 bits with saturation.
+constexpr std::int64_t shift_left_sat(std::int64_t v, int s) {
+  if (s <= 0) return v;
+  const std::int64_t limit = kRaw64Max >> s;
+  if (v > limit) return kRaw64Max;
+  if (v < -limit) return kRaw64Min;
+  return v * (std::int64_t{1} << s);
+}
+
+// n / d rounded to nearest, ties away from zero. d != 0.
+constexpr std::int64_t div_round(std::int64_t n, std::int64_t d) {
+  const bool negative = (n < 0) != (d < 0);
+  const std::uint64_t un = n < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(n) : static_cast<std::uint64_t>(n);
+  const std::uint64_t ud = d < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(d) : static_cast<std::uint64_t>(d);
+  const std::uint64_t q = (un + ud / 2) / ud;
+  return negative ? -static_cast<std::int64_t>(q) : static_cast<std::int64_t>(q);
+}
+
+constexpr double pow2(int n) {
+  double r = 1.0;
+  for (int i = 0; i < n; ++i) r *= 2.0;
+  for (int i = 0; i > n; --i) r *= 0.5;
+  return r;
+}
+
+// double -> integer of the given symmetric limit, round half away from zero,
+// NaN -> 0, saturating. No libm.
+constexpr std::int64_t double_to_raw(double scaled, double limit) {
+  if (!(scaled == scaled)) return 0;  // NaN
+  if (scaled >= limit) return static_cast<std::int64_t>(limit);
+  if (scaled <= -limit) return -static_cast<std::int64_t>(limit);
+  return static_cast<std::int64_t>(scaled >= 0.0 ? scaled + 0.5 : scaled - 0.5);
+}
+
+}  // namespace detail
+
+template <int FracBits>
+class Fixed {
+  static_assert(FracBits >= 1 && FracBits <= 30, "Fixed<F>: 1 <= F <= 30");
+
+ public:
+  static constexpr int kFracBits = FracBits;
+  static constexpr double kLsb = detail::pow2(-FracBits);
+  static constexpr double kMaxValue = static_cast<double>(detail::kRaw32Max) * kLsb;
+
+  constexpr Fixed() = default;
+
+  static constexpr Fixed from_raw(std::int32_t raw) {
+    Fixed f;
+    f.raw_ = raw < detail::kRaw32Min ? detail::kRaw32Min : raw;
+    return f;
+  }
+  static constexpr Fixed from_double(double v) {
+    // 2147483647.0 is exact in double; values at/above it saturate.
+    return from_raw(static_cast<std::int32_t>(
+        detail::double_to_raw(v * detail::pow2(FracBits), static_cast<double>(detail::kRaw32Max))));
+  }
+  static constexpr Fixed from_float(float v) { return from_double(static_cast<double>(v)); }
+  static constexpr Fixed from_int(std::int32_t v) {
+    return from_raw(detail::saturate32(detail::shift_left_sat(v, FracBits)));
+  }
+  static constexpr Fixed max() { return from_raw(detail::kRaw32Max); }
+  static constexpr Fixed min() { return from_raw(detail::kRaw32Min); }
+  static constexpr Fixed zero() { return from_raw(0); }
+  static constexpr Fixed one() { return from_raw(std::int32_t{1} << FracBits); }
+
+  constexpr std::int32_t raw() const { return raw_; }
+  constexpr double to_double() const { return static_cast<double>(raw_) * kLsb; }
+  constexpr float to_float() const { return static_cast<float>(to_double()); }
+
+  constexpr auto operator<=>(const Fixed&) const = default;
+
+  constexpr Fixed operator-() const { return from_raw(-raw_); }  // raw_ >= -INT32_MAX
+  friend constexpr Fixed operator+(Fixed a, Fixed b) {
+    return from_raw(detail::saturate32(std::int64_t{a.raw_} + b.raw_));
+  }
+  friend constexpr Fixed operator-(Fixed a, Fixed b) {
+    return from_raw(detail::saturate32(std::int64_t{a.raw_} - b.raw_));
+  }
+  friend constexpr Fixed operator*(Fixed a, Fixed b) {
+    return from_raw(detail::saturate32(detail::shift_round(std::int64_t{a.raw_} * b.raw_, FracBits)));
+  }
+  // Division by zero saturates towards the sign of the dividend (0/0 = 0).
+  friend constexpr Fixed operator/(Fixed a, Fixed b) {
+    if (b.raw_ == 0) return a.raw_ > 0 ? max() : (a.raw_ < 0 ? min() : zero());
+    return from_raw(detail::saturate32(
+        detail::div_round(std::int64_t{a.raw_} * (std::int64_t{1} << FracBits), b.raw_)));
+  }
+  constexpr Fixed& operator+=(Fixed b) { return *this = *this + b; }
+  constexpr Fixed& operator-=(Fixed b) { return *this = *this - b; }
+  constexpr Fixed& operator*=(Fixed b) { return *this = *this * b; }
+  constexpr Fixed& operator/=(Fixed b) { return *this = *this / b; }
+
+  // Product of two different formats, result in this format (rounded,
+  // saturated): used for coefficient (Q3.28) * signal (Q7.24).
+  template <int FB>
+  static constexpr Fixed mul(Fixed<FB> coeff, Fixed v) {
+    return from_raw(detail::saturate32(detail::shift_round(std::int64_t{coeff.raw()} * v.raw(), FB)));
+  }
+
+ private:
+  std::int32_t raw_ = 0;
+};
+
+using Q7_24 = Fixed<24>;
+// Coefficient format for gains and filter taps in the fixed-point kernel:
+// range +-8, LSB 3.7e-9 (the smallest default gain, Ki*T of theta_x/y =
+// 7.0e-6 A/(urad*tick), is then quantised to 0.03 %).
+using Q3_28 = Fixed<28>;
+
+// Wide accumulator, int64 Q(63-F).F. Saturating.
+template <int FracBits = 32>
+class Wide {
+  static_assert(FracBits >= 1 && FracBits <= 48, "Wide<F>: 1 <= F <= 48");
+
+ public:
+  static constexpr int kFracBits = FracBits;
+  static constexpr double kLsb = detail::pow2(-FracBits);
+
+  constexpr Wide() = default;
+  static constexpr Wide from_raw(std::int64_t raw) {
+    Wide w;
+    w.raw_ = raw < detail::kRaw64Min ? detail::kRaw64Min : raw;
+    return w;
+  }
+  static constexpr Wide from_double(double v) {
+    // 2^63 - 1024 is the largest double below 2^63; clamp there.
+    return from_raw(detail::double_to_raw(v * detail::pow2(FracBits), 9223372036854774784.0));
+  }
+  template <int F>
+  static constexpr Wide from_fixed(Fixed<F> v) {
+    if constexpr (FracBits >= F) {
+      return from_raw(detail::shift_left_sat(v.raw(), FracBits - F));
+    } else {
+      return from_raw(detail::shift_round(v.raw(), F - FracBits));
+    }
+  }
+  template <int F>
+  constexpr Fixed<F> to_fixed() const {
+    if constexpr (FracBits >= F) {
+      return Fixed<F>::from_raw(detail::saturate32(detail::shift_round(raw_, FracBits - F)));
+    } else {
+      return Fixed<F>::from_raw(detail::saturate32(detail::shift_left_sat(raw_, F - FracBits)));
+    }
+  }
+  constexpr std::int64_t raw() const { return raw_; }
+  constexpr double to_double() const { return static_cast<double>(raw_) * kLsb; }
+  constexpr auto operator<=>(const Wide&) const = default;
+
+  friend constexpr Wide operator+(Wide a, Wide b) { return from_raw(detail::saturate64_add(a.raw_, b.raw_)); }
+  friend constexpr Wide operator-(Wide a, Wide b) { return from_raw(detail::saturate64_add(a.raw_, -b.raw_)); }
+  constexpr Wide operator-() const { return from_raw(-raw_); }
+  constexpr Wide& operator+=(Wide b) { return *this = *this + b; }
+  constexpr Wide& operator-=(Wide b) { return *this = *this - b; }
+
+  // this += a * b exactly (the int64 product of two int32 raws is exact),
+  // aligned to FracBits with round-half-away-from-zero.
+  template <int FA, int FB>
+  constexpr void mac(Fixed<FA> a, Fixed<FB> b) {
+    const std::int64_t p = std::int64_t{a.raw()} * b.raw();
+    constexpr int kShift = FA + FB - FracBits;
+    const std::int64_t aligned = kShift >= 0 ? detail::shift_round(p, kShift) : detail::shift_left_sat(p, -kShift);
+    raw_ = detail::saturate64_add(raw_, aligned);
+  }
+
+  // this * c, c in Q(31-FC).FC, FC <= 32: 64x32-bit product split into two
+  // exact 64-bit partial products (no __int128 on Cortex-M), saturated.
+  template <int FC>
+  constexpr Wide mul(Fixed<FC> c) const {
+    static_assert(FC <= 32);
+    const std::int64_t hi = raw_ >> 32;  // floor
+    const std::int64_t lo = static_cast<std::int64_t>(static_cast<std::uint64_t>(raw_) & 0xFFFFFFFFu);
+    const std::int64_t p_hi = hi * c.raw();                         // |.| < 2^62
+    const std::int64_t p_lo = lo * c.raw();                         // |.| < 2^63
+    const std::int64_t lo_part = (p_lo + (std::int64_t{1} << (FC - 1))) >> FC;  // floor(x+1/2)
+    std::int64_t hi_part = 0;
+    if (__builtin_mul_overflow(p_hi, std::int64_t{1} << (32 - FC), &hi_part)) {
+      return from_raw(p_hi > 0 ? detail::kRaw64Max : detail::kRaw64Min);
+    }
+    return from_raw(detail::saturate64_add(hi_part, lo_part));
+  }
+
+ private:
+  std::int64_t raw_ = 0;
+};
+
+using Q31_32 = Wide<32>;
+
+}  // namespace maglev::numeric

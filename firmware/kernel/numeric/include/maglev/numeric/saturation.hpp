@@ -1,0 +1,54 @@
+// Saturation helpers and the 64-bit position -> Scalar error conversion.
+#pragma once
+
+#include <cstdint>
+
+#include "maglev/numeric/scalar_traits.hpp"
+
+namespace maglev::numeric {
+
+template <typename T>
+constexpr T clamp(T v, T lo, T hi) {
+  return v < lo ? lo : (hi < v ? hi : v);
+}
+
+// Symmetric clamp to [-limit, limit] (limit >= 0).
+template <typename T>
+constexpr T clamp_abs(T v, T limit) {
+  return clamp(v, -limit, limit);
+}
+
+// Picometres (or picoradians) per kernel unit (um or urad).
+inline constexpr std::int64_t kPicoPerMicro = 1000000;
+
+// Converts a 64-bit fixed-point position difference (1 pm or 1 prad per LSB)
+// to a Scalar in um (urad). The result saturates cleanly at the Scalar range
+// (+-128 um for both float and Q7.24, see ScalarTraits<float>::kMaxMagnitude):
+// a huge difference (e.g. a lost interferometer count) gives +-max, never a
+// wrapped value. Q7.24: exact integer arithmetic, round half away from zero.
+template <typename Scalar>
+constexpr Scalar pico_to_micro(std::int64_t diff_pico) {
+  using Traits = ScalarTraits<Scalar>;
+  // 2^31 / 2^24 um = 128 um = 1.28e8 pm; clamp first so the products below
+  // cannot overflow (1.28e8 * 2^24 ~ 2.1e15 << 2^63).
+  constexpr std::int64_t kClampPico = 130000000;
+  const std::int64_t d = diff_pico > kClampPico ? kClampPico : (diff_pico < -kClampPico ? -kClampPico : diff_pico);
+  if constexpr (Traits::kIsFixed) {
+    constexpr int F = Scalar::kFracBits;
+    const std::int64_t raw = detail::div_round(d * (std::int64_t{1} << F), kPicoPerMicro);
+    return Scalar::from_raw(detail::saturate32(raw));
+  } else {
+    return Traits::from_double(static_cast<double>(d) * 1e-6);
+  }
+}
+
+// Positions in um (urad) as double -> 64-bit pm (prad), round half away from
+// zero, saturating at +-2^62 (4.6e6 m: never reached by a real stage).
+constexpr std::int64_t micro_to_pico(double micro) {
+  return detail::double_to_raw(micro * 1e6, 4611686018427387904.0);
+}
+constexpr std::int64_t si_to_pico(double si) {  // m or rad -> pm or prad
+  return detail::double_to_raw(si * 1e12, 4611686018427387904.0);
+}
+
+}  // namespace maglev::numeric

@@ -1,0 +1,99 @@
+// ScalarTraits<Scalar>: the one place where float and fixed point differ.
+//
+// Kernel code is written once against these traits:
+//   Scalar  the signal type (errors um/urad, efforts A)      float | Q7.24
+//   Coeff   gains and filter taps                           float | Q3.28
+//   Acc     integrator / filter accumulators                double| Q31.32
+// float's accumulator is double because a float integrator holding ~1 A
+// cannot absorb a 2.4e-7 A increment (float eps at 1 is 1.2e-7); the
+// Cortex-M7 has a double-precision FPU, so this costs nothing in libm.
+#pragma once
+
+#include <cstdint>
+
+#include "maglev/numeric/fixed.hpp"
+#include "maglev/numeric/sin_cos.hpp"
+
+namespace maglev::numeric {
+
+template <typename Scalar>
+struct ScalarTraits;
+
+template <>
+struct ScalarTraits<float> {
+  using Scalar = float;
+  using Coeff = float;
+  using Acc = double;
+  static constexpr bool kIsFixed = false;
+  // Largest magnitude any kernel signal may take. Set equal to Q7.24's range
+  // so that float and fixed kernels saturate identically.
+  static constexpr double kMaxMagnitude = Q7_24::kMaxValue;
+  static constexpr double kCoeffMaxMagnitude = 3.0e38;
+
+  static constexpr Scalar from_double(double v) {
+    return static_cast<float>(v > kMaxMagnitude ? kMaxMagnitude : (v < -kMaxMagnitude ? -kMaxMagnitude : v));
+  }
+  static constexpr Scalar from_float(float v) { return from_double(static_cast<double>(v)); }
+  static constexpr float to_float(Scalar v) { return v; }
+  static constexpr double to_double(Scalar v) { return static_cast<double>(v); }
+  static constexpr Scalar zero() { return 0.0f; }
+  static constexpr Scalar one() { return 1.0f; }
+  static constexpr Scalar max() { return static_cast<float>(kMaxMagnitude); }
+
+  static constexpr Coeff coeff_from_double(double v) { return static_cast<float>(v); }
+  static constexpr double coeff_to_double(Coeff c) { return static_cast<double>(c); }
+  static constexpr bool coeff_fits(double v) { return v < kCoeffMaxMagnitude && v > -kCoeffMaxMagnitude; }
+  static constexpr Scalar mul(Coeff c, Scalar v) { return c * v; }
+
+  static constexpr Acc acc_zero() { return 0.0; }
+  static constexpr Acc acc_from_scalar(Scalar v) { return static_cast<double>(v); }
+  static constexpr Acc acc_from_double(double v) { return v; }
+  static constexpr double acc_to_double(Acc a) { return a; }
+  static constexpr Scalar acc_to_scalar(Acc a) { return from_double(a); }
+  static constexpr void mac(Acc& acc, Coeff c, Scalar v) { acc += static_cast<double>(c) * static_cast<double>(v); }
+  static constexpr Acc acc_mul(Acc a, Coeff c) { return a * static_cast<double>(c); }
+
+  static constexpr SinCos<Scalar> sin_cos(std::uint32_t phase) {
+    constexpr float kQ30 = 1.0f / 1073741824.0f;
+    return {static_cast<float>(sin_q30(phase)) * kQ30, static_cast<float>(cos_q30(phase)) * kQ30};
+  }
+};
+
+template <int F>
+struct ScalarTraits<Fixed<F>> {
+  using Scalar = Fixed<F>;
+  using Coeff = Q3_28;
+  using Acc = Q31_32;
+  static constexpr bool kIsFixed = true;
+  static constexpr double kMaxMagnitude = Scalar::kMaxValue;
+  static constexpr double kCoeffMaxMagnitude = Coeff::kMaxValue;
+
+  static constexpr Scalar from_double(double v) { return Scalar::from_double(v); }
+  static constexpr Scalar from_float(float v) { return Scalar::from_float(v); }
+  static constexpr float to_float(Scalar v) { return v.to_float(); }
+  static constexpr double to_double(Scalar v) { return v.to_double(); }
+  static constexpr Scalar zero() { return Scalar::zero(); }
+  static constexpr Scalar one() { return Scalar::one(); }
+  static constexpr Scalar max() { return Scalar::max(); }
+
+  static constexpr Coeff coeff_from_double(double v) { return Coeff::from_double(v); }
+  static constexpr double coeff_to_double(Coeff c) { return c.to_double(); }
+  static constexpr bool coeff_fits(double v) { return v < kCoeffMaxMagnitude && v > -kCoeffMaxMagnitude; }
+  static constexpr Scalar mul(Coeff c, Scalar v) { return Scalar::mul(c, v); }
+
+  static constexpr Acc acc_zero() { return Acc{}; }
+  static constexpr Acc acc_from_scalar(Scalar v) { return Acc::from_fixed(v); }
+  static constexpr Acc acc_from_double(double v) { return Acc::from_double(v); }
+  static constexpr double acc_to_double(Acc a) { return a.to_double(); }
+  static constexpr Scalar acc_to_scalar(Acc a) { return a.template to_fixed<F>(); }
+  static constexpr void mac(Acc& acc, Coeff c, Scalar v) { acc.mac(c, v); }
+  static constexpr Acc acc_mul(Acc a, Coeff c) { return a.mul(c); }
+
+  static constexpr SinCos<Scalar> sin_cos(std::uint32_t phase) {
+    static_assert(F <= 30);
+    return {Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(sin_q30(phase), 30 - F))),
+            Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(cos_q30(phase), 30 - F)))};
+  }
+};
+
+}  // namespace maglev::numeric

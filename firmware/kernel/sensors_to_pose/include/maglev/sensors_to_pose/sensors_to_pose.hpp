@@ -1,0 +1,227 @@
+// sensors_to_pose: raw per-tick sensor bits -> 64-bit fixed-point pose.
+//
+//   interferometer counts (3 x wrapping uint32) -> int64 counts -> pm
+//       -> beam-layout solve (x, y, theta_z, with Abbe/cosine terms)
+//   laser displacement ADC codes (3 x int16)   -> heights (pm)
+//       -> plane fit (z, theta_x, theta_y)
+//   Hall ADC codes (4 x int16)                 -> in-plane phase (homing only)
+//   status bits / rail codes                   -> validity per pose axis
+//
+// Every per-tick operation is integer (int64 with 32-bit-limb wide products,
+// see wide_math.hpp): the pose is bit-identical on host and target, in the
+// float and in the Q7.24 kernel. Constants are precomputed in double when a
+// Config is applied, never per tick.
+//
+// Sign conventions (world XYZ fixed to the magnet matrix, Z up; rotations
+// right-handed about +X, +Y, +Z):
+//   * a point of the platen at platen-frame (px, py) is at height
+//     z + theta_x * py - theta_y * px          (small angles)
+//   * a point of the platen at platen-frame (px, py) is at world
+//     (x - theta_z * py, y + theta_z * px)     (small angles)
+#pragma once
+
+#include <cstdint>
+
+#include "maglev/io/sensor_sample.hpp"
+
+namespace maglev::kernel {
+
+// 1 pm per LSB for lengths, 1 prad per LSB for angles.
+struct Pose64 {
+  std::int64_t x_pm;
+  std::int64_t y_pm;
+  std::int64_t z_pm;
+  std::int64_t theta_x_prad;
+  std::int64_t theta_y_prad;
+  std::int64_t theta_z_prad;
+};
+
+// Validity bit i <-> maglev::kernel::Axis i: x, y, theta_z, z, theta_x,
+// theta_y (the order of U in eq (21); same bits as the sequencer's kAxisBit*).
+inline constexpr std::uint8_t kPoseValidX = 1u << 0;
+inline constexpr std::uint8_t kPoseValidY = 1u << 1;
+inline constexpr std::uint8_t kPoseValidThetaZ = 1u << 2;
+inline constexpr std::uint8_t kPoseValidZ = 1u << 3;
+inline constexpr std::uint8_t kPoseValidThetaX = 1u << 4;
+inline constexpr std::uint8_t kPoseValidThetaY = 1u << 5;
+inline constexpr std::uint8_t kPoseValidInPlane = kPoseValidX | kPoseValidY | kPoseValidThetaZ;
+inline constexpr std::uint8_t kPoseValidOutOfPlane = kPoseValidZ | kPoseValidThetaX | kPoseValidThetaY;
+inline constexpr std::uint8_t kPoseValidAll = kPoseValidInPlane | kPoseValidOutOfPlane;
+
+// ---------------------------------------------------------------------------
+// Configuration (plain SI, what Modbus / persistence see)
+// ---------------------------------------------------------------------------
+enum class BeamAxis : std::uint8_t { kX = 0, kY = 1 };
+
+// One interferometer beam. Beams are fixed in the world; the plane mirror is
+// on the platen. A beam along X at world Y = perpendicular_m reads
+//   sign * m = x - (perpendicular_m - y) * theta_z + d * theta_z^2 / 2
+// and a beam along Y at world X = perpendicular_m reads
+//   sign * m = y + (perpendicular_m - x) * theta_z + d * theta_z^2 / 2
+// (d = mirror_distance_m: platen centre to the mirror face; the d term is the
+// cosine error of the rotated mirror, exact to O(theta^3)). x, y are measured
+// from the interferometer zero, i.e. before the homing offset.
+struct BeamConfig {
+  BeamAxis axis;
+  double perpendicular_m;
+  double mirror_distance_m;
+  std::int8_t sign;  // +1 or -1: counts increase with +axis motion or not
+};
+
+struct SensorsToPoseConfig {
+  // Interferometer: LSB = wavelength / (fold * interpolation).
+  double wavelength_m;
+  int fold;
+  int interpolation;
+  BeamConfig beam[io::kInterferometerAxes];
+  // Include the Abbe (y*theta_z, x*theta_z) and cosine (d*theta_z^2/2) terms.
+  bool abbe_cosine_correction;
+  // Plausibility: a per-tick count jump above max_speed / servo_rate is a
+  // glitch (lost fringe, counter reset), flagged and not absorbed.
+  double max_speed_m_per_s;
+  double servo_rate_Hz;
+
+  // Laser displacement sensors: height_i = zero_height + code * FS/32768 * scale.
+  double displacement_scale_m_per_V;
+  double displacement_zero_height_m;
+  double adc_full_scale_V;
+  double displacement_sensor_x_m[io::kDisplacementSensors];  // platen frame
+  double displacement_sensor_y_m[io::kDisplacementSensors];
+  // An ADC code with |code| >= rail_code is "at the rail": invalid.
+  std::int16_t adc_rail_code;
+
+  // Hall sensors (homing).
+  double pitch_m;
+  double hall_a_x_m;  // sensor A, platen frame; B is a quarter pitch further in X and Y
+  double hall_a_y_m;
+  // c_5 / c_1 of eq (3) at the Hall height (the 5th harmonic enters eq (1)
+  // with sign (-1)^1). Removed from the phase by a fixed-count iteration.
+  double hall_fifth_harmonic_ratio;
+  // sqrt(A^2 + B^2) must be within [min, max] ADC codes to trust the phase.
+  double hall_min_amplitude_codes;
+  double hall_max_amplitude_codes;
+};
+
+// Defaults from io/stage_parameters.hpp. Not constexpr (uses std::exp).
+SensorsToPoseConfig DefaultSensorsToPoseConfig();
+
+// c_n(z) / c_1(z) of eq (3) for harmonic n at height z over an array of
+// thickness delta (the sign (-1)^k is NOT included).
+double HalbachHarmonicRatio(int n, double z_m, double delta_m, double pitch_m);
+
+enum class SensorsToPoseError : std::uint8_t {
+  kOk = 0,
+  kBadInterferometerScale,   // wavelength/fold/interpolation not positive / too fine
+  kBadBeamSign,
+  kSingularBeamLayout,       // the three beams do not determine x, y, theta_z
+  kBadPlausibilityBound,
+  kSingularDisplacementLayout,  // the three sensors are collinear
+  kBadDisplacementScale,
+  kBadPitch,
+  kBadHallConfig,
+};
+
+// ---------------------------------------------------------------------------
+// State (caller-owned, static). Holds the applied constants and the counters.
+// ---------------------------------------------------------------------------
+struct SensorsToPoseState {
+  // --- applied constants (ApplySensorsToPoseConfig) ---
+  // pm = round(counts * lsb_num / lsb_den), exact; lsb_num/lsb_den is the
+  // reduced fraction wavelength_fm / (fold * interpolation * 1000).
+  std::int64_t lsb_num;
+  std::int64_t lsb_den;
+  std::int64_t max_counts_per_tick;
+  std::int8_t beam_sign[io::kInterferometerAxes];
+  std::int64_t beam_mirror_pm[io::kInterferometerAxes];
+  std::uint8_t beam_is_y[io::kInterferometerAxes];
+  bool abbe_cosine_correction;
+  // [x, y, theta_z] = inv_beam * m (Q40; rows x, y in pm/pm, theta_z in prad/pm).
+  std::int64_t inv_beam_q40[3][3];
+  // heights: zero_height_pm + code * lds_gain_q40
+  std::int64_t lds_zero_pm;
+  std::int64_t lds_gain_q40;
+  // [z, theta_x, theta_y] = inv_plane * h (Q40).
+  std::int64_t inv_plane_q40[3][3];
+  std::int16_t adc_rail_code;
+  std::int64_t pitch_pm;
+  std::int64_t hall_a_x_pm;
+  std::int64_t hall_a_y_pm;
+  double hall_fifth_harmonic_ratio;
+  double hall_min_amplitude_codes;
+  double hall_max_amplitude_codes;
+
+  // --- runtime ---
+  std::uint32_t last_raw[io::kInterferometerAxes];
+  std::int64_t counts[io::kInterferometerAxes];
+  std::uint8_t jump_latched;  // bit b: beam b saw an implausible jump (sticky until re-seed)
+  bool seeded;
+  // Homing offsets added to the interferometer x, y (magnet-frame absolute).
+  std::int64_t home_offset_x_pm;
+  std::int64_t home_offset_y_pm;
+  bool homed;
+};
+
+// Validates, precomputes, and re-seeds the counters on the next sample.
+// On error the state is left unchanged.
+SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
+                                            SensorsToPoseState* state);
+
+struct PoseMeasurement {
+  Pose64 pose;               // x, y include the homing offset
+  Pose64 pose_unhomed;       // x, y relative to the interferometer zero
+  std::uint8_t valid_axes;   // kPoseValid* bits
+  std::uint8_t beam_loss;    // bit b: status kBeamLoss<b>
+  std::uint8_t beam_jump;    // bit b: implausible count jump (latched)
+  std::uint8_t displacement_bad;  // bit s: out of range, or ADC at the rail
+  bool adc_fault;
+  bool stale_frame;
+};
+
+// One tick. Constant work, no early exits.
+PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseState* state);
+
+// Interferometer counter extension alone (also used by the step above).
+// Returns true if the sample's delta was plausible and absorbed.
+bool ExtendCounter(std::uint32_t raw, std::uint32_t* last_raw, std::int64_t* counts,
+                   std::int64_t max_counts_per_tick);
+
+// Exact count -> pm, rounding to nearest with ties away from zero.
+std::int64_t CountsToPicometres(std::int64_t counts, const SensorsToPoseState& state);
+
+// Re-seed the counters at the next sample (counts restart at 0 = the
+// present position) and clear the jump latches. Homing must follow.
+void ReseedInterferometers(SensorsToPoseState* state);
+
+// ---------------------------------------------------------------------------
+// Hall sensors and homing
+// ---------------------------------------------------------------------------
+struct HallPhase {
+  // Magnet-frame phase of sensor A in X and Y, 2^32 = one pitch.
+  std::uint32_t phase_x_turn;
+  std::uint32_t phase_y_turn;
+  double amplitude_x_codes;
+  double amplitude_y_codes;
+  bool plausible;  // amplitudes in range and ADC not faulted / railed
+};
+
+// phase = atan2(A, B) of each axis, with the 5th harmonic removed. Homing
+// only (double, libm): not part of the tick.
+HallPhase HallToPhase(const io::SensorSample& sample, const SensorsToPoseState& state);
+
+// Magnet-frame platen-centre coordinate (mod pitch, in [0, pitch)) from a
+// Hall phase: x = phase * pitch - hall_a_x (theta_z ~ 0 at homing).
+std::int64_t HallCoarsePosition_pm(std::uint32_t phase_turn, std::int64_t sensor_offset_pm,
+                                   std::int64_t pitch_pm);
+
+struct HomingOffsets {
+  std::int64_t x_pm;
+  std::int64_t y_pm;
+};
+
+// Offsets that make interferometer + offset == Hall coordinate (mod pitch),
+// chosen in [-pitch/2, pitch/2): the smallest correction.
+HomingOffsets ComputeHomingOffsets(const HallPhase& hall, const Pose64& pose_unhomed,
+                                   const SensorsToPoseState& state);
+void SetHomingOffsets(const HomingOffsets& offsets, SensorsToPoseState* state);
+
+}  // namespace maglev::kernel

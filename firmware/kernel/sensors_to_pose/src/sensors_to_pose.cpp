@@ -1,0 +1,395 @@
+#include "maglev/sensors_to_pose/sensors_to_pose.hpp"
+
+#include <cmath>
+#include <cstdint>
+
+#include "maglev/io/stage_parameters.hpp"
+#include "maglev/sensors_to_pose/wide_math.hpp"
+
+namespace maglev::kernel {
+namespace {
+
+namespace stage = io::stage;
+using wide::MulShiftRound;
+using wide::ToQ40;
+
+constexpr std::int64_t Gcd(std::int64_t a, std::int64_t b) {
+  while (b != 0) {
+    const std::int64_t t = a % b;
+    a = b;
+    b = t;
+  }
+  return a;
+}
+
+std::int64_t RoundToInt64(double v) { return static_cast<std::int64_t>(std::llround(v)); }
+
+// Inverse of a 3x3 matrix in double (configuration time). Returns false if
+// the matrix is singular relative to its scale.
+bool Invert3(const double m[3][3], double inv[3][3]) {
+  const double c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];
+  const double c01 = m[1][2] * m[2][0] - m[1][0] * m[2][2];
+  const double c02 = m[1][0] * m[2][1] - m[1][1] * m[2][0];
+  const double det = m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02;
+  double scale = 0.0;
+  for (int r = 0; r < 3; ++r) {
+    double row = 0.0;
+    for (int c = 0; c < 3; ++c) row += std::fabs(m[r][c]);
+    scale = scale > row ? scale : row;
+  }
+  if (!(std::fabs(det) > 1e-9 * scale * scale * scale)) return false;
+  const double k = 1.0 / det;
+  inv[0][0] = c00 * k;
+  inv[1][0] = c01 * k;
+  inv[2][0] = c02 * k;
+  inv[0][1] = (m[0][2] * m[2][1] - m[0][1] * m[2][2]) * k;
+  inv[1][1] = (m[0][0] * m[2][2] - m[0][2] * m[2][0]) * k;
+  inv[2][1] = (m[0][1] * m[2][0] - m[0][0] * m[2][1]) * k;
+  inv[0][2] = (m[0][1] * m[1][2] - m[0][2] * m[1][1]) * k;
+  inv[1][2] = (m[0][2] * m[1][0] - m[0][0] * m[1][2]) * k;
+  inv[2][2] = (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * k;
+  return true;
+}
+
+// Branch-free select for int64 (keeps the tick's cost data-independent).
+constexpr std::int64_t Select(bool c, std::int64_t a, std::int64_t b) {
+  const std::int64_t mask = -static_cast<std::int64_t>(c);
+  return (a & mask) | (b & ~mask);
+}
+
+// 1 prad in Q40 rad: theta_q40 = theta_prad * 2^40 / 1e12.
+constexpr double kPradToQ40Rad = 1099511627776.0 * 1e-12;
+
+}  // namespace
+
+double HalbachHarmonicRatio(int n, double z_m, double delta_m, double pitch_m) {
+  const double g1 = 2.0 * stage::kPi / pitch_m;
+  const double gn = g1 * n;
+  return (1.0 / n) * (1.0 - std::exp(-gn * delta_m)) / (1.0 - std::exp(-g1 * delta_m)) *
+         std::exp(-(gn - g1) * z_m);
+}
+
+SensorsToPoseConfig DefaultSensorsToPoseConfig() {
+  SensorsToPoseConfig c{};
+  c.wavelength_m = stage::kWavelength_m;
+  c.fold = stage::kInterferometerFold;
+  c.interpolation = stage::kInterferometerInterpolation;
+  // "x, y1, y2": x beam along X at y = 0; y beams along Y at x = -/+ s/2.
+  // (ours) mirror faces at the 143 mm frame's edge: 71.5 mm from the centre.
+  c.beam[0] = {BeamAxis::kX, 0.0, 0.0715, 1};
+  c.beam[1] = {BeamAxis::kY, -stage::kYBeamSeparation_m / 2, 0.0715, 1};
+  c.beam[2] = {BeamAxis::kY, +stage::kYBeamSeparation_m / 2, 0.0715, 1};
+  c.abbe_cosine_correction = true;
+  // (ours) 2 m/s: 1.7x the paper's fastest move (1.2 m/s^2 trapezoid peaks
+  // near 0.12 m/s) would still be far inside; a lost fringe burst is not.
+  c.max_speed_m_per_s = 2.0;
+  c.servo_rate_Hz = stage::kServoRate_Hz;
+  c.displacement_scale_m_per_V = stage::kDisplacementScale_m_per_V;
+  c.displacement_zero_height_m = stage::kDisplacementZeroHeight_m;
+  c.adc_full_scale_V = stage::kAdcFullScale_V;
+  for (int i = 0; i < io::kDisplacementSensors; ++i) {
+    c.displacement_sensor_x_m[i] = stage::kDisplacementSensorX_m[i];
+    c.displacement_sensor_y_m[i] = stage::kDisplacementSensorY_m[i];
+  }
+  c.adc_rail_code = 32767;  // the AD7606 clips at +32767 / -32768
+  c.pitch_m = stage::kPitch_m;
+  c.hall_a_x_m = stage::kHallAX_m;
+  c.hall_a_y_m = stage::kHallAY_m;
+  c.hall_fifth_harmonic_ratio = HalbachHarmonicRatio(5, stage::kHallHeightAboveMagnets_m,
+                                                     stage::kMagnetThickness_m, stage::kPitch_m);
+  // (ours) accept 10%..105% of full scale: a detached/unpowered sensor reads ~0.
+  c.hall_min_amplitude_codes = 3276.8;
+  c.hall_max_amplitude_codes = 34406.0;
+  return c;
+}
+
+SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
+                                            SensorsToPoseState* state) {
+  SensorsToPoseState s{};
+  // --- interferometer LSB as an exact reduced fraction of pm ---------------
+  // wavelength rounded to whole femtometres (632.991 nm is exactly 632991000 fm).
+  if (!(config.wavelength_m > 0.0 && config.wavelength_m < 1e-3) || config.fold <= 0 ||
+      config.interpolation <= 0 || config.fold > 64 || config.interpolation > 65536) {
+    return SensorsToPoseError::kBadInterferometerScale;
+  }
+  const std::int64_t wavelength_fm = RoundToInt64(config.wavelength_m * 1e15);
+  const std::int64_t den = std::int64_t{config.fold} * config.interpolation * 1000;
+  const std::int64_t g = Gcd(wavelength_fm, den);
+  s.lsb_num = wavelength_fm / g;
+  s.lsb_den = den / g;
+  // counts are split as q*den + r with r < den; r * num must fit in int64.
+  if (s.lsb_num >= (std::int64_t{1} << 40) || s.lsb_den >= (std::int64_t{1} << 22)) {
+    return SensorsToPoseError::kBadInterferometerScale;
+  }
+  const double lsb_m = config.wavelength_m / (config.fold * config.interpolation);
+  if (!(config.max_speed_m_per_s > 0.0) || !(config.servo_rate_Hz > 0.0)) {
+    return SensorsToPoseError::kBadPlausibilityBound;
+  }
+  const double max_counts = std::ceil(config.max_speed_m_per_s / config.servo_rate_Hz / lsb_m);
+  if (!(max_counts >= 1.0 && max_counts < 1.0e9)) return SensorsToPoseError::kBadPlausibilityBound;
+  s.max_counts_per_tick = static_cast<std::int64_t>(max_counts);
+
+  // --- beam layout -----------------------------------------------------------
+  double m[3][3];
+  for (int b = 0; b < io::kInterferometerAxes; ++b) {
+    const BeamConfig& beam = config.beam[b];
+    if (beam.sign != 1 && beam.sign != -1) return SensorsToPoseError::kBadBeamSign;
+    s.beam_sign[b] = beam.sign;
+    s.beam_is_y[b] = beam.axis == BeamAxis::kY ? 1u : 0u;
+    s.beam_mirror_pm[b] = RoundToInt64(beam.mirror_distance_m * 1e12);
+    // Linear part, units pm per (pm, pm, prad): prad * m = pm.
+    if (beam.axis == BeamAxis::kX) {
+      m[b][0] = 1.0;
+      m[b][1] = 0.0;
+      m[b][2] = -beam.perpendicular_m;
+    } else {
+      m[b][0] = 0.0;
+      m[b][1] = 1.0;
+      m[b][2] = beam.perpendicular_m;
+    }
+  }
+  double inv[3][3];
+  if (!Invert3(m, inv)) return SensorsToPoseError::kSingularBeamLayout;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) s.inv_beam_q40[r][c] = ToQ40(inv[r][c]);
+  s.abbe_cosine_correction = config.abbe_cosine_correction;
+
+  // --- laser displacement sensors: z_i = z + theta_x*y_i - theta_y*x_i ------
+  if (!(config.displacement_scale_m_per_V > 0.0) || !(config.adc_full_scale_V > 0.0) ||
+      config.adc_rail_code <= 0) {
+    return SensorsToPoseError::kBadDisplacementScale;
+  }
+  s.lds_zero_pm = RoundToInt64(config.displacement_zero_height_m * 1e12);
+  s.lds_gain_q40 = ToQ40(config.displacement_scale_m_per_V * config.adc_full_scale_V / 32768.0 * 1e12);
+  double p[3][3];
+  for (int i = 0; i < io::kDisplacementSensors; ++i) {
+    p[i][0] = 1.0;
+    p[i][1] = config.displacement_sensor_y_m[i];
+    p[i][2] = -config.displacement_sensor_x_m[i];
+  }
+  if (!Invert3(p, inv)) return SensorsToPoseError::kSingularDisplacementLayout;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) s.inv_plane_q40[r][c] = ToQ40(inv[r][c]);
+  s.adc_rail_code = config.adc_rail_code;
+
+  // --- Hall / pitch ------------------------------------------------------------
+  if (!(config.pitch_m > 1e-4 && config.pitch_m < 1.0)) return SensorsToPoseError::kBadPitch;
+  s.pitch_pm = RoundToInt64(config.pitch_m * 1e12);
+  if (!(config.hall_fifth_harmonic_ratio >= 0.0 && config.hall_fifth_harmonic_ratio < 0.2) ||
+      !(config.hall_min_amplitude_codes >= 0.0) ||
+      !(config.hall_max_amplitude_codes > config.hall_min_amplitude_codes)) {
+    return SensorsToPoseError::kBadHallConfig;
+  }
+  s.hall_a_x_pm = RoundToInt64(config.hall_a_x_m * 1e12);
+  s.hall_a_y_pm = RoundToInt64(config.hall_a_y_m * 1e12);
+  s.hall_fifth_harmonic_ratio = config.hall_fifth_harmonic_ratio;
+  s.hall_min_amplitude_codes = config.hall_min_amplitude_codes;
+  s.hall_max_amplitude_codes = config.hall_max_amplitude_codes;
+
+  s.seeded = false;
+  s.homed = false;
+  *state = s;
+  return SensorsToPoseError::kOk;
+}
+
+bool ExtendCounter(std::uint32_t raw, std::uint32_t* last_raw, std::int64_t* counts,
+                   std::int64_t max_counts_per_tick) {
+  // Modular difference reinterpreted as signed: correct across the 2^32 wrap
+  // in both directions as long as |true delta| < 2^31 per tick.
+  const std::int64_t delta = static_cast<std::int32_t>(raw - *last_raw);
+  const std::int64_t mag = delta < 0 ? -delta : delta;
+  const bool plausible = mag <= max_counts_per_tick;
+  *counts = Select(plausible, *counts + delta, *counts);
+  *last_raw = plausible ? raw : *last_raw;
+  return plausible;
+}
+
+std::int64_t CountsToPicometres(std::int64_t counts, const SensorsToPoseState& state) {
+  // counts * num / den exactly: counts = q*den + r, 0 <= r < den, so
+  // counts*num/den = q*num + r*num/den with r*num < 2^62. Then round half
+  // away from zero on the fractional part (symmetric about zero).
+  const std::int64_t q = wide::FloorDiv(counts, state.lsb_den);
+  const std::int64_t r = counts - q * state.lsb_den;
+  const std::int64_t rn = r * state.lsb_num;
+  const std::int64_t whole = rn / state.lsb_den;
+  const std::int64_t frac2 = 2 * (rn - whole * state.lsb_den);  // twice the remainder
+  // value = q*num + whole + rem/den; rem/den in [0, 1).
+  const std::int64_t base = q * state.lsb_num + whole;
+  // Non-negative value: round up if rem/den >= 1/2. Negative value (base < 0
+  // with a remainder): the magnitude's fraction is 1 - rem/den; rounding away
+  // from zero means rounding down (keeping base) if rem/den <= 1/2.
+  const bool negative = base < 0;
+  const bool up = negative ? (frac2 > state.lsb_den) : (frac2 >= state.lsb_den);
+  return base + (up ? 1 : 0);
+}
+
+void ReseedInterferometers(SensorsToPoseState* state) {
+  state->seeded = false;
+  state->homed = false;
+  state->jump_latched = 0;
+}
+
+PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseState* state) {
+  SensorsToPoseState& s = *state;
+  PoseMeasurement out{};
+
+  // --- counters ----------------------------------------------------------------
+  const bool seed = !s.seeded;
+  std::int64_t meas_pm[3];
+  for (int b = 0; b < io::kInterferometerAxes; ++b) {
+    const std::uint32_t raw = sample.interferometer_counts[b];
+    s.last_raw[b] = seed ? raw : s.last_raw[b];
+    s.counts[b] = Select(seed, 0, s.counts[b]);
+    const bool ok = ExtendCounter(raw, &s.last_raw[b], &s.counts[b], s.max_counts_per_tick);
+    s.jump_latched = static_cast<std::uint8_t>(s.jump_latched | (ok ? 0u : (1u << b)));
+    meas_pm[b] = s.beam_sign[b] * CountsToPicometres(s.counts[b], s);
+  }
+  s.seeded = true;
+
+  // --- beam solve: linear inverse, then four fixed Abbe/cosine corrections ---
+  // (fixed count: no data-dependent exit). The non-linear terms are
+  //   X beam:  + y*theta + d*theta^2/2      Y beam:  - x*theta + d*theta^2/2
+  // so m_lin = m - nonlin(estimate); each pass shrinks the residual by about
+  // |theta| (< 4e-3 at the 3.72 mrad travel): 65 um worst-case Abbe term ->
+  // 260 nm -> 1 nm -> 4 pm -> < 1 pm. In operation (|theta| ~ 1 urad) one
+  // pass would do; the count is fixed for a data-independent cost.
+  std::int64_t est[3] = {0, 0, 0};
+  for (int pass = 0; pass < 5; ++pass) {
+    const bool correct = s.abbe_cosine_correction && pass > 0;
+    const std::int64_t theta_q40 = MulShiftRound(est[2], ToQ40(kPradToQ40Rad));
+    const std::int64_t theta2_q40 = MulShiftRound(theta_q40, theta_q40);
+    std::int64_t lin[3];
+    for (int b = 0; b < 3; ++b) {
+      const std::int64_t other = s.beam_is_y[b] ? -est[0] : est[1];
+      const std::int64_t abbe = MulShiftRound(other, theta_q40);
+      const std::int64_t cosine = MulShiftRound(s.beam_mirror_pm[b], theta2_q40, wide::kCoeffShift + 1);
+      lin[b] = meas_pm[b] - Select(correct, abbe + cosine, 0);
+    }
+    for (int r = 0; r < 3; ++r) {
+      est[r] = MulShiftRound(lin[0], s.inv_beam_q40[r][0]) + MulShiftRound(lin[1], s.inv_beam_q40[r][1]) +
+               MulShiftRound(lin[2], s.inv_beam_q40[r][2]);
+    }
+  }
+
+  // --- laser displacement plane fit ------------------------------------------
+  std::int64_t h[3];
+  std::uint8_t lds_bad = 0;
+  for (int i = 0; i < io::kDisplacementSensors; ++i) {
+    const std::int16_t code = sample.displacement_adc[i];
+    h[i] = s.lds_zero_pm + MulShiftRound(code, s.lds_gain_q40);
+    const bool railed = code >= s.adc_rail_code || code <= -s.adc_rail_code - 1;
+    const bool oor = (sample.status_flags & (io::kDisplacementOutOfRange0 << i)) != 0;
+    lds_bad = static_cast<std::uint8_t>(lds_bad | ((railed || oor) ? (1u << i) : 0u));
+  }
+  std::int64_t plane[3];
+  for (int r = 0; r < 3; ++r) {
+    plane[r] = MulShiftRound(h[0], s.inv_plane_q40[r][0]) + MulShiftRound(h[1], s.inv_plane_q40[r][1]) +
+               MulShiftRound(h[2], s.inv_plane_q40[r][2]);
+  }
+
+  // The beams see tan(theta_z) (the mirror's slope): theta = atan(t) = t - t^3/3
+  // (+ t^5/5 < 1.4e-13 rad at 3.72 mrad). Without it: 1.7e-8 rad at the travel limit.
+  const std::int64_t t_q40 = MulShiftRound(est[2], ToQ40(kPradToQ40Rad));
+  const std::int64_t t2_q40 = MulShiftRound(t_q40, t_q40);
+  const std::int64_t theta_z_prad =
+      est[2] - (s.abbe_cosine_correction ? MulShiftRound(est[2], t2_q40) / 3 : 0);
+
+  out.pose_unhomed = Pose64{est[0], est[1], plane[0], plane[1], plane[2], theta_z_prad};
+  out.pose = out.pose_unhomed;
+  out.pose.x_pm += s.home_offset_x_pm;
+  out.pose.y_pm += s.home_offset_y_pm;
+
+  // --- validity ------------------------------------------------------------------
+  // Every in-plane axis uses every beam (the solve and the Abbe terms couple
+  // them), every out-of-plane axis every displacement sensor (plane fit).
+  out.beam_loss = static_cast<std::uint8_t>(sample.status_flags & (io::kBeamLoss0 | io::kBeamLoss1 | io::kBeamLoss2));
+  out.beam_jump = s.jump_latched;
+  out.displacement_bad = lds_bad;
+  out.adc_fault = (sample.status_flags & io::kAdcFault) != 0;
+  out.stale_frame = (sample.status_flags & io::kStaleFrame) != 0;
+  const bool in_plane_ok = out.beam_loss == 0 && out.beam_jump == 0 && !out.stale_frame;
+  const bool out_of_plane_ok = lds_bad == 0 && !out.adc_fault && !out.stale_frame;
+  out.valid_axes = static_cast<std::uint8_t>((in_plane_ok ? kPoseValidInPlane : 0u) |
+                                             (out_of_plane_ok ? kPoseValidOutOfPlane : 0u));
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// Hall / homing (not per tick)
+// ---------------------------------------------------------------------------
+namespace {
+
+// Phase of  B + jA = e^{j theta} - eps e^{j 5 theta}  (eq (1): the n = 5 term
+// has sign (-1)^1). atan2 gives phi = theta + arg(1 - eps e^{j 4 theta}).
+// Solve theta = phi - arg(1 - eps e^{j4 theta}) by fixed-point iteration; the
+// map contracts by 4 eps / (1 - eps) (0.52 for eps = 0.114), so 24 passes
+// leave < 1e-7 rad. Fixed count: no data-dependent exit.
+double HallAxisPhase(double a, double b, double eps) {
+  const double phi = std::atan2(a, b);
+  double theta = phi;
+  for (int k = 0; k < 24; ++k) {
+    const double delta = std::atan2(-eps * std::sin(4.0 * theta), 1.0 - eps * std::cos(4.0 * theta));
+    theta = phi - delta;
+  }
+  return theta;
+}
+
+std::uint32_t RadToTurn(double rad) {
+  double t = rad / (2.0 * io::stage::kPi);
+  t -= std::floor(t);
+  // [0,1) -> [0, 2^32), wrapping 1.0 to 0.
+  const double scaled = std::floor(t * 4294967296.0 + 0.5);
+  return static_cast<std::uint32_t>(static_cast<std::uint64_t>(scaled) & 0xffffffffu);
+}
+
+}  // namespace
+
+HallPhase HallToPhase(const io::SensorSample& sample, const SensorsToPoseState& state) {
+  HallPhase out{};
+  const double a_x = sample.hall_adc[0];
+  const double a_y = sample.hall_adc[1];
+  const double b_x = sample.hall_adc[2];
+  const double b_y = sample.hall_adc[3];
+  const double eps = state.hall_fifth_harmonic_ratio;
+  out.phase_x_turn = RadToTurn(HallAxisPhase(a_x, b_x, eps));
+  out.phase_y_turn = RadToTurn(HallAxisPhase(a_y, b_y, eps));
+  out.amplitude_x_codes = std::sqrt(a_x * a_x + b_x * b_x);
+  out.amplitude_y_codes = std::sqrt(a_y * a_y + b_y * b_y);
+  bool railed = false;
+  for (int i = 0; i < io::kHallChannels; ++i) {
+    const std::int16_t c = sample.hall_adc[i];
+    railed = railed || c >= state.adc_rail_code || c <= -state.adc_rail_code - 1;
+  }
+  const auto in_range = [&state](double amp) {
+    return amp >= state.hall_min_amplitude_codes && amp <= state.hall_max_amplitude_codes;
+  };
+  out.plausible = !railed && (sample.status_flags & io::kAdcFault) == 0 &&
+                  in_range(out.amplitude_x_codes) && in_range(out.amplitude_y_codes);
+  return out;
+}
+
+std::int64_t HallCoarsePosition_pm(std::uint32_t phase_turn, std::int64_t sensor_offset_pm,
+                                   std::int64_t pitch_pm) {
+  // phase * pitch / 2^32 exactly rounded (128-bit product), minus the sensor's
+  // platen-frame offset, reduced into [0, pitch).
+  const std::int64_t along = MulShiftRound(static_cast<std::int64_t>(phase_turn), pitch_pm, 32);
+  return wide::FloorMod(along - sensor_offset_pm, pitch_pm);
+}
+
+HomingOffsets ComputeHomingOffsets(const HallPhase& hall, const Pose64& pose_unhomed,
+                                   const SensorsToPoseState& state) {
+  const std::int64_t p = state.pitch_pm;
+  const std::int64_t hx = HallCoarsePosition_pm(hall.phase_x_turn, state.hall_a_x_pm, p);
+  const std::int64_t hy = HallCoarsePosition_pm(hall.phase_y_turn, state.hall_a_y_pm, p);
+  // offset = hall - ifm (mod p), represented in [-p/2, p/2).
+  const auto wrap = [p](std::int64_t v) { return wide::FloorMod(v + p / 2, p) - p / 2; };
+  return HomingOffsets{wrap(hx - pose_unhomed.x_pm), wrap(hy - pose_unhomed.y_pm)};
+}
+
+void SetHomingOffsets(const HomingOffsets& offsets, SensorsToPoseState* state) {
+  state->home_offset_x_pm = offsets.x_pm;
+  state->home_offset_y_pm = offsets.y_pm;
+  state->homed = true;
+}
+
+}  // namespace maglev::kernel

@@ -1,0 +1,129 @@
+// The supervisor: limits, sensor plausibility and the fault latch.
+//
+// Every tick it evaluates EVERY check (bounded, data-independent cost), and
+// the first one that trips while nothing is latched becomes the first-fault
+// record (code, tick, axis, value). The reaction is the safest one still
+// possible: a controlled landing while the in-plane sensors (x, y, theta_z
+// interferometers) are valid -- the in-plane loops are what keep the floating
+// platen stable -- and currents off otherwise. Reactions only escalate
+// (land -> currents off), never relax, until clear_fault().
+#pragma once
+
+#include <cstdint>
+
+#include "maglev/io/sensor_sample.hpp"
+#include "maglev/sequencer/sequencer.hpp"
+
+namespace maglev::kernel {
+
+enum class FaultCode : std::uint8_t {
+  kNone = 0,
+  kTravelX,                  // x outside the travel window
+  kTravelY,
+  kTravelThetaZ,
+  kZEnvelope,                // z outside [z_min, z_max] while z is closed
+  kTiltEnvelope,             // |theta_x| or |theta_y| beyond the envelope while z is closed
+  kFollowingError,           // |reference - measured| of a closed axis beyond its limit
+  kPeakCurrentCommanded,     // defensive: the allocation's limiter should make this impossible
+  kPeakCurrentMeasured,      // amplifier monitor beyond peak + margin: actuator not following
+  kRmsCurrent,               // thermal: first-order filtered i^2 beyond rms^2
+  kTickOverrun,              // more consecutive servo overruns than allowed
+  kBeamLoss,                 // interferometer signal loss (status bit)
+  kCounterJump,              // interferometer count step beyond the plausible speed
+  kStaleFrames,              // more consecutive stale samples than allowed
+  kDisplacementOutOfRange,   // laser displacement sensor: status bit or ADC at a rail
+  kAdcFault,                 // AD7606 conversion fault
+  kCurrentMonitorOutOfRange, // coil current monitor ADC at a rail
+};
+
+inline constexpr std::uint8_t kNoAxis = 0xFF;
+
+struct FaultRecord {
+  FaultCode code = FaultCode::kNone;
+  std::uint32_t tick = 0;
+  std::uint8_t axis = kNoAxis;  // Axis index, coil index (current faults) or sensor index
+  float value = 0.0f;           // the offending value, SI
+};
+
+enum class SupervisorConfigError : std::uint8_t {
+  kOk = 0,
+  kBadTravel,
+  kBadEnvelope,
+  kBadFollowingError,
+  kBadCurrentLimit,
+  kBadThermal,
+  kBadPlausibility,
+};
+
+struct SupervisorConfig {
+  // Travel window about the interferometer zero (paper 000: 56 mm x 35 mm).
+  float x_min_m = -0.028f, x_max_m = 0.028f;
+  float y_min_m = -0.0175f, y_max_m = 0.0175f;
+  float theta_z_limit_rad = 5e-3f;
+  // z / tilt envelope while z is closed (paper 000: within 40 um of rest).
+  float z_min_m = -5e-6f, z_max_m = 40e-6f;
+  float tilt_limit_rad = 300e-6f;  // 0.07 m half-frame * 300 urad = 21 um of edge travel
+  // Following error per axis, Axis order, SI (m or rad).
+  float following_error_limit[kSequencedAxes] = {200e-6f, 200e-6f, 500e-6f, 15e-6f, 200e-6f, 200e-6f};
+  float peak_current_A = 4.0f;              // io::stage::kPeakCoilCurrent_A
+  float measured_current_margin_A = 0.5f;   // monitor noise + amplifier tracking error
+  float rms_current_A = 3.0f;               // io::stage::kRmsCoilCurrent_A
+  float thermal_time_constant_s = 10.0f;    // coil thermal time constant (ours)
+  float max_interferometer_speed_m_per_s = 0.5f;  // stage reaches 0.12 m/s (paper 000 Fig. 10)
+  float interferometer_lsb_m = 0.618e-9f;   // io::stage::kInterferometerLsb_m
+  std::uint16_t max_consecutive_stale_frames = 2;
+  std::uint16_t max_consecutive_overruns = 2;
+};
+
+SupervisorConfigError validate(const SupervisorConfig& config, float servo_rate_Hz);
+
+struct SupervisorInputs {
+  const io::SensorSample* sample = nullptr;
+  bool tick_overrun = false;
+  std::uint32_t tick = 0;
+  bool positions_valid = false;     // homed: the pose means something
+  bool envelope_active = false;     // z closed: z/tilt envelope applies
+  std::uint8_t closed_axes = 0;     // following error applies to these
+  float pose[kSequencedAxes] = {};      // measured, SI, Axis order
+  float following_error[kSequencedAxes] = {};  // reference - measured, SI
+  float coil_current_cmd_A[io::kCoils] = {};
+  float coil_current_measured_A[io::kCoils] = {};
+};
+
+struct SupervisorStatus {
+  FaultCode active = FaultCode::kNone;  // the highest-priority check tripping THIS tick
+  FaultReaction reaction = FaultReaction::kNone;  // latched reaction
+  FaultRecord first_fault{};
+  bool in_plane_sensors_valid = true;
+  bool z_sensors_valid = true;
+  float rms_current_A[io::kCoils] = {};  // sqrt of the filtered i^2 (thermal state)
+  std::uint32_t fault_count = 0;         // ticks on which any check tripped
+};
+
+class Supervisor {
+ public:
+  void configure(const SupervisorConfig& config, float servo_rate_Hz);
+  void reset();  // clears the latch AND the thermal state (power-on only)
+
+  const SupervisorStatus& step(const SupervisorInputs& in);
+
+  // Clears the latch if no check tripped on the last tick; the thermal state is kept.
+  bool clear_fault();
+  bool cause_present() const { return status_.active != FaultCode::kNone; }
+  const SupervisorStatus& status() const { return status_; }
+
+ private:
+  SupervisorConfig config_{};
+  float thermal_alpha_ = 0.0f;     // dt / tau
+  std::int32_t max_count_step_ = 0;
+  SupervisorStatus status_{};
+  std::uint32_t previous_counts_[io::kInterferometerAxes] = {};
+  bool have_previous_ = false;
+  std::uint16_t stale_run_ = 0;
+  std::uint16_t overrun_run_ = 0;
+  float i2_filtered_[io::kCoils] = {};
+};
+
+const char* to_string(FaultCode c);
+
+}  // namespace maglev::kernel

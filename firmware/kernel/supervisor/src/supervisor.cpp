@@ -1,0 +1,223 @@
+#include "maglev/supervisor/supervisor.hpp"
+
+#include <cmath>
+
+namespace maglev::kernel {
+namespace {
+
+bool positive(float v) { return v > 0.0f && v < 1e30f; }  // also rejects NaN
+float abs_f(float v) { return v < 0.0f ? -v : v; }
+
+constexpr std::int16_t kAdcRailHigh = 32767;
+constexpr std::int16_t kAdcRailLow = -32768;
+bool at_rail(std::int16_t code) { return code >= kAdcRailHigh || code <= kAdcRailLow; }
+
+// A check that tripped this tick. Evaluated in priority order: the most
+// fundamental cause first (a lost beam also produces a following error).
+struct Trip {
+  FaultCode code = FaultCode::kNone;
+  std::uint8_t axis = kNoAxis;
+  float value = 0.0f;
+};
+
+void note(Trip& t, bool tripped, FaultCode code, std::uint8_t axis, float value) {
+  // Branch-light: every check is computed; only the first tripping one is kept.
+  if (tripped && t.code == FaultCode::kNone) {
+    t.code = code;
+    t.axis = axis;
+    t.value = value;
+  }
+}
+
+}  // namespace
+
+SupervisorConfigError validate(const SupervisorConfig& c, float servo_rate_Hz) {
+  if (!(c.x_min_m < c.x_max_m) || !(c.y_min_m < c.y_max_m) || c.x_min_m < -0.1f ||
+      c.x_max_m > 0.1f || c.y_min_m < -0.1f || c.y_max_m > 0.1f ||
+      !positive(c.theta_z_limit_rad) || c.theta_z_limit_rad > 0.1f) {
+    return SupervisorConfigError::kBadTravel;
+  }
+  // The z envelope must contain the rest position and stay inside the 40 um
+  // levitation range (paper 000 Sec. V) -- anything larger risks the coils.
+  if (!(c.z_min_m < 0.0f) || !(c.z_max_m > 0.0f) || c.z_max_m > 100e-6f || c.z_min_m < -100e-6f ||
+      !positive(c.tilt_limit_rad) || c.tilt_limit_rad > 2e-3f) {
+    return SupervisorConfigError::kBadEnvelope;
+  }
+  for (float f : c.following_error_limit) {
+    if (!positive(f) || f > 0.01f) return SupervisorConfigError::kBadFollowingError;
+  }
+  if (!positive(c.peak_current_A) || c.peak_current_A > 5.0f || !positive(c.rms_current_A) ||
+      c.rms_current_A > c.peak_current_A || !(c.measured_current_margin_A >= 0.0f) ||
+      c.measured_current_margin_A > 2.0f) {
+    return SupervisorConfigError::kBadCurrentLimit;
+  }
+  if (!positive(c.thermal_time_constant_s) || c.thermal_time_constant_s * servo_rate_Hz < 10.0f ||
+      c.thermal_time_constant_s > 3600.0f) {
+    return SupervisorConfigError::kBadThermal;
+  }
+  if (!positive(c.max_interferometer_speed_m_per_s) || !positive(c.interferometer_lsb_m) ||
+      !(servo_rate_Hz > 0.0f) ||
+      c.max_interferometer_speed_m_per_s / servo_rate_Hz / c.interferometer_lsb_m > 1e9f) {
+    return SupervisorConfigError::kBadPlausibility;
+  }
+  return SupervisorConfigError::kOk;
+}
+
+void Supervisor::configure(const SupervisorConfig& c, float servo_rate_Hz) {
+  config_ = c;
+  thermal_alpha_ = 1.0f / (c.thermal_time_constant_s * servo_rate_Hz);
+  max_count_step_ = static_cast<std::int32_t>(c.max_interferometer_speed_m_per_s / servo_rate_Hz /
+                                              c.interferometer_lsb_m);
+}
+
+void Supervisor::reset() {
+  status_ = SupervisorStatus{};
+  have_previous_ = false;
+  stale_run_ = 0;
+  overrun_run_ = 0;
+  for (float& v : i2_filtered_) v = 0.0f;
+}
+
+const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
+  const io::SensorSample& s = *in.sample;
+  Trip t;
+
+  // --- sensor plausibility --------------------------------------------------
+  const std::uint16_t flags = s.status_flags;
+  const std::uint16_t beam_bits = io::kBeamLoss0 | io::kBeamLoss1 | io::kBeamLoss2;
+  const std::uint16_t lds_bits =
+      io::kDisplacementOutOfRange0 | io::kDisplacementOutOfRange1 | io::kDisplacementOutOfRange2;
+  const bool beam_loss = (flags & beam_bits) != 0;
+  for (int a = 0; a < io::kInterferometerAxes; ++a) {
+    const bool lost = (flags & (1u << a)) != 0;
+    note(t, lost, FaultCode::kBeamLoss, static_cast<std::uint8_t>(a), 0.0f);
+  }
+  bool jump = false;
+  for (int a = 0; a < io::kInterferometerAxes; ++a) {
+    // Wrap-safe difference of the 32-bit hardware counter.
+    const auto delta = static_cast<std::int32_t>(s.interferometer_counts[a] - previous_counts_[a]);
+    const std::int32_t mag = delta < 0 ? -delta : delta;
+    const bool j = have_previous_ && mag > max_count_step_;
+    jump = jump || j;
+    note(t, j, FaultCode::kCounterJump, static_cast<std::uint8_t>(a),
+         static_cast<float>(delta) * config_.interferometer_lsb_m);
+    previous_counts_[a] = s.interferometer_counts[a];
+  }
+  have_previous_ = true;
+  const bool stale = (flags & io::kStaleFrame) != 0;
+  stale_run_ = stale ? static_cast<std::uint16_t>(stale_run_ < 0xFFFF ? stale_run_ + 1 : stale_run_) : 0;
+  const bool stale_fault = stale_run_ > config_.max_consecutive_stale_frames;
+  note(t, stale_fault, FaultCode::kStaleFrames, kNoAxis, static_cast<float>(stale_run_));
+  const bool adc_fault = (flags & io::kAdcFault) != 0;
+  note(t, adc_fault, FaultCode::kAdcFault, kNoAxis, 0.0f);
+  bool lds_bad = (flags & lds_bits) != 0;
+  for (int k = 0; k < io::kDisplacementSensors; ++k) {
+    const bool bad = (flags & (io::kDisplacementOutOfRange0 << k)) != 0 || at_rail(s.displacement_adc[k]);
+    lds_bad = lds_bad || bad;
+    note(t, bad, FaultCode::kDisplacementOutOfRange, static_cast<std::uint8_t>(k),
+         static_cast<float>(s.displacement_adc[k]));
+  }
+  for (int j = 0; j < io::kCoils; ++j) {
+    note(t, at_rail(s.coil_current_adc[j]), FaultCode::kCurrentMonitorOutOfRange,
+         static_cast<std::uint8_t>(j), static_cast<float>(s.coil_current_adc[j]));
+  }
+
+  // --- timing ----------------------------------------------------------------
+  overrun_run_ = in.tick_overrun
+                     ? static_cast<std::uint16_t>(overrun_run_ < 0xFFFF ? overrun_run_ + 1 : overrun_run_)
+                     : 0;
+  note(t, overrun_run_ > config_.max_consecutive_overruns, FaultCode::kTickOverrun, kNoAxis,
+       static_cast<float>(overrun_run_));
+
+  // --- currents ----------------------------------------------------------------
+  const float measured_limit = config_.peak_current_A + config_.measured_current_margin_A;
+  bool measured_over = false;
+  for (int j = 0; j < io::kCoils; ++j) {
+    const float m = in.coil_current_measured_A[j];
+    const bool over = abs_f(m) > measured_limit;
+    measured_over = measured_over || over;
+    note(t, over, FaultCode::kPeakCurrentMeasured, static_cast<std::uint8_t>(j), m);
+  }
+  const float rms2_limit = config_.rms_current_A * config_.rms_current_A;
+  for (int j = 0; j < io::kCoils; ++j) {
+    const float i = in.coil_current_cmd_A[j];
+    note(t, abs_f(i) > config_.peak_current_A * 1.001f, FaultCode::kPeakCurrentCommanded,
+         static_cast<std::uint8_t>(j), i);
+    // Thermal model: first-order low-pass of i^2 with the coil's time constant.
+    i2_filtered_[j] += thermal_alpha_ * (i * i - i2_filtered_[j]);
+    status_.rms_current_A[j] = std::sqrt(i2_filtered_[j]);
+  }
+  for (int j = 0; j < io::kCoils; ++j) {
+    note(t, i2_filtered_[j] > rms2_limit, FaultCode::kRmsCurrent, static_cast<std::uint8_t>(j),
+         status_.rms_current_A[j]);
+  }
+
+  // --- position limits ---------------------------------------------------------
+  const float x = in.pose[0], y = in.pose[1], tz = in.pose[2], z = in.pose[3];
+  note(t, in.positions_valid && (x < config_.x_min_m || x > config_.x_max_m), FaultCode::kTravelX, 0, x);
+  note(t, in.positions_valid && (y < config_.y_min_m || y > config_.y_max_m), FaultCode::kTravelY, 1, y);
+  note(t, in.positions_valid && abs_f(tz) > config_.theta_z_limit_rad, FaultCode::kTravelThetaZ, 2, tz);
+  note(t, in.envelope_active && (z < config_.z_min_m || z > config_.z_max_m), FaultCode::kZEnvelope, 3, z);
+  for (int a = 4; a < kSequencedAxes; ++a) {
+    note(t, in.envelope_active && abs_f(in.pose[a]) > config_.tilt_limit_rad, FaultCode::kTiltEnvelope,
+         static_cast<std::uint8_t>(a), in.pose[a]);
+  }
+  for (int a = 0; a < kSequencedAxes; ++a) {
+    const bool closed = (in.closed_axes & (1u << a)) != 0;
+    note(t, closed && abs_f(in.following_error[a]) > config_.following_error_limit[a],
+         FaultCode::kFollowingError, static_cast<std::uint8_t>(a), in.following_error[a]);
+  }
+
+  // --- latch and reaction --------------------------------------------------------
+  status_.in_plane_sensors_valid = !beam_loss && !jump && !stale_fault;
+  status_.z_sensors_valid = !lds_bad && !adc_fault;
+  status_.active = t.code;
+  if (t.code != FaultCode::kNone) {
+    ++status_.fault_count;
+    if (status_.first_fault.code == FaultCode::kNone) {
+      status_.first_fault = FaultRecord{t.code, in.tick, t.axis, t.value};
+    }
+  }
+  if (status_.first_fault.code != FaultCode::kNone) {
+    // Landing needs the in-plane loops (they stabilise the floating platen)
+    // and an actuator that follows its commands.
+    const bool can_land = status_.in_plane_sensors_valid && !measured_over;
+    const FaultReaction wanted = can_land ? FaultReaction::kLand : FaultReaction::kCurrentsOff;
+    if (static_cast<std::uint8_t>(wanted) > static_cast<std::uint8_t>(status_.reaction)) {
+      status_.reaction = wanted;
+    }
+  }
+  return status_;
+}
+
+bool Supervisor::clear_fault() {
+  if (status_.active != FaultCode::kNone) return false;
+  status_.first_fault = FaultRecord{};
+  status_.reaction = FaultReaction::kNone;
+  return true;
+}
+
+const char* to_string(FaultCode c) {
+  switch (c) {
+    case FaultCode::kNone: return "None";
+    case FaultCode::kTravelX: return "TravelX";
+    case FaultCode::kTravelY: return "TravelY";
+    case FaultCode::kTravelThetaZ: return "TravelThetaZ";
+    case FaultCode::kZEnvelope: return "ZEnvelope";
+    case FaultCode::kTiltEnvelope: return "TiltEnvelope";
+    case FaultCode::kFollowingError: return "FollowingError";
+    case FaultCode::kPeakCurrentCommanded: return "PeakCurrentCommanded";
+    case FaultCode::kPeakCurrentMeasured: return "PeakCurrentMeasured";
+    case FaultCode::kRmsCurrent: return "RmsCurrent";
+    case FaultCode::kTickOverrun: return "TickOverrun";
+    case FaultCode::kBeamLoss: return "BeamLoss";
+    case FaultCode::kCounterJump: return "CounterJump";
+    case FaultCode::kStaleFrames: return "StaleFrames";
+    case FaultCode::kDisplacementOutOfRange: return "DisplacementOutOfRange";
+    case FaultCode::kAdcFault: return "AdcFault";
+    case FaultCode::kCurrentMonitorOutOfRange: return "CurrentMonitorOutOfRange";
+  }
+  return "?";
+}
+
+}  // namespace maglev::kernel

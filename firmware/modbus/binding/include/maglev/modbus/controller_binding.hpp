@@ -1,0 +1,48 @@
+// The thin layer between the register map and the real kernel:
+//   * ConfigImage <-> maglev::kernel::KernelConfig, generated from the
+//     `field` column of registers.def (every CONFIG entry is a float field);
+//   * ControllerDevice<Scalar>: the modbus::Device the RegisterServer drives,
+//     over kernel::Controller<Scalar> and persistence::ConfigStore.
+// Heap-free; host and target.
+#pragma once
+
+#include "maglev/controller/controller.hpp"
+#include "maglev/modbus/register_server.hpp"
+#include "maglev/persistence/config_store.hpp"
+
+namespace maglev::modbus {
+
+// Address of the KernelConfig float a CONFIG register is, nullptr otherwise.
+float* config_field(kernel::KernelConfig& config, RegId id);
+// Copy the mapped fields; fields the map does not carry are left as they are.
+void image_to_kernel(const ConfigImage& image, kernel::KernelConfig& config);
+ConfigImage image_from_kernel(const kernel::KernelConfig& config);
+
+template <typename Scalar>
+class ControllerDevice final : public Device {
+ public:
+  // `store` may be nullptr (no flash: config.save fails with 04).
+  ControllerDevice(kernel::Controller<Scalar>& controller, persistence::ConfigStore* store);
+
+  // Boot: load flash, apply it to the kernel; a record the kernel refuses
+  // falls back to the kernel defaults (flagged refused). Returns the image the
+  // RegisterServer starts from.
+  ConfigImage boot();
+
+  Activity activity() const override;
+  double read_status(RegId id) const override;
+  ApplyResult apply_config(const ConfigImage& config, bool live_tuning) override;
+  std::uint16_t command(CommandCode code, std::uint16_t axis, float value) override;
+  bool save_config(const ConfigImage& config) override;
+  PersistStatus persist_status() const override;
+
+ private:
+  kernel::Controller<Scalar>& controller_;
+  persistence::ConfigStore* store_;
+  PersistStatus boot_status_{};
+};
+
+extern template class ControllerDevice<float>;
+extern template class ControllerDevice<numeric::Q7_24>;
+
+}  // namespace maglev::modbus

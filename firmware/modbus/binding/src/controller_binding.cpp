@@ -1,0 +1,158 @@
+#include "maglev/modbus/controller_binding.hpp"
+
+namespace maglev::modbus {
+
+float* config_field(kernel::KernelConfig& cfg, RegId id) {
+  switch (id) {
+#define MAGLEV_BIND_CONFIG(id, field) \
+  case RegId::id:                     \
+    return &cfg.field;
+#define MAGLEV_BIND_IDENT(id, field)
+#define MAGLEV_BIND_STATUS(id, field)
+#define MAGLEV_BIND_CONTROL(id, field)
+#define MAGLEV_REG(id, name, address, type, unit, min, max, def, access, when, persist, kind, field, desc) \
+  MAGLEV_BIND_##kind(id, field)
+#include "maglev/modbus/registers.def"
+#undef MAGLEV_REG
+#undef MAGLEV_BIND_CONFIG
+#undef MAGLEV_BIND_IDENT
+#undef MAGLEV_BIND_STATUS
+#undef MAGLEV_BIND_CONTROL
+    default:
+      return nullptr;
+  }
+}
+
+void image_to_kernel(const ConfigImage& image, kernel::KernelConfig& config) {
+  for (std::size_t s = 0; s < kPersistedCount; ++s) {
+    const RegisterDef& d = persisted_def(s);
+    if (float* f = config_field(config, d.id)) *f = static_cast<float>(decode(d.type, image.raw[s]));
+  }
+}
+
+ConfigImage image_from_kernel(const kernel::KernelConfig& config) {
+  ConfigImage image = ConfigImage::defaults();
+  kernel::KernelConfig copy = config;
+  for (std::size_t s = 0; s < kPersistedCount; ++s) {
+    const RegisterDef& d = persisted_def(s);
+    if (const float* f = config_field(copy, d.id)) image.raw[s] = encode(d.type, static_cast<double>(*f));
+  }
+  return image;
+}
+
+template <typename Scalar>
+ControllerDevice<Scalar>::ControllerDevice(kernel::Controller<Scalar>& controller, persistence::ConfigStore* store)
+    : controller_(controller), store_(store) {}
+
+template <typename Scalar>
+ConfigImage ControllerDevice<Scalar>::boot() {
+  const ConfigImage kernel_defaults = image_from_kernel(kernel::default_kernel_config());
+  if (store_ == nullptr) return kernel_defaults;
+  const persistence::LoadResult loaded = store_->load();
+  boot_status_ = loaded.status;
+  if ((loaded.status.flags & kLoadedDefaults) != 0) {
+    // No usable record: the kernel's defaults (the table's defaults equal them).
+    return kernel_defaults;
+  }
+  kernel::KernelConfig cfg = controller_.config();
+  image_to_kernel(loaded.config, cfg);
+  if (controller_.apply_config(cfg) != kernel::ConfigError::kOk) {
+    boot_status_.flags = static_cast<std::uint16_t>((boot_status_.flags & ~(kLoadedBankA | kLoadedBankB)) |
+                                                    kRefused | kLoadedDefaults);
+    boot_status_.reason = static_cast<std::uint16_t>(persistence::Reason::kValueOutOfRange);
+    return kernel_defaults;
+  }
+  return loaded.config;
+}
+
+template <typename Scalar>
+Activity ControllerDevice<Scalar>::activity() const {
+  using S = kernel::SequencerState;
+  switch (controller_.status().state) {
+    case S::kIdle:
+    case S::kFault:
+      return Activity::kIdle;
+    case S::kReady:
+      return Activity::kHolding;
+    default:
+      return Activity::kMoving;  // homing, locking, lifting, landing
+  }
+}
+
+template <typename Scalar>
+double ControllerDevice<Scalar>::read_status(RegId id) const {
+  const kernel::ControllerStatus& st = controller_.status();
+  constexpr double kPico = 1e-12;  // Pose64: 1 pm / 1 prad per LSB
+  switch (id) {
+    case RegId::status_state: return static_cast<double>(st.state);
+    case RegId::status_fault: return static_cast<double>(st.fault);
+    case RegId::status_saturation: return st.saturated ? 1.0 : 0.0;
+    case RegId::status_moving: return activity() == Activity::kMoving ? 1.0 : 0.0;
+    case RegId::status_x: return static_cast<double>(st.pose.x_pm) * kPico;
+    case RegId::status_y: return static_cast<double>(st.pose.y_pm) * kPico;
+    case RegId::status_z: return static_cast<double>(st.pose.z_pm) * kPico;
+    case RegId::status_theta_x: return static_cast<double>(st.pose.theta_x_prad) * kPico;
+    case RegId::status_theta_y: return static_cast<double>(st.pose.theta_y_prad) * kPico;
+    case RegId::status_theta_z: return static_cast<double>(st.pose.theta_z_prad) * kPico;
+    case RegId::status_closed_axes: return st.closed_axes;
+    case RegId::status_config_error: return static_cast<double>(st.last_config_error);
+    case RegId::status_scale_k: return static_cast<double>(st.scale_k);
+    default: return 0.0;
+  }
+}
+
+template <typename Scalar>
+Device::ApplyResult ControllerDevice<Scalar>::apply_config(const ConfigImage& config, bool live_tuning) {
+  kernel::KernelConfig cfg = controller_.config();
+  image_to_kernel(config, cfg);
+  cfg.live_tuning = live_tuning;
+  switch (controller_.apply_config(cfg)) {
+    case kernel::ConfigError::kOk:
+      return ApplyResult::kApplied;
+    case kernel::ConfigError::kLockedWhileLevitated:
+    case kernel::ConfigError::kGainsLockedWhileLevitated:
+      return ApplyResult::kBusy;
+    default:
+      return ApplyResult::kRefused;
+  }
+}
+
+template <typename Scalar>
+std::uint16_t ControllerDevice<Scalar>::command(CommandCode code, std::uint16_t axis, float value) {
+  kernel::MotionCommand cmd;
+  switch (code) {
+    case CommandCode::kHome: cmd.type = kernel::MotionType::kHome; break;
+    case CommandCode::kLevitate: cmd.type = kernel::MotionType::kLevitate; break;
+    case CommandCode::kLand: cmd.type = kernel::MotionType::kLand; break;
+    case CommandCode::kStop: cmd.type = kernel::MotionType::kStop; break;
+    case CommandCode::kClearFault: cmd.type = kernel::MotionType::kClearFault; break;
+    case CommandCode::kMove: cmd.type = kernel::MotionType::kMoveTo; break;
+    case CommandCode::kStep: cmd.type = kernel::MotionType::kStep; break;
+    case CommandCode::kNone: return 0;
+  }
+  cmd.axis = static_cast<kernel::Axis>(axis);
+  cmd.target = static_cast<double>(value);
+  // Moves run at the configured profile limits of their axis.
+  const kernel::ReferenceLimits& lim = controller_.config().references;
+  cmd.velocity = static_cast<double>(lim.max_velocity[axis % kernel::kAxisCount]);
+  cmd.acceleration = static_cast<double>(lim.max_acceleration[axis % kernel::kAxisCount]);
+  return static_cast<std::uint16_t>(controller_.command(cmd));
+}
+
+template <typename Scalar>
+bool ControllerDevice<Scalar>::save_config(const ConfigImage& config) {
+  if (store_ == nullptr) return false;
+  const bool ok = store_->save(config);
+  boot_status_ = store_->status();
+  return ok;
+}
+
+template <typename Scalar>
+PersistStatus ControllerDevice<Scalar>::persist_status() const {
+  return boot_status_;
+}
+
+template class ControllerDevice<float>;
+template class ControllerDevice<numeric::Q7_24>;
+
+}  // namespace maglev::modbus

@@ -1,0 +1,121 @@
+// The Modbus semantics of the register map, transport-free: one PDU in, one
+// PDU out. The RTU server (firmware) and the libmodbus TCP adapter (bench)
+// both drive this class, so the map behaves identically on both transports.
+//
+// A write (0x06, 0x10, 0x17) is validated WHOLE before anything changes:
+//   02 illegal data address  unknown/gap address, read-only register, or a
+//                            range that cuts an I32/F32 in half
+//   01 illegal function      engineer register while the engineer key is not
+//                            written (the server is "in the wrong state for
+//                            this request", Modbus spec 7)
+//   03 illegal data value    value out of [min, max], NaN, bad count, or the
+//                            kernel refused the resulting configuration
+//   06 server device busy    the register may not be written now (moving,
+//                            levitating) -- retry later
+//   04 server device failure config.save could not write flash
+// and then applied whole: configuration first (one apply_config call), then
+// control registers in address order, cmd.code last.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "maglev/modbus/register_map.hpp"
+
+namespace maglev::modbus {
+
+enum class ExceptionCode : std::uint8_t {
+  kNone = 0,
+  kIllegalFunction = 0x01,
+  kIllegalDataAddress = 0x02,
+  kIllegalDataValue = 0x03,
+  kServerDeviceFailure = 0x04,
+  kServerDeviceBusy = 0x06,
+};
+
+enum class Activity : std::uint8_t {
+  kIdle,     // landed / not levitating: everything may be written
+  kHolding,  // levitating, no reference running
+  kMoving,   // a reference (move, step, circle, ...) is running
+};
+
+struct PersistStatus {
+  std::uint16_t flags = 0;   // PersistFlag bits
+  std::uint16_t reason = 0;  // persistence::Reason
+  std::uint32_t sequence = 0;
+};
+
+// What the register map needs from the stage. Implemented by the controller
+// binding (real kernel + persistence); kept abstract so the map semantics
+// stay free of the kernel's Scalar template.
+class Device {
+ public:
+  virtual Activity activity() const = 0;
+  // A STATUS register's value (pose, state, fault, saturation, moving).
+  virtual double read_status(RegId id) const = 0;
+  // Apply a whole candidate configuration; on refusal nothing changed.
+  // kBusy: the kernel locks it in its present state (reply 06), kRefused: the
+  // values are inconsistent (reply 03).
+  enum class ApplyResult : std::uint8_t { kApplied, kRefused, kBusy };
+  virtual ApplyResult apply_config(const ConfigImage& config, bool live_tuning) = 0;
+  // Run a motion command; returns 0 when accepted, else a kernel result code.
+  virtual std::uint16_t command(CommandCode code, std::uint16_t axis, float value) = 0;
+  // Persist `config`; false when flash failed.
+  virtual bool save_config(const ConfigImage& config) = 0;
+  virtual PersistStatus persist_status() const = 0;
+
+ protected:
+  Device() = default;
+  Device(const Device&) = default;
+  Device& operator=(const Device&) = default;
+  ~Device() = default;
+};
+
+inline constexpr std::size_t kMaxPdu = 253;
+inline constexpr std::uint16_t kMaxReadCount = 125;
+inline constexpr std::uint16_t kMaxWriteCount = 123;
+inline constexpr std::uint16_t kMaxRwWriteCount = 121;
+
+class RegisterServer {
+ public:
+  RegisterServer(Device& device, const ConfigImage& initial);
+
+  // Handle one request PDU (function code first). Writes the response PDU to
+  // `resp` (>= kMaxPdu bytes) and returns its length. For a broadcast request
+  // writes are applied and 0 is returned (no reply); broadcast reads are ignored.
+  std::size_t handle_pdu(const std::uint8_t* req, std::size_t len, std::uint8_t* resp, bool broadcast);
+
+  // The same semantics without framing (tests, the app).
+  ExceptionCode read_registers(std::uint16_t start, std::uint16_t count, std::uint16_t* out) const;
+  ExceptionCode write_registers(std::uint16_t start, std::uint16_t count, const std::uint16_t* values);
+
+  const ConfigImage& config() const { return config_; }
+  Access level() const { return level_; }
+  bool live_tuning() const { return live_tuning_; }
+  // The configuration now matches what flash holds (after load or save).
+  void mark_saved() { saved_ = config_; }
+
+ private:
+  struct Pending {
+    const RegisterDef* def;
+    std::uint32_t raw;
+  };
+  ExceptionCode validate_write(std::uint16_t start, std::uint16_t count, const std::uint16_t* values,
+                               std::size_t& n_pending) ;
+  ExceptionCode apply_pending(std::size_t n_pending);
+  std::uint32_t read_raw(const RegisterDef& d) const;
+  bool may_write_now(const RegisterDef& d) const;
+
+  Device& device_;
+  ConfigImage config_;
+  ConfigImage saved_;
+  Access level_ = Access::kOperator;
+  bool live_tuning_ = false;
+  std::uint16_t cmd_axis_ = 0;
+  float cmd_value_ = 0.0f;
+  std::uint16_t cmd_code_ = 0;
+  std::uint16_t cmd_result_ = 0;
+  Pending pending_[kMaxWriteCount];
+};
+
+}  // namespace maglev::modbus

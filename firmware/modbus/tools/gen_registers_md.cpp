@@ -1,0 +1,123 @@
+// Writes the register table of docs/REGISTERS.md from registers.def.
+//   maglev_gen_registers_md --write FILE   replace the text between the markers
+//   maglev_gen_registers_md --check FILE   exit 1 if the table in FILE differs
+//   maglev_gen_registers_md                print the table
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "maglev/modbus/register_map.hpp"
+
+namespace {
+
+using namespace maglev::modbus;
+
+const char* kBegin = "<!-- BEGIN GENERATED REGISTER TABLE (maglev_gen_registers_md; do not edit) -->";
+const char* kEnd = "<!-- END GENERATED REGISTER TABLE -->";
+
+const char* type_name(RegType t) {
+  switch (t) {
+    case RegType::kU16: return "u16";
+    case RegType::kI32: return "i32";
+    case RegType::kF32: return "f32";
+  }
+  return "?";
+}
+const char* access_name(Access a) {
+  switch (a) {
+    case Access::kReadOnly: return "read-only";
+    case Access::kOperator: return "operator";
+    case Access::kEngineer: return "engineer";
+  }
+  return "?";
+}
+const char* when_name(WriteWhen w) {
+  switch (w) {
+    case WriteWhen::kNever: return "-";
+    case WriteWhen::kAlways: return "always";
+    case WriteWhen::kNotMoving: return "not moving";
+    case WriteWhen::kIdle: return "idle (landed)";
+    case WriteWhen::kGains: return "not moving, or live tuning";
+  }
+  return "?";
+}
+
+std::string num(double v, RegType t) {
+  char buf[64];
+  if (t == RegType::kF32) {
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+  } else {
+    std::snprintf(buf, sizeof buf, "%.0f", v);
+  }
+  return buf;
+}
+
+std::string table() {
+  std::ostringstream o;
+  o << kBegin << "\n\n";
+  char hash[16];
+  std::snprintf(hash, sizeof hash, "0x%08X", static_cast<unsigned>(kSchemaHash));
+  o << "Schema hash of the persisted entries: `" << hash << "` (" << kPersistedCount << " persisted entries, "
+    << kRegisterCount << " registers).\n\n";
+  o << "| Address | Name | Type | Unit | Min | Max | Default | Access | Writable when | Persisted | Description |\n";
+  o << "|---:|---|---|---|---:|---:|---:|---|---|---|---|\n";
+  for (std::size_t i = 0; i < kRegisterCount; ++i) {
+    const RegisterDef& d = kRegisters[i];
+    std::string addr = std::to_string(d.address);
+    if (width(d.type) == 2) addr += "-" + std::to_string(d.address + 1);
+    const bool ro = d.access == Access::kReadOnly;
+    std::string def = ro ? "-" : num(d.default_value, d.type);
+    o << "| " << addr << " | `" << d.name << "` | " << type_name(d.type) << " | " << d.unit << " | "
+      << (ro ? "-" : num(d.min, d.type)) << " | " << (ro ? "-" : num(d.max, d.type)) << " | " << def << " | "
+      << access_name(d.access) << " | " << when_name(d.when) << " | " << (d.persisted ? "yes" : "no") << " | "
+      << d.description << " |\n";
+  }
+  o << "\n" << kEnd;
+  return o.str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string t = table();
+  if (argc < 3) {
+    std::cout << t << "\n";
+    return 0;
+  }
+  const std::string mode = argv[1];
+  const std::string path = argv[2];
+  std::ifstream in(path);
+  if (!in) {
+    std::cerr << "cannot read " << path << "\n";
+    return 2;
+  }
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string doc = ss.str();
+  const auto b = doc.find(kBegin);
+  const auto e = doc.find(kEnd);
+  if (b == std::string::npos || e == std::string::npos || e < b) {
+    std::cerr << path << ": generated-table markers missing\n";
+    return 2;
+  }
+  const std::string current = doc.substr(b, e + std::string(kEnd).size() - b);
+  if (mode == "--check") {
+    if (current != t) {
+      std::cerr << path << " drifted from registers.def; regenerate with: maglev_gen_registers_md --write " << path
+                << "\n";
+      return 1;
+    }
+    std::cout << path << " matches registers.def (" << kRegisterCount << " registers)\n";
+    return 0;
+  }
+  if (mode == "--write") {
+    doc.replace(b, current.size(), t);
+    std::ofstream out(path);
+    out << doc;
+    return out ? 0 : 2;
+  }
+  std::cerr << "usage: maglev_gen_registers_md [--check|--write FILE]\n";
+  return 2;
+}

@@ -1,0 +1,61 @@
+#include "maglev/persistence/file_flash.hpp"
+
+#include <vector>
+
+namespace maglev::persistence {
+
+FileFlash::FileFlash(const std::string& path, std::size_t sector_size, std::size_t sector_count)
+    : sector_size_(sector_size), sector_count_(sector_count) {
+  const long total = static_cast<long>(sector_size * sector_count);
+  file_ = std::fopen(path.c_str(), "r+b");
+  if (file_ != nullptr) {
+    std::fseek(file_, 0, SEEK_END);
+    if (std::ftell(file_) != total) {
+      std::fclose(file_);
+      file_ = nullptr;
+    }
+  }
+  if (file_ == nullptr) {
+    file_ = std::fopen(path.c_str(), "w+b");
+    if (file_ == nullptr) return;
+    const std::vector<std::uint8_t> erased(sector_size * sector_count, 0xFF);
+    std::fwrite(erased.data(), 1, erased.size(), file_);
+    std::fflush(file_);
+  }
+}
+
+FileFlash::~FileFlash() {
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+FlashError FileFlash::erase(std::size_t sector) {
+  if (file_ == nullptr) return FlashError::kFailed;
+  if (sector >= sector_count_) return FlashError::kOutOfRange;
+  const std::vector<std::uint8_t> erased(sector_size_, 0xFF);
+  std::fseek(file_, static_cast<long>(sector * sector_size_), SEEK_SET);
+  if (std::fwrite(erased.data(), 1, erased.size(), file_) != erased.size()) return FlashError::kFailed;
+  return std::fflush(file_) == 0 ? FlashError::kOk : FlashError::kFailed;
+}
+
+FlashError FileFlash::program(std::size_t offset, const std::uint8_t* word) {
+  if (file_ == nullptr) return FlashError::kFailed;
+  if (offset % kFlashWordBytes != 0) return FlashError::kMisaligned;
+  if (offset + kFlashWordBytes > sector_size_ * sector_count_) return FlashError::kOutOfRange;
+  std::uint8_t current[kFlashWordBytes];
+  if (read(offset, current, kFlashWordBytes) != FlashError::kOk) return FlashError::kFailed;
+  for (std::uint8_t b : current) {
+    if (b != 0xFF) return FlashError::kNotErased;
+  }
+  std::fseek(file_, static_cast<long>(offset), SEEK_SET);
+  if (std::fwrite(word, 1, kFlashWordBytes, file_) != kFlashWordBytes) return FlashError::kFailed;
+  return std::fflush(file_) == 0 ? FlashError::kOk : FlashError::kFailed;
+}
+
+FlashError FileFlash::read(std::size_t offset, std::uint8_t* out, std::size_t len) const {
+  if (file_ == nullptr) return FlashError::kFailed;
+  if (offset + len > sector_size_ * sector_count_) return FlashError::kOutOfRange;
+  std::fseek(file_, static_cast<long>(offset), SEEK_SET);
+  return std::fread(out, 1, len, file_) == len ? FlashError::kOk : FlashError::kFailed;
+}
+
+}  // namespace maglev::persistence

@@ -1,0 +1,67 @@
+// Eight linear current amplifiers (PA12A-like) driving the coils.
+//
+// DAC code (AD5764, 16-bit two's complement over +-10 V) -> voltage ->
+// commanded current i_c = gain * V -> per-amplifier gain/offset error and
+// paper 003 Table 1 current noise -> current limit -> current loop.
+//
+// Current loop (ours): PI compensator whose zero cancels the coil pole R/L,
+// so the loop gain is K/(L s) and the closed loop is first order,
+//   di/dt = (K/L) (i_target - i),   bandwidth f_i = K / (2 pi L)
+// as long as the required coil voltage R i + K (i_target - i) fits inside the
+// output swing (supply - dropout); beyond that the output saturates and
+//   L di/dt = +-V_max - R i.
+// The loop is integrated in closed form (it is far too fast for the
+// mechanical RK4 step), piecewise per sub-step.
+#pragma once
+
+#include <cstdint>
+
+#include "maglev/hil/plant_config.hpp"
+#include "maglev/io/actuator_command.hpp"
+
+namespace maglev::hil {
+
+class Rng;
+
+// Paper 003 Table 1: std of the measured current (A) at commanded |i| (A),
+// linearly interpolated, held below the first point, extrapolated linearly
+// above the last.
+double Table1CurrentNoiseStd_A(double commanded_abs_A);
+
+// AD5764: code -> volts (two's complement, -32768 -> -FS, 32767 -> FS*(1-2^-15)).
+double DacCodeToVolts(std::int16_t code, double full_scale_V);
+
+class Amplifiers {
+ public:
+  explicit Amplifiers(const AmplifierConfig& config);
+
+  // New DAC command for the coming tick (zero-order hold). Draws the tick's
+  // current-noise sample from rng when noise is enabled.
+  void Apply(const io::ActuatorCommand& command, Rng* rng, bool noise_enabled);
+
+  // Piecewise closed-form integration. BeginSubstep fixes each coil's regime
+  // (linear / saturated) from its current at the sub-step start.
+  void BeginSubstep(double h_s);
+  // Current at stage 0 (t0), 1 (t0 + h/2), 2 (t0 + h) of the sub-step.
+  double CurrentAt(int coil, int stage) const { return stage_current_[stage][coil]; }
+  void EndSubstep();
+
+  double current_A(int coil) const { return current_[coil]; }
+  double commanded_A(int coil) const { return commanded_[coil]; }  // gain * V_dac
+  double target_A(int coil) const { return target_[coil]; }
+  bool enabled() const { return enabled_; }
+  double bandwidth_Hz() const;
+  void set_current(int coil, double current_A) { current_[coil] = current_A; }
+
+ private:
+  AmplifierConfig config_;
+  double omega_;   // K / L
+  double v_max_;   // supply - dropout
+  double current_[kCoils] = {};
+  double commanded_[kCoils] = {};
+  double target_[kCoils] = {};
+  double stage_current_[3][kCoils] = {};
+  bool enabled_ = false;
+};
+
+}  // namespace maglev::hil

@@ -1,0 +1,66 @@
+// The linear Halbach array's field, paper 000 eqs (1)-(3), and the Lorentz
+// force on one rectangular coil side, eqs (5)-(7).
+//
+// The magnet matrix is modelled as two superimposed linear arrays (ours, per
+// the task): an "X array" whose field varies along X and an "Y array" whose
+// field varies along Y. A coil side running along Y' (the Fx coils 1,2,5,6)
+// only sees the X array (the Y array's field averages out over its length p),
+// and the reverse for coil sides along X' (the Fy coils 3,4,7,8).
+//
+// Along the varying coordinate s (X or Y), with q_n = (-1)^k c_n:
+//   B_s(s, z) = sum_k q_n(z) sin(gamma_n s)        eq (1)
+//   B_z(s, z) = sum_k q_n(z) cos(gamma_n s)        eq (2)
+//   c_n(z)    = 2 sqrt2 mu0 M0 / (pi n) (1 - e^{-gamma_n Delta}) e^{-gamma_n z}   eq (3)
+#pragma once
+
+#include "maglev/hil/plant_config.hpp"
+
+namespace maglev::hil {
+
+inline constexpr int kMaxHarmonics = 4;  // n = 1, 5, 9, 13
+
+// Field components (along the array's varying axis s, and vertical z), T.
+struct FieldSZ {
+  double b_s_T;
+  double b_z_T;
+};
+
+class HalbachField {
+ public:
+  explicit HalbachField(const FieldConfig& config);
+
+  // Point field of one linear array at coordinate s and height z above the
+  // magnets' top surface (Hall sensors).
+  FieldSZ PointField(double s_m, double height_m) const;
+
+  // Field averaged over a coil side's cross-section (width a centred at s,
+  // from gap g to g + d). N * I * p * (u x B_avg) is then exactly the volume
+  // integral of eqs (5)-(7) for a straight side of effective length p.
+  FieldSZ SideAverageField(double s_m, double gap_m) const;
+
+  // b*(z) of eq (20) with n = 1 only, N/A (force amplitude of one coil).
+  double BStar(double gap_m) const;
+  // Amplitude of harmonic n's contribution to one coil's force, relative to
+  // the fundamental, at gap z (the paper's own check below eq (9)).
+  double HarmonicForceRatio(int n, double gap_m) const;
+  // c_1(z) of eq (3), T.
+  double C1(double gap_m) const;
+
+  double peak_magnetization_A_per_m() const { return m0_; }
+  double gamma1_per_m() const { return gamma1_; }
+  int harmonics() const { return harmonics_; }
+
+  // M0 such that 2 b*(z0) = two_b_star, eq (20) inverted.
+  static double CalibrateM0(const FieldConfig& config, double two_b_star_N_per_A);
+
+ private:
+  FieldConfig config_;
+  double m0_;
+  double gamma1_;
+  int harmonics_;
+  // Per harmonic: signed amplitude (-1)^k c_n(0) for point and side-averaged field.
+  double point_amp_[kMaxHarmonics];
+  double side_amp_[kMaxHarmonics];
+};
+
+}  // namespace maglev::hil

@@ -1,0 +1,157 @@
+// The HIL physical plant: the 6-DOF maglev platen over the Halbach magnet
+// matrix (paper 000), its eight current amplifiers and its sensors. It talks
+// to the controller ONLY through io::SensorSample and io::ActuatorCommand.
+//
+// Per servo tick (period 1 / servo_rate_Hz) the bench calls, in this order:
+//   1. io::SensorSample s = plant.sample();  // sensors at the tick start
+//   2. plant.apply(command);                 // DAC codes + enable, held (ZOH)
+//   3. plant.advance_tick();                 // = advance(1 / servo_rate_Hz)
+// advance(dt) integrates with fixed-step RK4 (substeps_per_tick sub-steps per
+// servo period); amplifier currents are integrated in closed form inside it.
+// Given (config, seed, command sequence) a run is bit-for-bit deterministic.
+//
+// Frames (maglev/io/stage_parameters.hpp): world XYZ fixed to the magnets,
+// Z up, X/Y origin at a phase zero of the Halbach fundamental; the state's
+// position is the platen CoM's (x, y) and z = height above the landed rest
+// position (air gap = rest gap + z at the coils). Attitude R = Rz Ry Rx
+// (theta_x, theta_y, theta_z about +X, +Y, +Z), kept as a unit quaternion.
+#pragma once
+
+#include <Eigen/Dense>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+
+#include "maglev/hil/amplifier.hpp"
+#include "maglev/hil/halbach_field.hpp"
+#include "maglev/hil/plant_config.hpp"
+#include "maglev/hil/rng.hpp"
+#include "maglev/io/actuator_command.hpp"
+#include "maglev/io/sensor_sample.hpp"
+
+namespace maglev::hil {
+
+// Rigid-body state: CoM position relative to its landed-rest position
+// (x, y absolute in the magnet frame), world velocity, attitude, body rates.
+struct BodyState {
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity_m_per_s = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d omega_body_rad_per_s = Eigen::Vector3d::Zero();
+};
+
+struct BodyDerivative {
+  Eigen::Vector3d velocity_m_per_s;
+  Eigen::Vector3d acceleration_m_per_s2;       // world
+  Eigen::Vector4d attitude_rate;               // d/dt (w, x, y, z)
+  Eigen::Vector3d angular_acceleration_body;   // rad/s^2
+};
+
+// Force (world frame, at the CoM) and torque (body frame, about the CoM).
+struct Wrench {
+  Eigen::Vector3d force_world_N = Eigen::Vector3d::Zero();
+  Eigen::Vector3d torque_body_Nm = Eigen::Vector3d::Zero();
+};
+
+// What the bench and the tests may read; never visible to the controller.
+struct PlantState {
+  double time_s = 0.0;
+  double position_m[3] = {};        // x, y, z (z above landed rest)
+  double angles_rad[3] = {};        // theta_x, theta_y, theta_z
+  double velocity_m_per_s[3] = {};  // world
+  double omega_body_rad_per_s[3] = {};
+  double coil_current_A[kCoils] = {};
+  double coil_commanded_A[kCoils] = {};  // gain * V_dac, before errors/noise
+  bool amplifier_enable = false;
+  double contact_force_N = 0.0;  // sum of the corner normal forces
+  bool in_contact = true;        // at least one corner touching
+  double magnetic_force_world_N[3] = {};
+  double magnetic_torque_body_Nm[3] = {};
+};
+
+// One straight coil side (effective length p) in the platen frame.
+struct CoilSide {
+  int coil;                  // 0..7 (coil j+1 of paper 000)
+  int forcer;                // 0..3 (coil pairs 1&2, 3&4, 5&6, 7&8)
+  int array_axis;            // 0: sees the X array (side along Y'), 1: the Y array
+  Eigen::Vector3d r_body_m;  // midpoint of the cross-section centre line
+  Eigen::Vector3d u_body;    // unit direction of positive coil current
+};
+
+class Plant {
+ public:
+  Plant(const PlantConfig& config, std::uint64_t seed);
+
+  // --- per-tick interface (the only path to/from the controller) ----------
+  io::SensorSample sample();
+  void apply(const io::ActuatorCommand& command);
+  void advance(double dt_s);
+  void advance_tick() { advance(tick_s_); }
+  const PlantState& truth() const { return truth_; }
+
+  // --- model access (tests, bench diagnostics) ----------------------------
+  const PlantConfig& config() const { return config_; }
+  const HalbachField& field() const { return field_; }
+  const Amplifiers& amplifiers() const { return amplifiers_; }
+  const BodyState& body_state() const { return body_; }
+  void set_body_state(const BodyState& state);
+  // Force the coil currents (e.g. an equilibrium for a test).
+  void set_coil_currents(const std::array<double, kCoils>& currents_A);
+  // Manual beam loss (in addition to the configured events).
+  void set_beam_loss(int axis, bool lost);
+
+  double mass_kg() const { return mass_; }
+  const Eigen::Vector3d& inertia_kgm2() const { return inertia_; }
+  double tick_s() const { return tick_s_; }
+  double suspension_stiffness_N_per_m() const { return k_susp_; }
+  const std::array<CoilSide, 2 * kCoils>& coil_sides() const { return sides_; }
+
+  // Lorentz force of one coil (both sides), world frame, for a given current.
+  Eigen::Vector3d CoilForceWorld(const BodyState& state, int coil, double current_A) const;
+  // Magnetic wrench of all coils.
+  Wrench MagneticWrench(const BodyState& state, const double* currents_A) const;
+  // Total wrench: magnetic + suspension + contact + gravity.
+  Wrench TotalWrench(const BodyState& state, const double* currents_A) const;
+  BodyDerivative Derivative(const BodyState& state, const double* currents_A) const;
+  // Kinetic energy (translation + rotation), J.
+  double KineticEnergy(const BodyState& state) const;
+
+  static Eigen::Matrix3d RotationFromAngles(double theta_x, double theta_y, double theta_z);
+  static Eigen::Vector3d AnglesFromRotation(const Eigen::Matrix3d& r);
+
+ private:
+  struct ContactResult {
+    Wrench wrench;
+    double normal_N;
+    bool touching;
+  };
+  ContactResult ContactWrench(const BodyState& state) const;
+  Wrench SuspensionWrench(const BodyState& state) const;
+  void UpdateTruth();
+  double InterferometerDisplacement(int axis) const;
+
+  PlantConfig config_;
+  HalbachField field_;
+  Amplifiers amplifiers_;
+  Rng rng_;
+  BodyState body_;
+  PlantState truth_;
+  std::array<CoilSide, 2 * kCoils> sides_{};
+  bool forcer_errors_active_ = false;
+
+  double mass_;
+  Eigen::Vector3d inertia_;
+  double tick_s_;
+  double side_force_per_A_;  // N * p
+  double k_susp_;
+  double com_arm_m_;
+
+  // Interferometer counters.
+  double lsb_m_;
+  std::int64_t counter_adjust_[io::kInterferometerAxes] = {};
+  std::int64_t last_count_[io::kInterferometerAxes] = {};
+  bool lost_prev_[io::kInterferometerAxes] = {};
+  bool manual_loss_[io::kInterferometerAxes] = {};
+};
+
+}  // namespace maglev::hil

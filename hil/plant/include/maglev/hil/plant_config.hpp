@@ -1,0 +1,198 @@
+// Configuration of the HIL physical plant: the 6-DOF platen over the Halbach
+// magnet matrix, its eight linear current amplifiers and its sensors.
+//
+// Every default comes from maglev/io/stage_parameters.hpp (the one source of
+// truth shared with the controller kernel) or from papers 000 / 003; values
+// marked "(ours)" are modelling choices the papers do not state. docs/PLANT.md
+// lists every element with its source.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "maglev/io/sensor_sample.hpp"
+#include "maglev/io/stage_parameters.hpp"
+
+namespace maglev::hil {
+
+inline constexpr int kForcers = 4;
+inline constexpr int kCoils = io::kCoils;
+
+// --- Halbach field and coils, paper 000 eqs (1)-(11), (20) -----------------
+struct FieldConfig {
+  double pitch_m = io::stage::kPitch_m;
+  double magnet_thickness_m = io::stage::kMagnetThickness_m;
+  // Peak magnetization M0 [A/m]. <= 0 means "calibrate": choose M0 so that the
+  // model's 2 b*(z0) at the rest gap equals kTwoBStarIdentified_N_per_A (eq 29).
+  double peak_magnetization_A_per_m = 0.0;
+  // Harmonics n = 4k+1 used in (1)-(2): 1 -> n=1 only; 4 -> n = 1,5,9,13.
+  int harmonics = 4;
+  double coil_effective_length_m = io::stage::kCoilEffectiveLength_m;  // p
+  double coil_side_width_m = io::stage::kCoilSideWidth_m;              // a
+  double coil_thickness_m = io::stage::kCoilThickness_m;               // d
+  int coil_turns = io::stage::kCoilTurns;                              // N
+  double rest_gap_m = io::stage::kRestGap_m;                           // z0
+};
+
+// --- Platen geometry and rigid body, paper 000 Sec. III, eqs (16)-(18) -----
+struct BodyConfig {
+  double mass_kg = io::stage::kMass_kg;
+  double inertia_kgm2[3] = {io::stage::kIx_kgm2, io::stage::kIy_kgm2, io::stage::kIz_kgm2};
+  // Added payload (Fig. 9: 539.6 g). (ours) Modelled as a thin square plate of
+  // side payload_side_m whose centre of mass coincides with the platen's, so it
+  // adds m_p s^2/12 to Ix, Iy and m_p s^2/6 to Iz and does not move the CoM.
+  double payload_kg = 0.0;
+  double payload_side_m = 0.10;
+  double lever_arm_m = io::stage::kLeverArm_m;  // l of eq (18)
+  // (ours) height of the CoM above the coils' mid-plane. 0 = the paper's A
+  // matrix (in-plane forces produce no tilt torque); > 0 adds the physical
+  // tilt torque of in-plane thrust.
+  double com_above_coil_midplane_m = 0.0;
+  double gravity_m_per_s2 = io::stage::kGravity_m_per_s2;
+  bool gravity_enabled = true;
+};
+
+// --- Per-forcer imperfections, paper 003 eqs (11)-(13), (17)-(19) ----------
+// Forcer f (0: coils 1&2, 1: 3&4, 2: 5&6, 3: 7&8).
+struct ForcerErrors {
+  double epsilon_tangential[kForcers] = {0, 0, 0, 0};  // F_t -> F_t (1 + eps), eqs (17)-(19)
+  double epsilon_off_axis_z[kForcers] = {0, 0, 0, 0};  // dF_z = eps F_t, eqs (11)-(13)
+  double misalignment_rad[kForcers] = {0, 0, 0, 0};    // in-plane rotation of the coil pair
+};
+
+// --- Out-of-plane suspension, eqs (29)-(31) --------------------------------
+// Four vertical spring-dampers (k/4, c/4) at the forcer centres (+-l, 0),
+// (0, +-l): exactly the paper's "four parallel supports", which gives
+// k_torsional = (k/2) l^2 and c_torsional = (c/2) l^2 (eq 31).
+struct SuspensionConfig {
+  bool enabled = true;
+  double stiffness_N_per_m = io::stage::kZStiffness_N_per_m;
+  double damping_Ns_per_m = io::stage::kZDamping_Ns_per_m;
+  double neutral_height_m = io::stage::kNominalHeight_m;  // zero spring force here
+  // (ours) The identified k is the TOTAL z stiffness at the levitated point,
+  // which physically includes the magnetic gradient of the levitating force
+  // (dF/dz = -gamma_1 m g, i.e. +gamma_1 m g of stiffness). If true the spring
+  // is softened by gamma_1 * m * g so that the linearized plant equals (29)-(31).
+  bool subtract_magnetic_stiffness = true;
+};
+
+// --- Landing contact (ours) ------------------------------------------------
+// One-sided stiff damped contacts at the 4 frame corners (143 mm frame),
+// with regularized Coulomb friction in the plane.
+struct ContactConfig {
+  bool enabled = true;
+  double corner_half_size_m = 0.0715;
+  double stiffness_N_per_m = 5.0e6;  // per corner
+  double damping_Ns_per_m = 1.0e3;   // per corner
+  double friction_coefficient = 0.1;
+  double friction_velocity_m_per_s = 1e-3;  // tanh-like regularization speed
+};
+
+// --- Amplifiers: 8 linear current amplifiers (PA12A-like) ------------------
+struct AmplifierConfig {
+  double dac_full_scale_V = io::stage::kDacFullScale_V;
+  double gain_A_per_V = io::stage::kAmplifierGain_A_per_V;
+  double coil_resistance_Ohm = io::stage::kCoilResistance_Ohm;
+  double coil_inductance_H = io::stage::kCoilInductance_H;
+  // (ours) PI current loop whose zero cancels the coil pole R/L; the closed
+  // loop is first order with bandwidth K/(2 pi L), K = loop transresistance.
+  // 1.8535 V/A -> 5.0 kHz.
+  double loop_transresistance_V_per_A = 1.8535;
+  double supply_voltage_V = 24.0;   // (ours) +-24 V rails
+  double output_dropout_V = 4.0;    // (ours) PA12A output swing: rails - 4 V
+  double current_limit_A = 5.0;     // (ours) = DAC full scale * gain
+  double gain_error[kCoils] = {0, 0, 0, 0, 0, 0, 0, 0};  // fraction
+  double offset_A[kCoils] = {0, 0, 0, 0, 0, 0, 0, 0};
+  // Current noise: std interpolated in paper 003 Table 1 (std vs |commanded|),
+  // times this scale; a new sample per servo tick (zero-order hold), then
+  // filtered by the current loop. See docs/PLANT.md for why the default is 0.25.
+  double current_noise_scale = 0.25;
+  double monitor_gain_V_per_A = io::stage::kCurrentMonitorGain_V_per_A;
+  double monitor_noise_A = 0.5e-3;  // (ours) monitor/ADC front-end noise, rms
+};
+
+// --- Sensors ---------------------------------------------------------------
+struct BeamLossEvent {
+  int axis = 0;          // 0: x, 1: y1, 2: y2
+  double start_s = 0.0;  // loss for start_s <= t < end_s
+  double end_s = 0.0;
+};
+
+struct InterferometerConfig {
+  double wavelength_m = io::stage::kWavelength_m;
+  int fold = io::stage::kInterferometerFold;
+  int interpolation = io::stage::kInterferometerInterpolation;
+  double y_beam_separation_m = io::stage::kYBeamSeparation_m;
+  double mirror_distance_m = 0.0715;  // (ours) mirror faces at the frame edge
+  // (ours) beam height above the platen CoM (Abbe arm for tilts).
+  double beam_height_m = 0.0;
+  double noise_m = 0.5e-9;  // (ours) rms, white per sample
+  // Counter values at the reference pose (x = y = theta = 0): arbitrary,
+  // chosen next to the unsigned and signed 32-bit wraps.
+  std::uint32_t start_count[io::kInterferometerAxes] = {4294967040u, 2147483520u, 123456789u};
+  std::vector<BeamLossEvent> beam_loss_events;
+};
+
+struct DisplacementConfig {
+  double scale_m_per_V = io::stage::kDisplacementScale_m_per_V;
+  double zero_height_m = io::stage::kDisplacementZeroHeight_m;
+  double sensor_x_m[io::kDisplacementSensors] = {io::stage::kDisplacementSensorX_m[0],
+                                                 io::stage::kDisplacementSensorX_m[1],
+                                                 io::stage::kDisplacementSensorX_m[2]};
+  double sensor_y_m[io::kDisplacementSensors] = {io::stage::kDisplacementSensorY_m[0],
+                                                 io::stage::kDisplacementSensorY_m[1],
+                                                 io::stage::kDisplacementSensorY_m[2]};
+  double noise_m = 5e-9;  // (ours) rms
+};
+
+struct HallConfig {
+  double a_x_m = io::stage::kHallAX_m;
+  double a_y_m = io::stage::kHallAY_m;
+  double b_x_m = io::stage::kHallBX_m;
+  double b_y_m = io::stage::kHallBY_m;
+  double height_above_magnets_m = io::stage::kHallHeightAboveMagnets_m;  // at rest
+  double sensitivity_V_per_T = io::stage::kHallSensitivity_V_per_T;
+  // (ours) 0.3 mT rms: the 6 um rms Hall position noise of paper 000's
+  // ref. [18] at gamma_1 * c_1 = 51 T/m.
+  double noise_T = 0.3e-3;
+};
+
+struct AdcConfig {
+  double full_scale_V = io::stage::kAdcFullScale_V;
+};
+
+// --- Integration -------------------------------------------------------------
+struct IntegrationConfig {
+  double servo_rate_Hz = io::stage::kServoRate_Hz;
+  int substeps_per_tick = 4;  // RK4 sub-steps inside each servo tick
+};
+
+// Initial state (world frame fixed to the magnets; z above landed rest).
+struct InitialState {
+  double position_m[3] = {0, 0, 0};
+  double angles_rad[3] = {0, 0, 0};  // theta_x, theta_y, theta_z
+};
+
+struct PlantConfig {
+  FieldConfig field;
+  BodyConfig body;
+  ForcerErrors forcer_errors;
+  SuspensionConfig suspension;
+  ContactConfig contact;
+  AmplifierConfig amplifier;
+  InterferometerConfig interferometer;
+  DisplacementConfig displacement;
+  HallConfig hall;
+  AdcConfig adc;
+  IntegrationConfig integration;
+  InitialState initial;
+  bool sensor_noise_enabled = true;
+
+  // The bench default: ideal + small realistic imperfections (docs/PLANT.md).
+  static PlantConfig Default();
+  // Paper-ideal: no noise, no amplifier/forcer errors (tests, linearization).
+  static PlantConfig Ideal();
+};
+
+}  // namespace maglev::hil

@@ -1,0 +1,101 @@
+#include "maglev/hil/amplifier.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "maglev/hil/rng.hpp"
+
+namespace maglev::hil {
+namespace {
+
+// Paper 003 Table 1 (8 coils, PA12A): average desired current vs std of the
+// measured current, both mA.
+constexpr int kTablePoints = 5;
+constexpr double kTableDesired_mA[kTablePoints] = {4.29, 12.62, 107.74, 213.40, 424.80};
+constexpr double kTableStd_mA[kTablePoints] = {4.79, 4.82, 5.60, 7.09, 10.93};
+
+}  // namespace
+
+double Table1CurrentNoiseStd_A(double commanded_abs_A) {
+  const double i_mA = std::fabs(commanded_abs_A) * 1e3;
+  if (i_mA <= kTableDesired_mA[0]) {
+    return kTableStd_mA[0] * 1e-3;
+  }
+  int k = 0;
+  while (k < kTablePoints - 2 && i_mA > kTableDesired_mA[k + 1]) {
+    ++k;
+  }
+  const double t = (i_mA - kTableDesired_mA[k]) / (kTableDesired_mA[k + 1] - kTableDesired_mA[k]);
+  return (kTableStd_mA[k] + t * (kTableStd_mA[k + 1] - kTableStd_mA[k])) * 1e-3;
+}
+
+double DacCodeToVolts(std::int16_t code, double full_scale_V) {
+  return static_cast<double>(code) * (full_scale_V / 32768.0);
+}
+
+Amplifiers::Amplifiers(const AmplifierConfig& config)
+    : config_(config),
+      omega_(config.loop_transresistance_V_per_A / config.coil_inductance_H),
+      v_max_(config.supply_voltage_V - config.output_dropout_V) {}
+
+double Amplifiers::bandwidth_Hz() const { return omega_ / (2.0 * io::stage::kPi); }
+
+void Amplifiers::Apply(const io::ActuatorCommand& command, Rng* rng, bool noise_enabled) {
+  enabled_ = command.amplifier_enable;
+  for (int j = 0; j < kCoils; ++j) {
+    const double v = DacCodeToVolts(command.dac_code[j], config_.dac_full_scale_V);
+    commanded_[j] = config_.gain_A_per_V * v;
+    // Draw the noise sample even when disabled: the random sequence then
+    // does not depend on the enable line.
+    const double n = (rng != nullptr && noise_enabled) ? rng->Normal() : 0.0;
+    if (!enabled_) {
+      target_[j] = 0.0;  // disabled output: the loop drives the coil to zero
+      continue;
+    }
+    double t = commanded_[j] * (1.0 + config_.gain_error[j]) + config_.offset_A[j];
+    t += n * config_.current_noise_scale * Table1CurrentNoiseStd_A(commanded_[j]);
+    target_[j] = std::clamp(t, -config_.current_limit_A, config_.current_limit_A);
+  }
+}
+
+void Amplifiers::BeginSubstep(double h_s) {
+  const double r = config_.coil_resistance_Ohm;
+  const double l = config_.coil_inductance_H;
+  const double k = config_.loop_transresistance_V_per_A;
+  const double lin_half = std::exp(-omega_ * h_s / 2.0);
+  const double lin_full = lin_half * lin_half;
+  const double sat_half = std::exp(-r / l * h_s / 2.0);
+  const double sat_full = sat_half * sat_half;
+  for (int j = 0; j < kCoils; ++j) {
+    const double i0 = current_[j];
+    const double it = target_[j];
+    const double v_demand = r * i0 + k * (it - i0);
+    stage_current_[0][j] = i0;
+    if (std::fabs(v_demand) <= v_max_) {
+      stage_current_[1][j] = it + (i0 - it) * lin_half;
+      stage_current_[2][j] = it + (i0 - it) * lin_full;
+    } else {
+      // Output at the rail: L di/dt = +-V_max - R i, never past the target.
+      const double i_inf = std::copysign(v_max_, v_demand) / r;
+      double i1 = i_inf + (i0 - i_inf) * sat_half;
+      double i2 = i_inf + (i0 - i_inf) * sat_full;
+      if (v_demand > 0.0) {
+        i1 = std::min(i1, it);
+        i2 = std::min(i2, it);
+      } else {
+        i1 = std::max(i1, it);
+        i2 = std::max(i2, it);
+      }
+      stage_current_[1][j] = i1;
+      stage_current_[2][j] = i2;
+    }
+  }
+}
+
+void Amplifiers::EndSubstep() {
+  for (int j = 0; j < kCoils; ++j) {
+    current_[j] = stage_current_[2][j];
+  }
+}
+
+}  // namespace maglev::hil

@@ -1,0 +1,523 @@
+#include "maglev/hil/plant.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace maglev::hil {
+namespace {
+
+constexpr double kPi = io::stage::kPi;
+
+std::int16_t QuantizeAdc(double volts, double full_scale_V) {
+  const double code = std::nearbyint(volts * (32768.0 / full_scale_V));
+  return static_cast<std::int16_t>(std::clamp(code, -32768.0, 32767.0));
+}
+
+// Forcer centres in the platen frame, eq (18): 1&2 at y = -l (Fx), 3&4 at
+// x = +l (Fy), 5&6 at y = +l (Fx), 7&8 at x = -l (Fy).
+Eigen::Vector2d ForcerCentre(int forcer, double l) {
+  switch (forcer) {
+    case 0: return {0.0, -l};
+    case 1: return {l, 0.0};
+    case 2: return {0.0, l};
+    default: return {-l, 0.0};
+  }
+}
+
+}  // namespace
+
+PlantConfig PlantConfig::Ideal() {
+  PlantConfig c;
+  c.amplifier.current_noise_scale = 0.0;
+  c.amplifier.monitor_noise_A = 0.0;
+  c.sensor_noise_enabled = false;
+  return c;
+}
+
+PlantConfig PlantConfig::Default() {
+  PlantConfig c;
+  // (ours) small, fixed imperfections of the size paper 003 discusses: coil
+  // pair misalignments of a few 0.1 mrad, tangential force errors of a few
+  // 0.1 %, off-axis vertical error forces of a few 0.1 % of the thrust.
+  const double eps_t[kForcers] = {0.003, -0.002, 0.004, -0.003};
+  const double eps_z[kForcers] = {0.002, -0.003, 0.001, -0.002};
+  const double misalign[kForcers] = {0.5e-3, -0.3e-3, 0.2e-3, -0.4e-3};
+  for (int f = 0; f < kForcers; ++f) {
+    c.forcer_errors.epsilon_tangential[f] = eps_t[f];
+    c.forcer_errors.epsilon_off_axis_z[f] = eps_z[f];
+    c.forcer_errors.misalignment_rad[f] = misalign[f];
+  }
+  // (ours) amplifier gain errors within the 1 % resistor tolerance of paper
+  // 003 Sec. 3.1, and offsets of a few mA (uncalibrated DC drift).
+  const double gain_err[kCoils] = {0.004, -0.006, 0.002, -0.003, 0.007, -0.002, 0.005, -0.008};
+  const double offset[kCoils] = {2e-3, -1.5e-3, 1e-3, -2.5e-3, 0.5e-3, 3e-3, -1e-3, 1.5e-3};
+  for (int j = 0; j < kCoils; ++j) {
+    c.amplifier.gain_error[j] = gain_err[j];
+    c.amplifier.offset_A[j] = offset[j];
+  }
+  return c;
+}
+
+Eigen::Matrix3d Plant::RotationFromAngles(double theta_x, double theta_y, double theta_z) {
+  return (Eigen::AngleAxisd(theta_z, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(theta_y, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(theta_x, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+Eigen::Vector3d Plant::AnglesFromRotation(const Eigen::Matrix3d& r) {
+  return {std::atan2(r(2, 1), r(2, 2)), std::asin(std::clamp(-r(2, 0), -1.0, 1.0)),
+          std::atan2(r(1, 0), r(0, 0))};
+}
+
+Plant::Plant(const PlantConfig& config, std::uint64_t seed)
+    : config_(config),
+      field_(config.field),
+      amplifiers_(config.amplifier),
+      rng_(seed),
+      mass_(config.body.mass_kg + config.body.payload_kg),
+      tick_s_(1.0 / config.integration.servo_rate_Hz),
+      side_force_per_A_(config.field.coil_turns * config.field.coil_effective_length_m),
+      com_arm_m_(config.body.com_above_coil_midplane_m) {
+  const double s2 = config.body.payload_side_m * config.body.payload_side_m;
+  inertia_ = {config.body.inertia_kgm2[0] + config.body.payload_kg * s2 / 12.0,
+              config.body.inertia_kgm2[1] + config.body.payload_kg * s2 / 12.0,
+              config.body.inertia_kgm2[2] + config.body.payload_kg * s2 / 6.0};
+
+  // Suspension spring: identified total minus the magnetic gradient stiffness
+  // of the levitating force (gamma_1 * weight), see SuspensionConfig.
+  const double weight = mass_ * config.body.gravity_m_per_s2;
+  k_susp_ = config.suspension.stiffness_N_per_m -
+            (config.suspension.subtract_magnetic_stiffness ? field_.gamma1_per_m() * weight : 0.0);
+
+  // --- coil geometry from eq (18) and kCoilPhase_rad (eq 19) ---------------
+  // Coil j obeys (F_tangential, F_z) = b* i_j (sin psi_j, cos psi_j) with
+  // psi_j = gamma_1 * base + phi_j. A side carrying current along u_ref
+  // (-Y' for the Fx coils, +X' for the Fy coils) at s along the array axis
+  // gives (F_t, F_z) ~ (sin(gamma_1 s - pi/2), cos(gamma_1 s - pi/2)), so
+  // the reference side sits at s0 = base + (phi_j + pi/2) / gamma_1; the
+  // other side is L/2 away with the opposite current. Only s0 mod L/2 matters
+  // for the forces; the representative sets the torque arms. (ours) Each
+  // coil is centred at 0 when its phase allows it, otherwise at +L/4 (pairs
+  // 1&2, 3&4) or -L/4 (5&6, 7&8): the layout is symmetric under a 180 deg
+  // turn, and the four sides of a pair are L/4 apart (Sec. III).
+  const double pitch = config.field.pitch_m;
+  const double gamma1 = field_.gamma1_per_m();
+  const double l = config.body.lever_arm_m;
+  int k = 0;
+  for (int j = 0; j < kCoils; ++j) {
+    const int f = j / 2;
+    const bool fx_coil = (f % 2) == 0;
+    const double base = fx_coil ? io::stage::kBasePointX2_m : io::stage::kBasePointY8_m;
+    const double s0 = (io::stage::kCoilPhase_rad[j] + kPi / 2.0) / gamma1;  // relative to base
+    const double m = (s0 - pitch / 4.0) / (pitch / 2.0);
+    double centre = 0.0;
+    if (std::fabs(m - std::nearbyint(m)) > 1e-9) {
+      centre = (f < 2) ? pitch / 4.0 : -pitch / 4.0;
+    }
+    const Eigen::Vector3d u_ref = fx_coil ? Eigen::Vector3d(0.0, -1.0, 0.0) : Eigen::Vector3d(1.0, 0.0, 0.0);
+    const Eigen::Vector2d fc = ForcerCentre(f, l);
+    const double alpha = config.forcer_errors.misalignment_rad[f];
+    const Eigen::Matrix3d rot_alpha = Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    for (int side = 0; side < 2; ++side) {
+      const double s = centre + (side == 0 ? -pitch / 4.0 : pitch / 4.0);
+      const double half_pitches = std::nearbyint((s - s0) / (pitch / 2.0));
+      const bool odd = std::fabs(std::fmod(half_pitches, 2.0)) > 0.5;
+      Eigen::Vector3d r = fx_coil ? Eigen::Vector3d(base + s, fc.y(), -com_arm_m_)
+                                  : Eigen::Vector3d(fc.x(), base + s, -com_arm_m_);
+      // Misalignment: the pair turns by alpha about its centre (paper 003).
+      const Eigen::Vector3d centre3(fc.x(), fc.y(), -com_arm_m_);
+      r = centre3 + rot_alpha * (r - centre3);
+      CoilSide cs;
+      cs.coil = j;
+      cs.forcer = f;
+      cs.array_axis = fx_coil ? 0 : 1;
+      cs.r_body_m = r;
+      cs.u_body = rot_alpha * (odd ? -u_ref : u_ref);
+      sides_[static_cast<std::size_t>(k++)] = cs;
+    }
+  }
+  for (int f = 0; f < kForcers; ++f) {
+    if (config.forcer_errors.epsilon_tangential[f] != 0.0 || config.forcer_errors.epsilon_off_axis_z[f] != 0.0) {
+      forcer_errors_active_ = true;
+    }
+  }
+
+  // --- initial state ---------------------------------------------------------
+  body_.position_m = {config.initial.position_m[0], config.initial.position_m[1], config.initial.position_m[2]};
+  body_.attitude = Eigen::Quaterniond(
+      RotationFromAngles(config.initial.angles_rad[0], config.initial.angles_rad[1], config.initial.angles_rad[2]));
+
+  lsb_m_ = config.interferometer.wavelength_m /
+           (static_cast<double>(config.interferometer.fold) * config.interferometer.interpolation);
+  for (int a = 0; a < io::kInterferometerAxes; ++a) {
+    counter_adjust_[a] = 0;
+    last_count_[a] = static_cast<std::int64_t>(config.interferometer.start_count[a]);
+  }
+  UpdateTruth();
+}
+
+void Plant::set_body_state(const BodyState& state) {
+  body_ = state;
+  body_.attitude.normalize();
+  UpdateTruth();
+}
+
+void Plant::set_coil_currents(const std::array<double, kCoils>& currents_A) {
+  for (int j = 0; j < kCoils; ++j) {
+    amplifiers_.set_current(j, currents_A[static_cast<std::size_t>(j)]);
+  }
+  UpdateTruth();
+}
+
+void Plant::set_beam_loss(int axis, bool lost) {
+  if (axis >= 0 && axis < io::kInterferometerAxes) {
+    manual_loss_[axis] = lost;
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Forces
+// ---------------------------------------------------------------------------
+Eigen::Vector3d Plant::CoilForceWorld(const BodyState& state, int coil, double current_A) const {
+  Eigen::Vector3d total = Eigen::Vector3d::Zero();
+  const Eigen::Matrix3d r = state.attitude.normalized().toRotationMatrix();
+  for (const CoilSide& cs : sides_) {
+    if (cs.coil != coil) {
+      continue;
+    }
+    const Eigen::Vector3d rw = r * cs.r_body_m;
+    const double height = state.position_m.z() + rw.z() - cs.r_body_m.z();
+    const double gap = config_.field.rest_gap_m + height;
+    const double s = (cs.array_axis == 0 ? state.position_m.x() + rw.x() : state.position_m.y() + rw.y());
+    const FieldSZ b = field_.SideAverageField(s, gap);
+    const Eigen::Vector3d bw = cs.array_axis == 0 ? Eigen::Vector3d(b.b_s_T, 0.0, b.b_z_T)
+                                                  : Eigen::Vector3d(0.0, b.b_s_T, b.b_z_T);
+    Eigen::Vector3d f = side_force_per_A_ * current_A * (r * cs.u_body).cross(bw);
+    if (forcer_errors_active_) {
+      // Paper 003: F_t -> F_t (1 + eps_t), dF_z = eps_z F_t (platen frame).
+      Eigen::Vector3d fb = r.transpose() * f;
+      const int t_axis = cs.array_axis;  // X' for the Fx coils, Y' for the Fy coils
+      const double ft = fb(t_axis);
+      fb(t_axis) += config_.forcer_errors.epsilon_tangential[cs.forcer] * ft;
+      fb.z() += config_.forcer_errors.epsilon_off_axis_z[cs.forcer] * ft;
+      f = r * fb;
+    }
+    total += f;
+  }
+  return total;
+}
+
+Wrench Plant::MagneticWrench(const BodyState& state, const double* currents_A) const {
+  const Eigen::Matrix3d r = state.attitude.normalized().toRotationMatrix();
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d torque_w = Eigen::Vector3d::Zero();
+  const double rest_gap = config_.field.rest_gap_m;
+  for (const CoilSide& cs : sides_) {
+    const double i = currents_A[cs.coil];
+    const Eigen::Vector3d rw = r * cs.r_body_m;
+    const double gap = rest_gap + state.position_m.z() + rw.z() - cs.r_body_m.z();
+    Eigen::Vector3d f;
+    if (cs.array_axis == 0) {
+      const FieldSZ b = field_.SideAverageField(state.position_m.x() + rw.x(), gap);
+      f = (r * cs.u_body).cross(Eigen::Vector3d(b.b_s_T, 0.0, b.b_z_T));
+    } else {
+      const FieldSZ b = field_.SideAverageField(state.position_m.y() + rw.y(), gap);
+      f = (r * cs.u_body).cross(Eigen::Vector3d(0.0, b.b_s_T, b.b_z_T));
+    }
+    f *= side_force_per_A_ * i;
+    if (forcer_errors_active_) {
+      Eigen::Vector3d fb = r.transpose() * f;
+      const int t_axis = cs.array_axis;
+      const double ft = fb(t_axis);
+      fb(t_axis) += config_.forcer_errors.epsilon_tangential[cs.forcer] * ft;
+      fb.z() += config_.forcer_errors.epsilon_off_axis_z[cs.forcer] * ft;
+      f = r * fb;
+    }
+    force += f;
+    torque_w += rw.cross(f);
+  }
+  Wrench w;
+  w.force_world_N = force;
+  w.torque_body_Nm = r.transpose() * torque_w;
+  return w;
+}
+
+Wrench Plant::SuspensionWrench(const BodyState& state) const {
+  Wrench w;
+  if (!config_.suspension.enabled) {
+    return w;
+  }
+  const Eigen::Matrix3d r = state.attitude.normalized().toRotationMatrix();
+  const Eigen::Vector3d omega_w = r * state.omega_body_rad_per_s;
+  const double k4 = k_susp_ / 4.0;
+  const double c4 = config_.suspension.damping_Ns_per_m / 4.0;
+  const double h0 = config_.suspension.neutral_height_m;
+  Eigen::Vector3d torque_w = Eigen::Vector3d::Zero();
+  for (int f = 0; f < kForcers; ++f) {
+    const Eigen::Vector2d fc = ForcerCentre(f, config_.body.lever_arm_m);
+    const Eigen::Vector3d rb(fc.x(), fc.y(), -com_arm_m_);
+    const Eigen::Vector3d rw = r * rb;
+    const double h = state.position_m.z() + rw.z() - rb.z();
+    const double hdot = state.velocity_m_per_s.z() + omega_w.cross(rw).z();
+    const Eigen::Vector3d fz(0.0, 0.0, -k4 * (h - h0) - c4 * hdot);
+    w.force_world_N += fz;
+    torque_w += rw.cross(fz);
+  }
+  w.torque_body_Nm = r.transpose() * torque_w;
+  return w;
+}
+
+Plant::ContactResult Plant::ContactWrench(const BodyState& state) const {
+  ContactResult out{Wrench{}, 0.0, false};
+  if (!config_.contact.enabled) {
+    return out;
+  }
+  const Eigen::Matrix3d r = state.attitude.normalized().toRotationMatrix();
+  const Eigen::Vector3d omega_w = r * state.omega_body_rad_per_s;
+  const double c = config_.contact.corner_half_size_m;
+  const double corners[4][2] = {{c, c}, {-c, c}, {-c, -c}, {c, -c}};
+  Eigen::Vector3d torque_w = Eigen::Vector3d::Zero();
+  for (const auto& corner : corners) {
+    const Eigen::Vector3d rb(corner[0], corner[1], -com_arm_m_);
+    const Eigen::Vector3d rw = r * rb;
+    const double h = state.position_m.z() + rw.z() - rb.z();
+    if (h >= 0.0) {
+      continue;
+    }
+    const Eigen::Vector3d vel = state.velocity_m_per_s + omega_w.cross(rw);
+    // One-sided: the surface pushes, never pulls.
+    const double fn = std::max(0.0, -config_.contact.stiffness_N_per_m * h - config_.contact.damping_Ns_per_m * vel.z());
+    out.touching = true;
+    if (fn <= 0.0) {
+      continue;
+    }
+    Eigen::Vector3d f(0.0, 0.0, fn);
+    const double vt = std::hypot(vel.x(), vel.y());
+    const double vs = config_.contact.friction_velocity_m_per_s;
+    const double scale = config_.contact.friction_coefficient * fn / std::sqrt(vt * vt + vs * vs);
+    f.x() = -scale * vel.x();
+    f.y() = -scale * vel.y();
+    out.normal_N += fn;
+    out.wrench.force_world_N += f;
+    torque_w += rw.cross(f);
+  }
+  out.wrench.torque_body_Nm = r.transpose() * torque_w;
+  return out;
+}
+
+Wrench Plant::TotalWrench(const BodyState& state, const double* currents_A) const {
+  Wrench w = MagneticWrench(state, currents_A);
+  const Wrench s = SuspensionWrench(state);
+  const ContactResult c = ContactWrench(state);
+  w.force_world_N += s.force_world_N + c.wrench.force_world_N;
+  w.torque_body_Nm += s.torque_body_Nm + c.wrench.torque_body_Nm;
+  if (config_.body.gravity_enabled) {
+    w.force_world_N.z() -= mass_ * config_.body.gravity_m_per_s2;
+  }
+  return w;
+}
+
+BodyDerivative Plant::Derivative(const BodyState& state, const double* currents_A) const {
+  const Wrench w = TotalWrench(state, currents_A);
+  BodyDerivative d;
+  d.velocity_m_per_s = state.velocity_m_per_s;
+  d.acceleration_m_per_s2 = w.force_world_N / mass_;
+  const Eigen::Quaterniond& q = state.attitude;
+  const Eigen::Vector3d& om = state.omega_body_rad_per_s;
+  // q_dot = 1/2 q (x) (0, omega_body)
+  d.attitude_rate = {-0.5 * (q.x() * om.x() + q.y() * om.y() + q.z() * om.z()),
+                     0.5 * (q.w() * om.x() + q.y() * om.z() - q.z() * om.y()),
+                     0.5 * (q.w() * om.y() + q.z() * om.x() - q.x() * om.z()),
+                     0.5 * (q.w() * om.z() + q.x() * om.y() - q.y() * om.x())};
+  // Euler's equations in the principal body frame.
+  const Eigen::Vector3d i_om = inertia_.cwiseProduct(om);
+  d.angular_acceleration_body = (w.torque_body_Nm - om.cross(i_om)).cwiseQuotient(inertia_);
+  return d;
+}
+
+double Plant::KineticEnergy(const BodyState& state) const {
+  const Eigen::Vector3d& om = state.omega_body_rad_per_s;
+  return 0.5 * mass_ * state.velocity_m_per_s.squaredNorm() + 0.5 * om.dot(inertia_.cwiseProduct(om));
+}
+
+// ---------------------------------------------------------------------------
+// Integration
+// ---------------------------------------------------------------------------
+namespace {
+
+BodyState Step(const BodyState& s, const BodyDerivative& d, double h) {
+  BodyState o;
+  o.position_m = s.position_m + h * d.velocity_m_per_s;
+  o.velocity_m_per_s = s.velocity_m_per_s + h * d.acceleration_m_per_s2;
+  o.attitude = Eigen::Quaterniond(s.attitude.w() + h * d.attitude_rate[0], s.attitude.x() + h * d.attitude_rate[1],
+                                  s.attitude.y() + h * d.attitude_rate[2], s.attitude.z() + h * d.attitude_rate[3]);
+  o.omega_body_rad_per_s = s.omega_body_rad_per_s + h * d.angular_acceleration_body;
+  return o;
+}
+
+}  // namespace
+
+void Plant::apply(const io::ActuatorCommand& command) {
+  amplifiers_.Apply(command, &rng_, config_.amplifier.current_noise_scale > 0.0);
+  UpdateTruth();
+}
+
+void Plant::advance(double dt_s) {
+  if (!(dt_s > 0.0)) {
+    return;
+  }
+  // Sub-steps of at most tick / substeps_per_tick.
+  const int per_tick = std::max(1, config_.integration.substeps_per_tick);
+  const int n = std::max(1, static_cast<int>(std::ceil(dt_s / (tick_s_ / per_tick) - 1e-9)));
+  const double h = dt_s / n;
+  double i0[kCoils];
+  double i1[kCoils];
+  double i2[kCoils];
+  for (int step = 0; step < n; ++step) {
+    amplifiers_.BeginSubstep(h);
+    for (int j = 0; j < kCoils; ++j) {
+      i0[j] = amplifiers_.CurrentAt(j, 0);
+      i1[j] = amplifiers_.CurrentAt(j, 1);
+      i2[j] = amplifiers_.CurrentAt(j, 2);
+    }
+    const BodyDerivative k1 = Derivative(body_, i0);
+    const BodyDerivative k2 = Derivative(Step(body_, k1, h / 2), i1);
+    const BodyDerivative k3 = Derivative(Step(body_, k2, h / 2), i1);
+    const BodyDerivative k4 = Derivative(Step(body_, k3, h), i2);
+    BodyDerivative sum;
+    sum.velocity_m_per_s = k1.velocity_m_per_s + 2.0 * (k2.velocity_m_per_s + k3.velocity_m_per_s) + k4.velocity_m_per_s;
+    sum.acceleration_m_per_s2 = k1.acceleration_m_per_s2 + 2.0 * (k2.acceleration_m_per_s2 + k3.acceleration_m_per_s2) +
+                                k4.acceleration_m_per_s2;
+    sum.attitude_rate = k1.attitude_rate + 2.0 * (k2.attitude_rate + k3.attitude_rate) + k4.attitude_rate;
+    sum.angular_acceleration_body = k1.angular_acceleration_body +
+                                    2.0 * (k2.angular_acceleration_body + k3.angular_acceleration_body) +
+                                    k4.angular_acceleration_body;
+    body_ = Step(body_, sum, h / 6.0);
+    body_.attitude.normalize();
+    amplifiers_.EndSubstep();
+    truth_.time_s += h;
+  }
+  UpdateTruth();
+}
+
+void Plant::UpdateTruth() {
+  const Eigen::Matrix3d r = body_.attitude.toRotationMatrix();
+  const Eigen::Vector3d ang = AnglesFromRotation(r);
+  for (int a = 0; a < 3; ++a) {
+    truth_.position_m[a] = body_.position_m[a];
+    truth_.angles_rad[a] = ang[a];
+    truth_.velocity_m_per_s[a] = body_.velocity_m_per_s[a];
+    truth_.omega_body_rad_per_s[a] = body_.omega_body_rad_per_s[a];
+  }
+  double currents[kCoils];
+  for (int j = 0; j < kCoils; ++j) {
+    currents[j] = amplifiers_.current_A(j);
+    truth_.coil_current_A[j] = currents[j];
+    truth_.coil_commanded_A[j] = amplifiers_.commanded_A(j);
+  }
+  truth_.amplifier_enable = amplifiers_.enabled();
+  const Wrench m = MagneticWrench(body_, currents);
+  for (int a = 0; a < 3; ++a) {
+    truth_.magnetic_force_world_N[a] = m.force_world_N[a];
+    truth_.magnetic_torque_body_Nm[a] = m.torque_body_Nm[a];
+  }
+  const ContactResult c = ContactWrench(body_);
+  truth_.contact_force_N = c.normal_N;
+  truth_.in_contact = c.touching;
+}
+
+// ---------------------------------------------------------------------------
+// Sensors
+// ---------------------------------------------------------------------------
+double Plant::InterferometerDisplacement(int axis) const {
+  // Plane mirror on the platen at mirror_distance_m from the centre; the beam
+  // is fixed in the world. Returns the beam's hit point along its axis minus
+  // its value at the reference pose (exact, includes Abbe and cosine terms).
+  const Eigen::Matrix3d r = body_.attitude.toRotationMatrix();
+  const auto& ic = config_.interferometer;
+  const double d = ic.mirror_distance_m;
+  const double zb = ic.beam_height_m;
+  const Eigen::Vector3d& p = body_.position_m;
+  if (axis == 0) {
+    const Eigen::Vector3d n = r.col(0);  // x beam along X at world y = 0
+    const double t = (n.dot(p) + d - n.z() * zb) / n.x();
+    return t - d;
+  }
+  const double xb = (axis == 1 ? -0.5 : 0.5) * ic.y_beam_separation_m;
+  const Eigen::Vector3d n = r.col(1);
+  const double t = (n.dot(p) + d - n.x() * xb - n.z() * zb) / n.y();
+  return t - d;
+}
+
+io::SensorSample Plant::sample() {
+  io::SensorSample out{};
+  std::uint16_t status = 0;
+  const bool noisy = config_.sensor_noise_enabled;
+  const Eigen::Matrix3d r = body_.attitude.toRotationMatrix();
+  const double t = truth_.time_s;
+
+  // --- interferometers: wrapping counters ------------------------------------
+  for (int a = 0; a < io::kInterferometerAxes; ++a) {
+    const double noise = noisy ? config_.interferometer.noise_m * rng_.Normal() : 0.0;
+    bool lost = manual_loss_[a];
+    for (const BeamLossEvent& e : config_.interferometer.beam_loss_events) {
+      lost = lost || (e.axis == a && t >= e.start_s && t < e.end_s);
+    }
+    const std::int64_t fresh = static_cast<std::int64_t>(config_.interferometer.start_count[a]) +
+                               static_cast<std::int64_t>(std::floor((InterferometerDisplacement(a) + noise) / lsb_m_));
+    if (lost) {
+      status = static_cast<std::uint16_t>(status | (io::kBeamLoss0 << a));
+    } else {
+      if (lost_prev_[a]) {
+        // Incremental counter: motion during the loss is not counted, the
+        // count resumes from where it froze.
+        counter_adjust_[a] = last_count_[a] - fresh;
+      }
+      last_count_[a] = fresh + counter_adjust_[a];
+    }
+    lost_prev_[a] = lost;
+    out.interferometer_counts[a] = static_cast<std::uint32_t>(static_cast<std::uint64_t>(last_count_[a]) & 0xffffffffu);
+  }
+
+  // --- laser displacement sensors ---------------------------------------------
+  const auto& dc = config_.displacement;
+  for (int i = 0; i < io::kDisplacementSensors; ++i) {
+    const Eigen::Vector3d rb(dc.sensor_x_m[i], dc.sensor_y_m[i], -com_arm_m_);
+    const double h = body_.position_m.z() + (r * rb).z() - rb.z();
+    const double noise = noisy ? dc.noise_m * rng_.Normal() : 0.0;
+    const double volts = (h + noise - dc.zero_height_m) / dc.scale_m_per_V;
+    if (std::fabs(volts) > config_.adc.full_scale_V) {
+      status = static_cast<std::uint16_t>(status | (io::kDisplacementOutOfRange0 << i));
+    }
+    out.displacement_adc[i] = QuantizeAdc(volts, config_.adc.full_scale_V);
+  }
+
+  // --- Hall sensors: A.Bx, A.By, B.Bx, B.By -------------------------------------
+  const auto& hc = config_.hall;
+  const double hall_xy[2][2] = {{hc.a_x_m, hc.a_y_m}, {hc.b_x_m, hc.b_y_m}};
+  for (int sensor = 0; sensor < 2; ++sensor) {
+    const Eigen::Vector3d rb(hall_xy[sensor][0], hall_xy[sensor][1], -com_arm_m_);
+    const Eigen::Vector3d w = body_.position_m + r * rb;
+    const double height = hc.height_above_magnets_m + w.z() - rb.z();
+    const FieldSZ bx = field_.PointField(w.x(), height);
+    const FieldSZ by = field_.PointField(w.y(), height);
+    const Eigen::Vector3d b_body = r.transpose() * Eigen::Vector3d(bx.b_s_T, by.b_s_T, bx.b_z_T + by.b_z_T);
+    for (int c = 0; c < 2; ++c) {
+      const double noise = noisy ? hc.noise_T * rng_.Normal() : 0.0;
+      out.hall_adc[2 * sensor + c] = QuantizeAdc(hc.sensitivity_V_per_T * (b_body[c] + noise), config_.adc.full_scale_V);
+    }
+  }
+
+  // --- amplifier current monitors ------------------------------------------------
+  const auto& ac = config_.amplifier;
+  for (int j = 0; j < kCoils; ++j) {
+    const double noise = noisy ? ac.monitor_noise_A * rng_.Normal() : 0.0;
+    out.coil_current_adc[j] =
+        QuantizeAdc(ac.monitor_gain_V_per_A * (amplifiers_.current_A(j) + noise), config_.adc.full_scale_V);
+  }
+  out.status_flags = status;
+  return out;
+}
+
+}  // namespace maglev::hil

@@ -1,0 +1,81 @@
+// A small DBC reader for tests only (BO_ and SG_ lines, Intel or Motorola
+// flag recorded, Intel decoding). Independent of the codec on purpose: it is
+// what "decode the bytes with the DBC" means in the tests.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <string>
+#include <vector>
+
+namespace maglev::can::test {
+
+struct DbcSignal {
+  std::string name;
+  int start = 0;
+  int length = 0;
+  bool little_endian = true;
+  bool is_signed = false;
+  double factor = 1.0;
+  double offset = 0.0;
+  double min = 0.0;
+  double max = 0.0;
+};
+struct DbcMessage {
+  std::uint32_t id = 0;
+  std::string name;
+  int length = 0;
+  std::vector<DbcSignal> signals;
+};
+
+inline std::map<std::uint32_t, DbcMessage> parse_dbc(const std::string& path) {
+  std::ifstream in(path);
+  std::map<std::uint32_t, DbcMessage> out;
+  const std::regex bo(R"(^BO_ (\d+) (\w+): (\d+) (\w+)\s*$)");
+  const std::regex sg(
+      R"(^ SG_ (\w+) : (\d+)\|(\d+)@([01])([+-]) \(([^,]+),([^)]+)\) \[([^|]+)\|([^\]]+)\] \"[^\"]*\" .*$)");
+  std::string line;
+  DbcMessage* cur = nullptr;
+  while (std::getline(in, line)) {
+    std::smatch m;
+    if (std::regex_match(line, m, bo)) {
+      DbcMessage msg;
+      msg.id = static_cast<std::uint32_t>(std::stoul(m[1]));
+      msg.name = m[2];
+      msg.length = std::stoi(m[3]);
+      cur = &(out[msg.id] = msg);
+    } else if (cur != nullptr && std::regex_match(line, m, sg)) {
+      DbcSignal s;
+      s.name = m[1];
+      s.start = std::stoi(m[2]);
+      s.length = std::stoi(m[3]);
+      s.little_endian = m[4] == "1";
+      s.is_signed = m[5] == "-";
+      s.factor = std::stod(m[6]);
+      s.offset = std::stod(m[7]);
+      s.min = std::stod(m[8]);
+      s.max = std::stod(m[9]);
+      cur->signals.push_back(s);
+    } else if (line.empty()) {
+      cur = nullptr;
+    }
+  }
+  return out;
+}
+
+// Physical value of one signal (Intel byte order, byte*8+bit numbering).
+inline double dbc_decode(const DbcSignal& s, const std::uint8_t* data) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < s.length; ++i) {
+    const int bit = s.start + i;
+    v |= static_cast<std::uint64_t>((data[bit / 8] >> (bit % 8)) & 1) << i;
+  }
+  double raw = static_cast<double>(v);
+  if (s.is_signed && ((v >> (s.length - 1)) & 1) != 0) raw -= std::ldexp(1.0, s.length);
+  return raw * s.factor + s.offset;
+}
+
+}  // namespace maglev::can::test

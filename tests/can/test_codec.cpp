@@ -1,0 +1,242 @@
+// Codec, E2E and receiver tests: round trips, every rejection path, counter wrap.
+#include <cstring>
+#include <random>
+
+#include "maglev/can_link/codec.hpp"
+#include "maglev/can_link/e2e.hpp"
+#include "maglev/can_link/receiver.hpp"
+
+// CppUTest last: its leak-detector macros clash with STL headers.
+#include <CppUTest/TestHarness.h>
+
+using namespace maglev;
+using namespace maglev::can;
+
+namespace {
+io::SensorSample random_sample(std::mt19937& rng) {
+  io::SensorSample s{};
+  for (auto& c : s.interferometer_counts) c = static_cast<std::uint32_t>(rng());
+  for (auto& c : s.displacement_adc) c = static_cast<std::int16_t>(rng());
+  for (auto& c : s.hall_adc) c = static_cast<std::int16_t>(rng());
+  for (auto& c : s.coil_current_adc) c = static_cast<std::int16_t>(rng());
+  s.status_flags = static_cast<std::uint16_t>(rng());
+  return s;
+}
+io::ActuatorCommand random_command(std::mt19937& rng) {
+  io::ActuatorCommand a{};
+  for (auto& c : a.dac_code) c = static_cast<std::int16_t>(rng());
+  a.amplifier_enable = (rng() & 1u) != 0;
+  return a;
+}
+}  // namespace
+
+TEST_GROUP(E2e){};
+
+TEST(E2e, Crc16CcittFalseCheckValue) {
+  const std::uint8_t msg[] = {'1', '2', '3', '4', '5', '6', '7', '8', '9'};
+  LONGS_EQUAL(0x29B1, crc16_ccitt(msg, sizeof msg));
+}
+
+TEST(E2e, DataIdChangesCrc) {
+  std::mt19937 rng(1);
+  CanFrame f{};
+  encode_actuator(random_command(rng), 7, f);
+  CHECK_TRUE(e2e_crc_ok(f.data, f.len, message(MessageKind::kActuator).data_id));
+  // Same bytes under the current monitor's data ID (same 20-byte length): fails.
+  CHECK_FALSE(e2e_crc_ok(f.data, f.len, message(MessageKind::kCurrentMonitor).data_id));
+}
+
+TEST_GROUP(RoundTrip){};
+
+TEST(RoundTrip, SensorActuatorAndAllOthers) {
+  std::mt19937 rng(42);
+  for (int i = 0; i < 500; ++i) {
+    CanFrame f{};
+    const auto s = random_sample(rng);
+    encode_sensor(s, static_cast<std::uint8_t>(i), f);
+    LONGS_EQUAL(0x030, f.id);
+    LONGS_EQUAL(32, f.len);
+    LONGS_EQUAL(kFlagFd | kFlagBrs, f.flags);
+    const Message* m = nullptr;
+    CHECK(RxStatus::kOk == check_frame(f, nullptr, &m));
+    io::SensorSample back{};
+    decode_sensor(f, back);
+    MEMCMP_EQUAL(s.interferometer_counts, back.interferometer_counts, sizeof s.interferometer_counts);
+    MEMCMP_EQUAL(s.displacement_adc, back.displacement_adc, sizeof s.displacement_adc);
+    MEMCMP_EQUAL(s.hall_adc, back.hall_adc, sizeof s.hall_adc);
+    LONGS_EQUAL(s.status_flags, back.status_flags);
+    LONGS_EQUAL(i & 0xFF, frame_counter(f));
+
+    const auto a = random_command(rng);
+    encode_actuator(a, static_cast<std::uint8_t>(i), f);
+    CHECK(RxStatus::kOk == check_frame(f, &message(MessageKind::kActuator), nullptr));
+    io::ActuatorCommand ab{};
+    decode_actuator(f, ab);
+    MEMCMP_EQUAL(a.dac_code, ab.dac_code, sizeof a.dac_code);
+    CHECK_EQUAL(a.amplifier_enable, ab.amplifier_enable);
+
+    CurrentMonitorFrame cm{};
+    for (int j = 0; j < 8; ++j) cm.coil_current_adc[j] = s.coil_current_adc[j];
+    encode_current_monitor(cm, 3, f);
+    CHECK(RxStatus::kOk == check_frame(f, nullptr, nullptr));
+    CurrentMonitorFrame cmb{};
+    decode_current_monitor(f, cmb);
+    MEMCMP_EQUAL(cm.coil_current_adc, cmb.coil_current_adc, sizeof cm.coil_current_adc);
+
+    ControllerStatusFrame cs{};
+    for (auto& p : cs.pose_nm_nrad) p = static_cast<std::int32_t>(rng());
+    cs.sequencer_state = static_cast<std::uint8_t>(rng() % 16);
+    cs.fault_code = static_cast<std::uint16_t>(rng());
+    cs.saturation_flags = static_cast<std::uint8_t>(rng());
+    cs.scale_k_e4 = static_cast<std::uint16_t>(rng());
+    for (auto& c : cs.current_command_mA) c = static_cast<std::int16_t>(rng());
+    cs.tick = static_cast<std::uint32_t>(rng());
+    encode_controller_status(cs, 9, f);
+    CHECK(RxStatus::kOk == check_frame(f, nullptr, nullptr));
+    ControllerStatusFrame csb{};
+    decode_controller_status(f, csb);
+    MEMCMP_EQUAL(cs.pose_nm_nrad, csb.pose_nm_nrad, sizeof cs.pose_nm_nrad);
+    LONGS_EQUAL(cs.sequencer_state, csb.sequencer_state);
+    LONGS_EQUAL(cs.fault_code, csb.fault_code);
+    LONGS_EQUAL(cs.saturation_flags, csb.saturation_flags);
+    LONGS_EQUAL(cs.scale_k_e4, csb.scale_k_e4);
+    MEMCMP_EQUAL(cs.current_command_mA, csb.current_command_mA, sizeof cs.current_command_mA);
+    UNSIGNED_LONGS_EQUAL(cs.tick, csb.tick);
+
+    const SyncFrame sy{static_cast<std::uint32_t>(rng()), static_cast<std::uint32_t>(rng())};
+    encode_sync(sy, 1, f);
+    CHECK(RxStatus::kOk == check_frame(f, nullptr, nullptr));
+    SyncFrame syb{};
+    decode_sync(f, syb);
+    UNSIGNED_LONGS_EQUAL(sy.tick, syb.tick);
+    UNSIGNED_LONGS_EQUAL(sy.time_us, syb.time_us);
+
+    const HeartbeatFrame hb{static_cast<NodeState>(rng() % 4), static_cast<std::uint32_t>(rng()),
+                            static_cast<std::uint16_t>(rng()), static_cast<std::uint16_t>(rng())};
+    for (auto k : {MessageKind::kHeartbeatController, MessageKind::kHeartbeatPlant}) {
+      encode_heartbeat(k, hb, 2, f);
+      LONGS_EQUAL(message(k).can_id, f.id);
+      CHECK(RxStatus::kOk == check_frame(f, nullptr, nullptr));
+      HeartbeatFrame hbb{};
+      decode_heartbeat(f, hbb);
+      CHECK(hb.node_state == hbb.node_state);
+      UNSIGNED_LONGS_EQUAL(hb.uptime_ms, hbb.uptime_ms);
+      LONGS_EQUAL(hb.rx_rejected, hbb.rx_rejected);
+      LONGS_EQUAL(hb.bus_errors, hbb.bus_errors);
+    }
+  }
+}
+
+TEST(RoundTrip, KnownBytesOfASensorFrame) {
+  // Pins the wire layout: little endian, header then payload back to back.
+  io::SensorSample s{};
+  s.interferometer_counts[0] = 0x11223344u;
+  s.displacement_adc[0] = -2;  // 0xFFFE
+  s.status_flags = io::kBeamLoss1;
+  CanFrame f{};
+  encode_sensor(s, 0xAB, f);
+  LONGS_EQUAL(0xAB, f.data[2]);
+  LONGS_EQUAL(0x44, f.data[3]);
+  LONGS_EQUAL(0x33, f.data[4]);
+  LONGS_EQUAL(0x22, f.data[5]);
+  LONGS_EQUAL(0x11, f.data[6]);
+  LONGS_EQUAL(0xFE, f.data[15]);
+  LONGS_EQUAL(0xFF, f.data[16]);
+  LONGS_EQUAL(0x02, f.data[29]);  // status flags at bits 224..239
+  LONGS_EQUAL(0x00, f.data[31]);  // padding
+  const std::uint16_t crc = e2e_crc(f.data, 32, 0x0A03);
+  LONGS_EQUAL(crc & 0xFF, f.data[0]);
+  LONGS_EQUAL(crc >> 8, f.data[1]);
+}
+
+TEST_GROUP(Rejection) {
+  LinkReceiver rx;
+  CanFrame good{};
+  void setup() override {
+    std::mt19937 rng(5);
+    encode_actuator(random_command(rng), 10, good);
+    CHECK(RxStatus::kOk == rx.accept(good));  // establishes counter 10
+  }
+};
+
+TEST(Rejection, UnknownId) {
+  CanFrame f = good;
+  f.id = 0x555;
+  CHECK(RxStatus::kUnknownId == rx.accept(f));
+  LONGS_EQUAL(1, rx.stats().count(RxStatus::kUnknownId));
+  // Expecting a sensor frame but getting an actuator frame is also "unknown here".
+  CanFrame g{};
+  encode_actuator(io::kSafeActuatorCommand, 11, g);
+  CHECK(RxStatus::kUnknownId == rx.accept(g, &message(MessageKind::kSensor)));
+  LONGS_EQUAL(2, rx.stats().count(RxStatus::kUnknownId));
+}
+
+TEST(Rejection, WrongLengthAndFormat) {
+  CanFrame f{};
+  encode_actuator(io::kSafeActuatorCommand, 11, f);
+  f.len = 24;
+  CHECK(RxStatus::kWrongLength == rx.accept(f));
+  f.len = 20;
+  f.flags = 0;  // classical frame
+  CHECK(RxStatus::kWrongFormat == rx.accept(f));
+  f.flags = kFlagFd | kFlagExtendedId;
+  CHECK(RxStatus::kWrongFormat == rx.accept(f));
+  LONGS_EQUAL(1, rx.stats().count(RxStatus::kWrongLength));
+  LONGS_EQUAL(2, rx.stats().count(RxStatus::kWrongFormat));
+  LONGS_EQUAL(1, rx.stats().accepted);
+}
+
+TEST(Rejection, BadCrcOnEverySingleBitFlip) {
+  CanFrame f{};
+  encode_actuator(io::kSafeActuatorCommand, 11, f);
+  for (int bit = 0; bit < 20 * 8; ++bit) {
+    CanFrame c = f;
+    c.data[bit / 8] = static_cast<std::uint8_t>(c.data[bit / 8] ^ (1u << (bit % 8)));
+    CHECK(RxStatus::kBadCrc == rx.accept(c));
+  }
+  LONGS_EQUAL(160, rx.stats().count(RxStatus::kBadCrc));
+  CHECK(RxStatus::kOk == rx.accept(f));  // the intact frame still goes through
+}
+
+TEST(Rejection, RepeatedOutOfOrderJumpAndLost) {
+  CanFrame f{};
+  encode_actuator(io::kSafeActuatorCommand, 10, f);
+  CHECK(RxStatus::kRepeated == rx.accept(f));
+  encode_actuator(io::kSafeActuatorCommand, 9, f);
+  CHECK(RxStatus::kOutOfOrder == rx.accept(f));
+  encode_actuator(io::kSafeActuatorCommand, 13, f);  // 11, 12 lost: still OK (max jump 3)
+  CHECK(RxStatus::kOk == rx.accept(f));
+  LONGS_EQUAL(2, rx.stats().lost);
+  encode_actuator(io::kSafeActuatorCommand, 20, f);  // jump 7 > 3
+  CHECK(RxStatus::kSequenceJump == rx.accept(f));
+  encode_actuator(io::kSafeActuatorCommand, 21, f);  // resynchronised on 20
+  CHECK(RxStatus::kOk == rx.accept(f));
+  LONGS_EQUAL(1, rx.stats().count(RxStatus::kRepeated));
+  LONGS_EQUAL(1, rx.stats().count(RxStatus::kOutOfOrder));
+  LONGS_EQUAL(1, rx.stats().count(RxStatus::kSequenceJump));
+  LONGS_EQUAL(3, rx.stats().accepted);
+}
+
+TEST(Rejection, CounterWrapIsAccepted) {
+  LinkReceiver r;
+  CanFrame f{};
+  for (int i = 250; i < 250 + 20; ++i) {
+    encode_sensor(io::SensorSample{}, static_cast<std::uint8_t>(i), f);
+    CHECK(RxStatus::kOk == r.accept(f));
+  }
+  LONGS_EQUAL(20, r.stats().accepted);
+  LONGS_EQUAL(0, r.stats().lost);
+  LONGS_EQUAL(0, r.stats().rejected_total());
+}
+
+TEST(Rejection, OutOfRangeEnableIsNeverApplied) {
+  // A frame with a valid CRC but amplifier_enable = 2 (a sender bug).
+  std::int64_t raw[kActuatorSignals.size()] = {};
+  raw[2] = 1000;
+  raw[10] = 2;
+  CanFrame f{};
+  encode_raw(message(MessageKind::kActuator), raw, 11, f);
+  CHECK(RxStatus::kOutOfRange == rx.accept(f));
+  LONGS_EQUAL(1, rx.stats().count(RxStatus::kOutOfRange));
+  CHECK(rx.last_message() == nullptr);
+}

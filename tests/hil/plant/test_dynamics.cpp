@@ -1,0 +1,267 @@
+// Rigid-body dynamics: energy conservation, the identified transfer
+// functions (25), (26), (29)-(31) from a numerical linearization, landing
+// contact and lift-off, payload.
+#include <complex>
+#include <cstdio>
+
+#include "allocation_copy.hpp"
+#include "maglev/hil/plant.hpp"
+
+// CppUTest last: its leak-checking operator new macros break STL headers.
+#include <CppUTest/TestHarness.h>
+
+using maglev::hil::BodyState;
+using maglev::hil::Plant;
+using maglev::hil::PlantConfig;
+namespace stage = maglev::io::stage;
+namespace t = maglev::hil::test;
+
+TEST_GROUP(PlantDynamics){};
+
+TEST(PlantDynamics, FreeRigidBodyConservesEnergy) {
+  PlantConfig c = PlantConfig::Ideal();
+  c.body.gravity_enabled = false;
+  c.suspension.enabled = false;
+  c.contact.enabled = false;
+  Plant plant(c, 7);
+  BodyState s;
+  s.position_m = {0.0, 0.0, 0.01};
+  s.velocity_m_per_s = {0.05, -0.03, 0.02};
+  s.omega_body_rad_per_s = {3.0, -2.0, 5.0};  // tumbling, Ix = Iy != Iz
+  plant.set_body_state(s);
+  const double e0 = plant.KineticEnergy(plant.body_state());
+  const Eigen::Vector3d l0 = plant.body_state().attitude.toRotationMatrix() *
+                             plant.inertia_kgm2().cwiseProduct(s.omega_body_rad_per_s);
+  double max_drift = 0.0;
+  for (int k = 0; k < 25000; ++k) {  // 10 s at 2.5 kHz, default sub-steps
+    plant.advance_tick();
+    const double e = plant.KineticEnergy(plant.body_state());
+    max_drift = std::max(max_drift, std::fabs(e - e0) / e0);
+  }
+  const BodyState& s1 = plant.body_state();
+  const Eigen::Vector3d l1 = s1.attitude.toRotationMatrix() * plant.inertia_kgm2().cwiseProduct(s1.omega_body_rad_per_s);
+  std::printf("\n  free body, 10 s: max relative energy drift %.3e, |dL|/|L| %.3e\n", max_drift,
+              (l1 - l0).norm() / l0.norm());
+  CHECK(max_drift < 1e-9);
+  CHECK((l1 - l0).norm() / l0.norm() < 1e-9);
+  // Uniform translation.
+  DOUBLES_EQUAL(0.05 * 10.0, s1.position_m.x(), 1e-9);
+  DOUBLES_EQUAL(0.01 + 0.02 * 10.0, s1.position_m.z(), 1e-9);
+}
+
+namespace {
+
+using Vector12 = Eigen::Matrix<double, 12, 1>;
+using Matrix12 = Eigen::Matrix<double, 12, 12>;
+using Matrix12x6 = Eigen::Matrix<double, 12, 6>;
+
+// Generalized coordinates in the paper's order q = (x, y, theta_z, z, theta_x, theta_y).
+BodyState StateFrom(const Vector12& xs) {
+  BodyState s;
+  s.position_m = {xs[0], xs[1], xs[3]};
+  s.attitude = Eigen::Quaterniond(Plant::RotationFromAngles(xs[4], xs[5], xs[2]));
+  s.velocity_m_per_s = {xs[6], xs[7], xs[9]};
+  s.omega_body_rad_per_s = {xs[10], xs[11], xs[8]};  // = angle rates at level attitude
+  return s;
+}
+
+t::Vector6 Accelerations(const Plant& plant, const Vector12& xs, const t::Vector6& u) {
+  const t::Vector8 i = t::CurrentsFromEffort(u, xs[0], xs[1]);  // commutated at the measured x, y
+  const auto d = plant.Derivative(StateFrom(xs), i.data());
+  t::Vector6 a;
+  a << d.acceleration_m_per_s2.x(), d.acceleration_m_per_s2.y(), d.angular_acceleration_body.z(),
+      d.acceleration_m_per_s2.z(), d.angular_acceleration_body.x(), d.angular_acceleration_body.y();
+  return a;
+}
+
+struct Linearization {
+  Matrix12 a;
+  Matrix12x6 b;
+  t::Vector6 u0;
+};
+
+Linearization Linearize(const Plant& plant, const Vector12& x0) {
+  Linearization lin;
+  // Equilibrium effort: acceleration is affine in U.
+  t::Matrix68 dummy;
+  (void)dummy;
+  Eigen::Matrix<double, 6, 6> ju;
+  const t::Vector6 acc0 = Accelerations(plant, x0, t::Vector6::Zero());
+  for (int k = 0; k < 6; ++k) {
+    t::Vector6 du = t::Vector6::Zero();
+    du[k] = 1.0;
+    ju.col(k) = Accelerations(plant, x0, du) - acc0;
+  }
+  lin.u0 = -ju.fullPivLu().solve(acc0);
+  // Central differences in the state.
+  lin.a.setZero();
+  lin.a.topRightCorner<6, 6>().setIdentity();
+  for (int k = 0; k < 12; ++k) {
+    const double h = (k < 6) ? 1e-7 : 1e-5;
+    Vector12 xp = x0, xm = x0;
+    xp[k] += h;
+    xm[k] -= h;
+    lin.a.block<6, 1>(6, k) = (Accelerations(plant, xp, lin.u0) - Accelerations(plant, xm, lin.u0)) / (2 * h);
+  }
+  lin.b.setZero();
+  for (int k = 0; k < 6; ++k) {
+    t::Vector6 up = lin.u0, um = lin.u0;
+    up[k] += 1e-3;
+    um[k] -= 1e-3;
+    lin.b.block<6, 1>(6, k) = (Accelerations(plant, x0, up) - Accelerations(plant, x0, um)) / 2e-3;
+  }
+  return lin;
+}
+
+std::complex<double> Tf(const Linearization& lin, int axis, double f_Hz) {
+  const std::complex<double> s(0.0, 2.0 * stage::kPi * f_Hz);
+  const Eigen::Matrix<std::complex<double>, 12, 12> m =
+      s * Eigen::Matrix<std::complex<double>, 12, 12>::Identity() - lin.a.cast<std::complex<double>>();
+  const Eigen::Matrix<std::complex<double>, 12, 1> col = m.fullPivLu().solve(lin.b.col(axis).cast<std::complex<double>>());
+  return col[axis];
+}
+
+double CheckTf(const Linearization& lin, int axis, double f_Hz, double m2, double m1, double m0, const char* name) {
+  const std::complex<double> s(0.0, 2.0 * stage::kPi * f_Hz);
+  const std::complex<double> expected = stage::kTwoBStarIdentified_N_per_A / (m2 * s * s + m1 * s + m0);
+  const std::complex<double> got = Tf(lin, axis, f_Hz);
+  const double err = std::abs(got - expected) / std::abs(expected);
+  std::printf("  %-8s %6.1f Hz: |G| %.4e (paper %.4e), rel. error %.3f %%\n", name, f_Hz, std::abs(got),
+              std::abs(expected), 100 * err);
+  return err;
+}
+
+Vector12 NominalPoint() {
+  Vector12 x0 = Vector12::Zero();
+  x0[0] = 0.0031;  // off the phase zero: the commutation must do its job
+  x0[1] = -0.0042;
+  x0[3] = stage::kNominalHeight_m;
+  return x0;
+}
+
+}  // namespace
+
+TEST(PlantDynamics, LinearizedPlantMatchesIdentifiedTransferFunctions) {
+  const double m = stage::kMass_kg;
+  // Paper's numbers are mutually consistent: 2b*/m, 2b*/Iz, 2b*/Ix.
+  DOUBLES_EQUAL(2.27, stage::kTwoBStarIdentified_N_per_A / m, 0.005);
+  DOUBLES_EQUAL(473.25, stage::kTwoBStarIdentified_N_per_A / stage::kIz_kgm2, 0.01);
+  DOUBLES_EQUAL(896.68, stage::kTwoBStarIdentified_N_per_A / stage::kIx_kgm2, 0.01);
+  DOUBLES_EQUAL(128.0, stage::kZStiffness_N_per_m / 2 * stage::kLeverArm_m * stage::kLeverArm_m, 0.5);
+  DOUBLES_EQUAL(1.21, stage::kZDamping_Ns_per_m / 2 * stage::kLeverArm_m * stage::kLeverArm_m, 0.01);
+
+  const Plant plant(PlantConfig::Ideal(), 1);  // full model: harmonics 1..13, suspension on
+  const Linearization lin = Linearize(plant, NominalPoint());
+  std::printf("\n  equilibrium effort U0 = [%.4f %.4f %.4f %.4f %.4f %.4f] A (u_z paper: m g / 2b* = %.4f)\n",
+              lin.u0[0], lin.u0[1], lin.u0[2], lin.u0[3], lin.u0[4], lin.u0[5],
+              m * stage::kGravity_m_per_s2 / stage::kTwoBStarIdentified_N_per_A);
+  double worst = 0.0;
+  for (double f : {10.0, 50.0, 200.0}) {
+    worst = std::max(worst, CheckTf(lin, 0, f, m, 0, 0, "x (25)"));
+    worst = std::max(worst, CheckTf(lin, 1, f, m, 0, 0, "y (25)"));
+    worst = std::max(worst, CheckTf(lin, 2, f, stage::kIz_kgm2, 0, 0, "thz (25)"));
+  }
+  for (double f : {0.5, 5.0, 50.0, 200.0}) {
+    worst = std::max(worst, CheckTf(lin, 3, f, m, stage::kZDamping_Ns_per_m, stage::kZStiffness_N_per_m, "z (30)"));
+    worst = std::max(worst, CheckTf(lin, 4, f, stage::kIx_kgm2, 1.21, 128.0, "thx (31)"));
+    worst = std::max(worst, CheckTf(lin, 5, f, stage::kIy_kgm2, 1.21, 128.0, "thy (31)"));
+  }
+  std::printf("  worst relative error %.3f %%\n", 100 * worst);
+  CHECK(worst < 0.02);
+}
+
+TEST(PlantDynamics, PureMassPlantsWithoutSuspension) {
+  // Eq (26): G_z = 2.27/s^2, G_thx = 896.68/s^2 -- the pure-mass model holds
+  // above the magnetic gradient stiffness gamma_1 m g (~912 N/m, 5.5 Hz).
+  PlantConfig c = PlantConfig::Ideal();
+  c.suspension.enabled = false;
+  const Plant plant(c, 1);
+  const Linearization lin = Linearize(plant, NominalPoint());
+  std::printf("\n");
+  double worst = 0.0;
+  for (double f : {60.0, 100.0, 300.0}) {
+    worst = std::max(worst, CheckTf(lin, 3, f, stage::kMass_kg, 0, 0, "z (26)"));
+    worst = std::max(worst, CheckTf(lin, 4, f, stage::kIx_kgm2, 0, 0, "thx (26)"));
+    worst = std::max(worst, CheckTf(lin, 5, f, stage::kIy_kgm2, 0, 0, "thy"));
+  }
+  CHECK(worst < 0.02);
+  // The passive magnetic z stiffness is there and has the right size.
+  const double k_mag = -lin.a(9, 3) * stage::kMass_kg;
+  std::printf("  magnetic z stiffness %.1f N/m (gamma_1 m g = %.1f N/m)\n", k_mag,
+              stage::kGamma1_per_m * stage::kMass_kg * stage::kGravity_m_per_s2);
+  DOUBLES_EQUAL(stage::kGamma1_per_m * stage::kMass_kg * stage::kGravity_m_per_s2, k_mag, 30.0);
+}
+
+namespace {
+
+maglev::io::ActuatorCommand CommandFor(const t::Vector6& u, double x, double y, bool enable) {
+  const t::Vector8 i = t::CurrentsFromEffort(u, x, y);
+  maglev::io::ActuatorCommand cmd{};
+  for (int j = 0; j < 8; ++j) {
+    cmd.dac_code[j] = t::DacCode(i[j]);
+  }
+  cmd.amplifier_enable = enable;
+  return cmd;
+}
+
+}  // namespace
+
+TEST(PlantDynamics, LandedPlatenRestsAtZero) {
+  Plant plant(PlantConfig::Ideal(), 3);
+  const auto cmd = CommandFor(t::Vector6::Zero(), 0, 0, false);
+  for (int k = 0; k < 1250; ++k) {
+    plant.apply(cmd);
+    plant.advance_tick();
+  }
+  const auto& tr = plant.truth();
+  const double weight = stage::kMass_kg * stage::kGravity_m_per_s2;
+  const double spring_lift = plant.suspension_stiffness_N_per_m() * stage::kNominalHeight_m;
+  std::printf("\n  landed: z = %.3f um, thx = %.3e, thy = %.3e rad, contact %.3f N\n", tr.position_m[2] * 1e6,
+              tr.angles_rad[0], tr.angles_rad[1], tr.contact_force_N);
+  CHECK(tr.in_contact);
+  CHECK(std::fabs(tr.position_m[2]) < 0.5e-6);
+  CHECK(std::fabs(tr.angles_rad[0]) < 1e-7 && std::fabs(tr.angles_rad[1]) < 1e-7);
+  DOUBLES_EQUAL(weight - spring_lift, tr.contact_force_N, 0.01);
+}
+
+TEST(PlantDynamics, LiftOffOnlyAboveWeightMinusSpringPreload) {
+  const double weight = stage::kMass_kg * stage::kGravity_m_per_s2;
+  double final_z[2] = {};
+  bool contact[2] = {};
+  for (int trial = 0; trial < 2; ++trial) {
+    Plant plant(PlantConfig::Ideal(), 3);
+    const double spring_lift = plant.suspension_stiffness_N_per_m() * stage::kNominalHeight_m;
+    const double threshold = weight - spring_lift;  // contact preload to overcome
+    const double f_lift = threshold * (trial == 0 ? 0.97 : 1.03);
+    // z = 0 (1.6 mm gap): F_z = 2 b*(z0) u_z exactly at x = y = 0.
+    t::Vector6 u = t::Vector6::Zero();
+    u[3] = f_lift / stage::kTwoBStarIdentified_N_per_A;
+    const auto cmd = CommandFor(u, 0, 0, true);
+    for (int k = 0; k < 1500; ++k) {
+      plant.apply(cmd);
+      plant.advance_tick();
+    }
+    final_z[trial] = plant.truth().position_m[2];
+    contact[trial] = plant.truth().in_contact;
+  }
+  std::printf("\n  97%% of threshold: z = %.3f um; 103%%: z = %.3f um\n", final_z[0] * 1e6, final_z[1] * 1e6);
+  CHECK(contact[0]);
+  CHECK(!contact[1]);
+  CHECK(final_z[0] < 0.1e-6);
+  CHECK(final_z[1] > 1.0e-6);
+}
+
+TEST(PlantDynamics, PayloadAddsMassAndInertia) {
+  PlantConfig c = PlantConfig::Ideal();
+  c.body.payload_kg = stage::kTestPayload_kg;
+  const Plant plant(c, 1);
+  DOUBLES_EQUAL(0.75 + 0.5396, plant.mass_kg(), 1e-12);
+  DOUBLES_EQUAL(0.0019 + 0.5396 * 0.01 / 12, plant.inertia_kgm2().x(), 1e-12);
+  DOUBLES_EQUAL(0.0036 + 0.5396 * 0.01 / 6, plant.inertia_kgm2().z(), 1e-12);
+  // The loaded platen's x plant is 2b*/(m + m_p) / s^2.
+  const Linearization lin = Linearize(plant, NominalPoint());
+  const std::complex<double> g = Tf(lin, 0, 50.0);
+  const double w = 2 * stage::kPi * 50.0;
+  DOUBLES_EQUAL(stage::kTwoBStarIdentified_N_per_A / (plant.mass_kg() * w * w), std::abs(g),
+                0.02 * std::abs(g));
+}

@@ -1,0 +1,131 @@
+// Biquad stages: measured response == exact discrete H(e^jwT); notch depth
+// at f0, low-pass gain Q at f0, lead-lag dc / high-frequency gains.
+#include <cmath>
+#include <complex>
+#include <cstdio>
+
+#include "CppUTest/TestHarness.h"
+#include "freq_response.hpp"
+#include "maglev/axis_loops/biquad.hpp"
+
+using namespace maglev::kernel;
+using maglev::numeric::Q7_24;
+using maglev::numeric::ScalarTraits;
+using loops_test::kFs;
+using loops_test::kPi;
+using loops_test::kT;
+using cplx = std::complex<double>;
+
+namespace {
+
+cplx exact(const BiquadDesign& d, double f) {
+  const cplx zi = std::polar(1.0, -2.0 * kPi * f * kT);
+  return (d.b0 + d.b1 * zi + d.b2 * zi * zi) / (1.0 + d.a1 * zi + d.a2 * zi * zi);
+}
+
+template <typename Scalar>
+cplx measure(const BiquadConfig& cfg, double f) {
+  using Tr = ScalarTraits<Scalar>;
+  BiquadCoefficients<Scalar> c;
+  CHECK(design_biquad<Scalar>(cfg, kFs, &c) == LoopDesignError::kOk);
+  BiquadState<Scalar> s{};
+  // 1 s settle (the notch's slowest pole decays as exp(-w0/(2Q) t)), 2 s window.
+  return loops_test::measure_gain([&](double x) { return Tr::to_double(biquad_update(c, s, Tr::from_double(x))); },
+                                  f, 1.0, 2500, 5000);
+}
+
+void check_stage(const BiquadConfig& cfg, const double* freqs, int n, const char* name) {
+  BiquadDesign d;
+  CHECK(design_biquad_double(cfg, kFs, &d) == LoopDesignError::kOk);
+  for (int i = 0; i < n; ++i) {
+    const double f = freqs[i];
+    const cplx h = exact(d, f);
+    const cplx mf = measure<float>(cfg, f);
+    const cplx mq = measure<Q7_24>(cfg, f);
+    std::printf("\n[biquad %s] %6.1f Hz |H|=%.5f (%.2f dB) ph=%7.2f  meas-exact: float %.1e Q7.24 %.1e", name, f,
+                std::abs(h), 20 * std::log10(std::abs(h)), loops_test::phase_deg(h), std::abs(mf - h),
+                std::abs(mq - h));
+    // Absolute error on a unit-amplitude input: float 1e-5, Q7.24 2e-5
+    // (coefficient quantisation 2^-29 and 1-LSB output rounding).
+    CHECK(std::abs(mf - h) < 1e-5);
+    CHECK(std::abs(mq - h) < 2e-5);
+  }
+}
+
+}  // namespace
+
+TEST_GROUP(Biquad){};
+
+TEST(Biquad, NotchHasItsDepthAtF0) {
+  BiquadConfig cfg;
+  cfg.type = BiquadType::kNotch;
+  cfg.frequency_Hz = 180.0f;
+  cfg.q = 2.0f;
+  cfg.depth_dB = 30.0f;
+  const double freqs[] = {10.0, 100.0, 180.0, 300.0, 1000.0};
+  check_stage(cfg, freqs, 5, "notch");
+  BiquadDesign d;
+  CHECK(design_biquad_double(cfg, kFs, &d) == LoopDesignError::kOk);
+  // Prewarped: exactly -30 dB at f0 and unity at dc and Nyquist.
+  DOUBLES_EQUAL(-30.0, 20 * std::log10(std::abs(exact(d, 180.0))), 1e-6);
+  DOUBLES_EQUAL(1.0, std::abs(exact(d, 0.0)), 1e-12);
+  DOUBLES_EQUAL(1.0, std::abs(exact(d, 1250.0)), 1e-9);
+  // Measured depth in Q7.24 too.
+  DOUBLES_EQUAL(-30.0, 20 * std::log10(std::abs(measure<Q7_24>(cfg, 180.0))), 0.05);
+}
+
+TEST(Biquad, LowPassHasGainQAtCornerAndUnityDc) {
+  BiquadConfig cfg;
+  cfg.type = BiquadType::kLowPass;
+  cfg.frequency_Hz = 400.0f;
+  cfg.q = 0.7071f;
+  const double freqs[] = {5.0, 100.0, 400.0, 1000.0};
+  check_stage(cfg, freqs, 4, "lowpass");
+  BiquadDesign d;
+  CHECK(design_biquad_double(cfg, kFs, &d) == LoopDesignError::kOk);
+  DOUBLES_EQUAL(0.7071, std::abs(exact(d, 400.0)), 1e-6);
+  DOUBLES_EQUAL(-90.0, loops_test::phase_deg(exact(d, 400.0)), 1e-6);
+  DOUBLES_EQUAL(1.0, std::abs(exact(d, 0.0)), 1e-12);
+  DOUBLES_EQUAL(0.0, std::abs(exact(d, 1250.0)), 1e-9);  // Tustin zero at Nyquist
+}
+
+TEST(Biquad, LeadLagCorners) {
+  BiquadConfig cfg;
+  cfg.type = BiquadType::kLeadLag;
+  cfg.frequency_Hz = 30.0f;  // zero
+  cfg.pole_Hz = 120.0f;
+  const double freqs[] = {1.0, 30.0, 60.0, 120.0, 500.0};
+  check_stage(cfg, freqs, 5, "leadlag");
+  BiquadDesign d;
+  CHECK(design_biquad_double(cfg, kFs, &d) == LoopDesignError::kOk);
+  DOUBLES_EQUAL(1.0, std::abs(exact(d, 0.0)), 1e-12);
+  // Both corners prewarped: the discrete stage is the continuous prototype
+  // with corners tan-warped, so its maximum lead is asin((a-1)/(a+1)) with
+  // a = tan(pi 120 T)/tan(pi 30 T) = 4.029 (37.03 deg, vs 36.87 for a = 4),
+  // reached at the warped geometric mean (~60 Hz).
+  const double ratio = std::tan(kPi * 120.0 * kT) / std::tan(kPi * 30.0 * kT);
+  const double fm = std::atan(std::sqrt(std::tan(kPi * 30.0 * kT) * std::tan(kPi * 120.0 * kT))) / (kPi * kT);
+  DOUBLES_EQUAL(std::asin((ratio - 1) / (ratio + 1)) * 180.0 / kPi, loops_test::phase_deg(exact(d, fm)), 1e-9);
+  DOUBLES_EQUAL(4.0, std::abs(exact(d, 1250.0)), 1e-9);
+}
+
+TEST(Biquad, DisabledStagePassesThroughAndInvalidConfigsAreRejected) {
+  BiquadCoefficients<Q7_24> c;
+  CHECK(design_biquad<Q7_24>(BiquadConfig{}, kFs, &c) == LoopDesignError::kOk);
+  CHECK(!c.enabled);
+  BiquadState<Q7_24> s{};
+  DOUBLES_EQUAL(1.25, biquad_update(c, s, Q7_24::from_double(1.25)).to_double(), 0.0);
+  BiquadConfig bad;
+  bad.type = BiquadType::kNotch;
+  bad.frequency_Hz = 1300.0f;
+  CHECK(design_biquad<Q7_24>(bad, kFs, &c) == LoopDesignError::kFilterAboveNyquist);
+  bad.frequency_Hz = 100.0f;
+  bad.q = 0.0f;
+  CHECK(design_biquad<Q7_24>(bad, kFs, &c) == LoopDesignError::kBadQuality);
+  bad.type = BiquadType::kLeadLag;
+  bad.frequency_Hz = 10.0f;
+  bad.pole_Hz = 1000.0f;  // high-frequency gain ~ b0 > 8: does not fit Q3.28
+  CHECK(design_biquad<Q7_24>(bad, kFs, &c) == LoopDesignError::kCoefficientOutOfRange);
+  BiquadCoefficients<float> cf;
+  CHECK(design_biquad<float>(bad, kFs, &cf) == LoopDesignError::kOk);
+}

@@ -1,0 +1,300 @@
+// Pid2Dof: frequency response against the exact discrete transfer function
+// and the continuous C(jw) of (27), (28), (32), (33); step weighting;
+// anti-windup; float vs Q7.24 agreement; design validation.
+#include <cmath>
+#include <complex>
+#include <cstdio>
+
+#include "CppUTest/TestHarness.h"
+#include "freq_response.hpp"
+#include "maglev/axis_loops/defaults.hpp"
+
+using namespace maglev::kernel;
+using maglev::numeric::Q7_24;
+using maglev::numeric::ScalarTraits;
+using loops_test::kFs;
+using loops_test::kPi;
+using loops_test::kT;
+using cplx = std::complex<double>;
+
+namespace {
+
+template <typename Scalar>
+cplx exact_discrete(const Pid2DofCoefficients<Scalar>& c, double f) {
+  using Tr = ScalarTraits<Scalar>;
+  const cplx z = std::polar(1.0, 2.0 * kPi * f * kT);
+  const double kp = Tr::coeff_to_double(c.kp), ki2 = Tr::coeff_to_double(c.ki_half_T);
+  const double ad = Tr::coeff_to_double(c.a_d), bd = Tr::coeff_to_double(c.b_d);
+  return kp + ki2 * (z + 1.0) / (z - 1.0) + bd * (z - 1.0) / (z - ad);
+}
+
+// Continuous prototype in kernel units (A/um): kp + ki/s + kd s/(1 + s/wf).
+cplx continuous(const Pid2DofConfig& k, double f, bool with_filter) {
+  const cplx s(0.0, 2.0 * kPi * f);
+  const double wf = 2.0 * kPi * static_cast<double>(k.derivative_filter_hz);
+  const cplx d = static_cast<double>(k.kd) * s / (with_filter ? (1.0 + s / wf) : cplx(1.0));
+  return 1e-6 * (static_cast<double>(k.kp) + static_cast<double>(k.ki) / s + d);
+}
+
+template <typename Scalar>
+cplx measure_pid(const Pid2DofConfig& cfg, double f, double amp) {
+  using Tr = ScalarTraits<Scalar>;
+  Pid2DofCoefficients<Scalar> c;
+  CHECK(design_pid2dof<Scalar>(cfg, kFs, &c) == LoopDesignError::kOk);
+  Pid2DofState<Scalar> st{};
+  Pid2Dof<Scalar> pid(&c, &st);
+  return loops_test::measure_gain(
+      [&](double x) {
+        return Tr::to_double(pid.update(Tr::from_double(x), Tr::zero(), Tr::zero()));
+      },
+      f, amp, 2500, 2500);
+}
+
+const char* kAxisNames[] = {"x", "y", "thz", "z", "thx", "thy"};
+
+}  // namespace
+
+TEST_GROUP(Pid2Dof){};
+
+TEST(Pid2Dof, DefaultsAreThePapersGains) {
+  const auto x = default_axis_loop_config(Axis::kX);
+  DOUBLES_EQUAL(36000.0, static_cast<double>(x.pid.kp), 0.0);
+  DOUBLES_EQUAL(2400000.0, static_cast<double>(x.pid.ki), 0.0);
+  DOUBLES_EQUAL(100.0, static_cast<double>(x.pid.kd), 0.0);
+  const auto tz = default_axis_loop_config(Axis::kThetaZ);
+  DOUBLES_EQUAL(300.0, static_cast<double>(tz.pid.kp), 0.0);
+  DOUBLES_EQUAL(24000.0, static_cast<double>(tz.pid.ki), 0.0);
+  DOUBLES_EQUAL(1.0, static_cast<double>(tz.pid.kd), 0.0);
+  const auto z = default_axis_loop_config(Axis::kZ);
+  DOUBLES_EQUAL(40000.0, static_cast<double>(z.pid.kp), 0.0);
+  DOUBLES_EQUAL(560000.0, static_cast<double>(z.pid.ki), 0.0);
+  DOUBLES_EQUAL(0.0, static_cast<double>(z.pid.kd), 0.0);
+  const auto tx = default_axis_loop_config(Axis::kThetaX);
+  DOUBLES_EQUAL(70.0, static_cast<double>(tx.pid.kp), 0.0);
+  DOUBLES_EQUAL(17600.0, static_cast<double>(tx.pid.ki), 0.0);
+  DOUBLES_EQUAL(0.09, static_cast<double>(tx.pid.kd), 1e-7);
+  CHECK(default_axis_loop_config(Axis::kThetaY).pid.kp == tx.pid.kp);
+  CHECK(default_axis_loop_config(Axis::kY).pid.ki == x.pid.ki);
+  // U-vector order of eq (18).
+  LONGS_EQUAL(2, axis_index(Axis::kThetaZ));
+  LONGS_EQUAL(3, axis_index(Axis::kZ));
+  LONGS_EQUAL(5, axis_index(Axis::kThetaY));
+  // Plants of eqs (25)-(31).
+  DOUBLES_EQUAL(2.27, axis_plant(Axis::kX).gain, 0.005);
+  DOUBLES_EQUAL(473.25, axis_plant(Axis::kThetaZ).gain, 0.01);
+  DOUBLES_EQUAL(896.68, axis_plant(Axis::kThetaX).gain, 0.01);
+  DOUBLES_EQUAL(94600.0 / 0.75, axis_plant(Axis::kZ).stiffness_per_s2, 1e-6);
+}
+
+TEST(Pid2Dof, FrequencyResponseMatchesExactDiscreteAndContinuous) {
+  const double freqs[] = {1.0, 10.0, 50.0, 100.0, 300.0};
+  for (Axis axis : kAllAxes) {
+    Pid2DofConfig cfg = default_axis_loop_config(axis).pid;
+    cfg.effort_limit_A = 100.0f;
+    const double amp = 10.0;  // um (urad)
+    Pid2DofCoefficients<float> cf;
+    Pid2DofCoefficients<Q7_24> cq;
+    CHECK(design_pid2dof<float>(cfg, kFs, &cf) == LoopDesignError::kOk);
+    CHECK(design_pid2dof<Q7_24>(cfg, kFs, &cq) == LoopDesignError::kOk);
+    for (double f : freqs) {
+      const cplx mf = measure_pid<float>(cfg, f, amp);
+      const cplx mq = measure_pid<Q7_24>(cfg, f, amp);
+      const cplx df = exact_discrete(cf, f);
+      const cplx dq = exact_discrete(cq, f);
+      const cplx cc = continuous(cfg, f, true);
+      const cplx cp = continuous(cfg, f, false);
+      std::printf("\n[pid %-3s] %5.0f Hz |C|=%.5g A/um ph=%7.2f deg  meas/exact-1: float %.1e Q7.24 %.1e"
+                  "  discrete/continuous-1: %.2e (%.2f deg)  vs paper C (no filter): %.2e",
+                  kAxisNames[axis_index(axis)], f, std::abs(mf), loops_test::phase_deg(mf),
+                  loops_test::rel_err(mf, df), loops_test::rel_err(mq, dq), loops_test::rel_err(df, cc),
+                  loops_test::phase_deg(df / cc), loops_test::rel_err(df, cp));
+      // Measured == exact discrete transfer function (of the quantised
+      // coefficients): float 1e-5, Q7.24 1e-4 (signal rounding, 2^-24 A).
+      CHECK(loops_test::rel_err(mf, df) < 1e-5);
+      CHECK(loops_test::rel_err(mq, dq) < 1e-4);
+      // Q3.28 coefficient quantisation moves the response by < 0.1 %.
+      CHECK(loops_test::rel_err(dq, df) < 1e-3);
+      // Discrete vs its continuous prototype: Tustin warping is
+      // (wT)^2/12 = 0.53 % at fs/25 = 100 Hz: tolerance 1 % and 1 deg.
+      if (f <= 100.0) {
+        CHECK(loops_test::rel_err(df, cc) < 0.01);
+        CHECK(std::fabs(loops_test::phase_deg(df / cc)) < 1.0);
+      }
+      // Against the paper's unfiltered C(jw): the 1 kHz derivative filter is
+      // the only difference; below 10 Hz it is < 1 %, at 50 Hz < 5 %.
+      if (f <= 10.0) CHECK(loops_test::rel_err(df, cp) < 0.01);
+      if (f <= 50.0) CHECK(loops_test::rel_err(df, cp) < 0.05);
+    }
+  }
+}
+
+namespace {
+
+struct StepResult {
+  double overshoot_pct;
+  double settle_s;
+  double max_effort;
+};
+
+// Closed loop on the x axis (exact ZOH double integrator, one tick of
+// computation delay), step of step_um issued through reference_step.
+template <typename Scalar>
+StepResult x_step(Pid2DofConfig cfg, double step_um, double limit_A, double* traj = nullptr, int n = 5000) {
+  using Tr = ScalarTraits<Scalar>;
+  cfg.effort_limit_A = static_cast<float>(limit_A);
+  Pid2DofCoefficients<Scalar> c;
+  CHECK(design_pid2dof<Scalar>(cfg, kFs, &c) == LoopDesignError::kOk);
+  Pid2DofState<Scalar> st{};
+  Pid2Dof<Scalar> pid(&c, &st);
+  loops_test::AxisSim plant{axis_plant(Axis::kX).gain * 1e6, 0.0, 0.0};
+  double u_prev = 0.0, peak = 0.0, max_u = 0.0;
+  int settle = 0;
+  for (int k = 0; k < n; ++k) {
+    const double r = step_um;
+    const Scalar v = pid.update(Tr::from_double(r - plant.y), Tr::from_double(k == 0 ? step_um : 0.0), Tr::zero());
+    const Scalar u = pid.saturate(v);
+    pid.apply_limit(u);
+    plant.step(u_prev);
+    u_prev = Tr::to_double(u);
+    max_u = std::fmax(max_u, std::fabs(u_prev));
+    peak = std::fmax(peak, plant.y);
+    if (std::fabs(plant.y - r) > 0.02 * std::fabs(r)) settle = k + 1;
+    if (traj) traj[k] = plant.y;
+  }
+  return {(peak - step_um) / step_um * 100.0, settle * kT, max_u};
+}
+
+}  // namespace
+
+TEST(Pid2Dof, EightMicronStepMeetsThePaperWithDefaultWeights) {
+  const Pid2DofConfig cfg = default_axis_loop_config(Axis::kX).pid;
+  const StepResult w = x_step<float>(cfg, 8.0, 4.0);
+  Pid2DofConfig one_dof = cfg;
+  one_dof.setpoint_weight_p = 1.0f;
+  const StepResult u = x_step<float>(one_dof, 8.0, 4.0);
+  const StepResult wq = x_step<Q7_24>(cfg, 8.0, 4.0);
+  std::printf("\n[pid x 8um step] b=%.1f: overshoot %.2f %% settle %.3f s (Q7.24: %.2f %%, %.3f s); b=1: %.1f %%",
+              static_cast<double>(cfg.setpoint_weight_p), w.overshoot_pct, w.settle_s, wq.overshoot_pct,
+              wq.settle_s, u.overshoot_pct);
+  CHECK(w.overshoot_pct <= 3.25);
+  CHECK(w.settle_s <= 0.32);
+  CHECK(wq.overshoot_pct <= 3.25);
+  CHECK(wq.settle_s <= 0.32);
+  CHECK(u.overshoot_pct > 30.0);  // why the weight is there
+}
+
+TEST(Pid2Dof, StepWeightingEqualsTextbookTwoDofForm) {
+  // Textbook: v = kp (b r - y) + I(r - y) + D(c r - y) with absolute r, y.
+  Pid2DofConfig cfg = default_axis_loop_config(Axis::kX).pid;
+  cfg.setpoint_weight_d = 0.3f;
+  Pid2DofCoefficients<float> c;
+  CHECK(design_pid2dof<float>(cfg, kFs, &c) == LoopDesignError::kOk);
+  Pid2DofState<float> st{};
+  Pid2Dof<float> pid(&c, &st);
+  const double kp = static_cast<double>(c.kp), b = static_cast<double>(cfg.setpoint_weight_p);
+  const double cw = static_cast<double>(c.c);
+  const double ki2 = static_cast<double>(c.ki_half_T), ad = static_cast<double>(c.a_d), bd = static_cast<double>(c.b_d);
+  double I = 0, D = 0, e_prev = 0, ed_prev = 0, r = 0, max_diff = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const double step = (k == 10) ? 5.0 : (k == 1500 ? -3.0 : 0.0);
+    r += step;
+    const double y = 2.0 * std::sin(0.01 * k) + 0.001 * k;
+    const double e = r - y;
+    I += ki2 * (e + e_prev);
+    e_prev = e;
+    const double ed = cw * r - y;
+    D = ad * D + bd * (ed - ed_prev);
+    ed_prev = ed;
+    const double ref = kp * (b * r - y) + I + D;
+    const double v = static_cast<double>(pid.update(static_cast<float>(e), static_cast<float>(step), 0.0f));
+    // Both forms' output differs only by the constant kp (1-b) r0 = 0 here.
+    max_diff = std::fmax(max_diff, std::fabs(v - ref));
+  }
+  CHECK(max_diff < 1e-5);
+}
+
+TEST(Pid2Dof, BackCalculationLimitsWindupAfterSaturation) {
+  // 100 um step with the effort limited to 0.1 A: the loop saturates for
+  // ~0.2 s. With back-calculation the integrator tracks the applied effort.
+  const Pid2DofConfig cfg = default_axis_loop_config(Axis::kX).pid;
+  Pid2DofConfig no_aw = cfg;
+  no_aw.antiwindup_tracking_time_s = 1e6f;  // T/Tt = 4e-10: off
+  for (int fixed = 0; fixed < 2; ++fixed) {
+    const StepResult aw = fixed ? x_step<Q7_24>(cfg, 100.0, 0.1) : x_step<float>(cfg, 100.0, 0.1);
+    const StepResult wu = fixed ? x_step<Q7_24>(no_aw, 100.0, 0.1) : x_step<float>(no_aw, 100.0, 0.1);
+    std::printf("\n[pid x 100um step, 0.1 A limit, %s] back-calc: overshoot %.1f %% settle %.3f s; "
+                "without: overshoot %.1f %% settle %.3f s",
+                fixed ? "Q7.24" : "float", aw.overshoot_pct, aw.settle_s, wu.overshoot_pct, wu.settle_s);
+    CHECK(aw.max_effort <= 0.1 + 1e-6);
+    CHECK(aw.overshoot_pct < 0.5 * wu.overshoot_pct);
+    CHECK(aw.settle_s < wu.settle_s);
+    CHECK(aw.overshoot_pct < 15.0);
+    CHECK(aw.settle_s < 0.5);
+  }
+}
+
+TEST(Pid2Dof, FloatAndFixedAgreeOnTheSameInputs) {
+  // Open loop, the same error sequence (sines + steps + noise, um) into both.
+  // Tolerance: Q3.28 coefficient quantisation (<= 2^-29 absolute per
+  // coefficient; relative <= 5.3e-4 for the smallest, ki T/2 = 3.5e-6 of
+  // theta_x/y, which dominates integral-heavy outputs) plus Q7.24 rounding
+  // of e (2^-25 um) and of the output (2^-25 A):
+  // |v_f - v_q| <= 6e-4 |v| + 1e-6 A.
+  for (Axis axis : kAllAxes) {
+    Pid2DofConfig cfg = default_axis_loop_config(axis).pid;
+    Pid2DofCoefficients<float> cf;
+    Pid2DofCoefficients<Q7_24> cq;
+    CHECK(design_pid2dof<float>(cfg, kFs, &cf) == LoopDesignError::kOk);
+    CHECK(design_pid2dof<Q7_24>(cfg, kFs, &cq) == LoopDesignError::kOk);
+    Pid2DofState<float> sf{};
+    Pid2DofState<Q7_24> sq{};
+    Pid2Dof<float> pf(&cf, &sf);
+    Pid2Dof<Q7_24> pq(&cq, &sq);
+    std::uint32_t rng = 99u;
+    double worst = 0.0;
+    for (int k = 0; k < 20000; ++k) {
+      rng = rng * 1664525u + 1013904223u;
+      const double noise = (static_cast<double>(rng >> 8) / 16777216.0 - 0.5) * 0.01;
+      const double e = 0.5 * std::sin(0.003 * k) + 0.05 * std::sin(0.3 * k) + noise;
+      const double step = (k % 5000 == 100) ? 2.0 : 0.0;
+      const double vf = static_cast<double>(pf.update(static_cast<float>(e), static_cast<float>(step), 0.0f));
+      const double vq = pq.update(Q7_24::from_double(e), Q7_24::from_double(step), Q7_24::zero()).to_double();
+      pf.apply_limit(pf.saturate(static_cast<float>(vf)));
+      pq.apply_limit(pq.saturate(Q7_24::from_double(vq)));
+      const double tol = 6e-4 * std::fabs(vf) + 1e-6;
+      worst = std::fmax(worst, std::fabs(vf - vq) / tol);
+    }
+    std::printf("\n[pid %-3s] float vs Q7.24: worst |dv| / tolerance = %.3f", kAxisNames[axis_index(axis)], worst);
+    CHECK(worst <= 1.0);
+  }
+}
+
+TEST(Pid2Dof, DesignRejectsInvalidConfigs) {
+  Pid2DofCoefficients<Q7_24> c;
+  const Pid2DofConfig good = default_axis_loop_config(Axis::kX).pid;
+  CHECK(design_pid2dof<Q7_24>(good, kFs, &c) == LoopDesignError::kOk);
+  Pid2DofConfig bad = good;
+  bad.kp = -1.0f;
+  CHECK(design_pid2dof<Q7_24>(bad, kFs, &c) == LoopDesignError::kNegativeGain);
+  bad = good;
+  bad.derivative_filter_hz = 1250.0f;
+  CHECK(design_pid2dof<Q7_24>(bad, kFs, &c) == LoopDesignError::kFilterAboveNyquist);
+  bad = good;
+  bad.ki = NAN;
+  CHECK(design_pid2dof<Q7_24>(bad, kFs, &c) == LoopDesignError::kNonFinite);
+  bad = good;
+  bad.setpoint_weight_p = 1.5f;
+  CHECK(design_pid2dof<Q7_24>(bad, kFs, &c) == LoopDesignError::kBadSetpointWeight);
+  bad = good;
+  bad.antiwindup_tracking_time_s = 1e-5f;
+  CHECK(design_pid2dof<Q7_24>(bad, kFs, &c) == LoopDesignError::kBadTrackingTime);
+  bad = good;
+  bad.effort_limit_A = 0.0f;
+  CHECK(design_pid2dof<Q7_24>(bad, kFs, &c) == LoopDesignError::kBadLimit);
+  bad = good;
+  bad.kp = 1e8f;  // 100 A/um does not fit Q3.28 (+-8)
+  CHECK(design_pid2dof<Q7_24>(bad, kFs, &c) == LoopDesignError::kCoefficientOutOfRange);
+  Pid2DofCoefficients<float> cf;  // float coefficients have no such limit
+  CHECK(design_pid2dof<float>(bad, kFs, &cf) == LoopDesignError::kOk);
+  CHECK(design_pid2dof<Q7_24>(good, 0.0, &c) == LoopDesignError::kBadServoRate);
+}

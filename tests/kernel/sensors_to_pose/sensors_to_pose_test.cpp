@@ -1,0 +1,369 @@
+// sensors_to_pose: counter extension, exact count -> pm, beam-layout solve
+// with Abbe/cosine terms, LDS plane fit, validity, Hall phase and homing,
+// pose errors. Synthetic sensors are generated here from the forward models
+// (exact trigonometry in double), not from the kernel's inverses.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <random>
+
+#include "CppUTest/TestHarness.h"
+#include "maglev/io/stage_parameters.hpp"
+#include "maglev/numeric/fixed.hpp"
+#include "maglev/sensors_to_pose/pose_error.hpp"
+#include "maglev/sensors_to_pose/sensors_to_pose.hpp"
+#include "maglev/sensors_to_pose/wide_math.hpp"
+
+namespace {
+
+using namespace maglev::kernel;  // NOLINT
+namespace io = maglev::io;
+namespace stage = maglev::io::stage;
+
+// Host-only exact reference arithmetic (the kernel itself never uses it).
+__extension__ typedef __int128 I128;
+
+constexpr double kLsb_m = 632.991e-9 / 1024.0;
+
+SensorsToPoseState& FreshState(const SensorsToPoseConfig& cfg) {
+  static SensorsToPoseState st;
+  CHECK(ApplySensorsToPoseConfig(cfg, &st) == SensorsToPoseError::kOk);
+  return st;
+}
+
+io::SensorSample ZeroSample() {
+  io::SensorSample s{};
+  return s;
+}
+
+// Forward interferometer model (beams fixed in the world, mirror on the platen).
+double BeamReading_m(const BeamConfig& b, double x, double y, double th) {
+  const double t = std::tan(th), sec1 = 1.0 / std::cos(th) - 1.0;
+  if (b.axis == BeamAxis::kX) return b.sign * (x - (b.perpendicular_m - y) * t + b.mirror_distance_m * sec1);
+  return b.sign * (y + (b.perpendicular_m - x) * t + b.mirror_distance_m * sec1);
+}
+
+}  // namespace
+
+TEST_GROUP(SensorsToPose){};
+
+TEST(SensorsToPose, CounterExtensionAcrossWrapsBothWays) {
+  std::uint32_t last = 0xFFFFFF00u;
+  std::int64_t counts = 0;
+  // Up across the wrap in steps of 100.
+  for (int n = 1; n <= 10; ++n) {
+    const std::uint32_t raw = 0xFFFFFF00u + static_cast<std::uint32_t>(100 * n);  // wraps after n = 2
+    CHECK(ExtendCounter(raw, &last, &counts, 1000));
+    CHECK_EQUAL(100 * n, counts);
+  }
+  // Down back across the wrap, further down to -5000.
+  for (int n = 9; n >= -50; --n) {
+    const std::uint32_t raw = 0xFFFFFF00u + static_cast<std::uint32_t>(100 * n);
+    CHECK(ExtendCounter(raw, &last, &counts, 1000));
+    CHECK_EQUAL(100 * n, counts);
+  }
+  // A 2^31-1 step is a glitch: flagged, not absorbed, and stays flagged until
+  // the hardware counter comes back near the last good value.
+  const std::uint32_t good = last;
+  CHECK_FALSE(ExtendCounter(good + 0x7FFFFFFFu, &last, &counts, 1000));
+  CHECK_EQUAL(-5000, counts);
+  CHECK_EQUAL(good, last);
+  CHECK_FALSE(ExtendCounter(good - 1001u, &last, &counts, 1000));
+  CHECK(ExtendCounter(good - 1000u, &last, &counts, 1000));
+  CHECK_EQUAL(-6000, counts);
+  // Many turns of the 32-bit counter: 5e9 counts in 1e6-count steps.
+  last = 123u;
+  counts = 0;
+  for (int n = 0; n < 5000; ++n) CHECK(ExtendCounter(last + 1000000u, &last, &counts, 1000000));
+  CHECK_EQUAL(std::int64_t{5000000000}, counts);
+}
+
+TEST(SensorsToPose, ExactCountToPicometre) {
+  SensorsToPoseState& st = FreshState(DefaultSensorsToPoseConfig());
+  CHECK_EQUAL(632991, st.lsb_num);
+  CHECK_EQUAL(1024, st.lsb_den);
+  CHECK_EQUAL(632991, CountsToPicometres(1024, st));
+  CHECK_EQUAL(-632991, CountsToPicometres(-1024, st));
+  CHECK_EQUAL(618, CountsToPicometres(1, st));      // 618.155
+  CHECK_EQUAL(-618, CountsToPicometres(-1, st));
+  CHECK_EQUAL(1854, CountsToPicometres(3, st));     // 1854.466
+  // Exhaustive check against an exact 128-bit reference (host only).
+  std::mt19937_64 rng(42);
+  for (int n = 0; n < 200000; ++n) {
+    const std::int64_t c = static_cast<std::int64_t>(rng() >> 22) - (std::int64_t{1} << 41);
+    const I128 num = static_cast<I128>(c) * 632991;
+    // round half away from zero
+    const I128 mag = num < 0 ? -num : num;
+    const I128 q = (2 * mag + 1024) / 2048;
+    const std::int64_t expect = static_cast<std::int64_t>(num < 0 ? -q : q);
+    if (CountsToPicometres(c, st) != expect) {
+      std::printf("\n counts %lld", static_cast<long long>(c));
+      CHECK_EQUAL(expect, CountsToPicometres(c, st));
+    }
+  }
+  // Ties: 512 counts = 316495.5 pm -> 316496; -512 -> -316496.
+  CHECK_EQUAL(316496, CountsToPicometres(512, st));
+  CHECK_EQUAL(-316496, CountsToPicometres(-512, st));
+}
+
+TEST(SensorsToPose, WideMulShiftMatchesInt128) {
+  std::mt19937_64 rng(5);
+  for (int n = 0; n < 100000; ++n) {
+    const std::int64_t a = static_cast<std::int64_t>(rng()) >> (static_cast<int>(rng() % 30) + 1);
+    const std::int64_t c = static_cast<std::int64_t>(rng()) >> (static_cast<int>(rng() % 30) + 20);
+    const I128 p = static_cast<I128>(a) * c;
+    const I128 mag = p < 0 ? -p : p;
+    const I128 q = (mag + (static_cast<I128>(1) << 39)) >> 40;
+    const I128 expect = p < 0 ? -q : q;
+    if (expect > INT64_MAX || expect < -INT64_MAX) continue;
+    CHECK_EQUAL(static_cast<std::int64_t>(expect), wide::MulShiftRound(a, c));
+  }
+}
+
+TEST(SensorsToPose, BeamLayoutSolveWithAbbeAndCosine) {
+  SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> px(-0.028, 0.028), py(-0.0175, 0.0175), pth(-3.7e-3, 3.7e-3);
+  double worst_xy = 0, worst_th = 0, worst_uncorrected = 0;
+  for (int layout = 0; layout < 2; ++layout) {
+    if (layout == 1) {
+      // A different layout: two X beams at y = -/+ 40 mm, one Y beam at x = 10 mm, one sign flipped.
+      cfg.beam[0] = {BeamAxis::kX, -0.040, 0.06, 1};
+      cfg.beam[1] = {BeamAxis::kX, 0.040, 0.06, -1};
+      cfg.beam[2] = {BeamAxis::kY, 0.010, 0.05, 1};
+    }
+    for (int n = 0; n < 300; ++n) {
+      SensorsToPoseState& st = FreshState(cfg);
+      io::SensorSample s = ZeroSample();
+      (void)SensorsToPoseStep(s, &st);  // seed at counts = 0: pose zero here
+      const double x = px(rng), y = py(rng), th = pth(rng);
+      for (int b = 0; b < 3; ++b) {
+        // Counts relative to the zero pose (the reading at x = y = th = 0 is 0).
+        const double m = BeamReading_m(cfg.beam[b], x, y, th) - BeamReading_m(cfg.beam[b], 0, 0, 0);
+        s.interferometer_counts[b] = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::llround(m / kLsb_m)));
+      }
+      // Walk there in plausible steps (the plausibility bound is 1.29e6 counts/tick).
+      io::SensorSample target = s;
+      PoseMeasurement pm{};
+      for (int k = 1; k <= 100; ++k) {
+        io::SensorSample step = target;
+        for (int b = 0; b < 3; ++b) {
+          const double frac = k / 100.0;
+          step.interferometer_counts[b] = static_cast<std::uint32_t>(
+              static_cast<std::int32_t>(std::llround(static_cast<std::int32_t>(target.interferometer_counts[b]) * frac)));
+        }
+        pm = SensorsToPoseStep(step, &st);
+      }
+      CHECK_EQUAL(kPoseValidAll, pm.valid_axes);
+      const double ex = static_cast<double>(pm.pose.x_pm) * 1e-12 - x;
+      const double ey = static_cast<double>(pm.pose.y_pm) * 1e-12 - y;
+      const double et = static_cast<double>(pm.pose.theta_z_prad) * 1e-12 - th;
+      worst_xy = std::fmax(worst_xy, std::fmax(std::fabs(ex), std::fabs(ey)));
+      worst_th = std::fmax(worst_th, std::fabs(et));
+    }
+  }
+  // Without the correction the Abbe term (y * theta_z) shows up in full.
+  cfg = DefaultSensorsToPoseConfig();
+  cfg.abbe_cosine_correction = false;
+  for (int n = 0; n < 50; ++n) {
+    SensorsToPoseState& st = FreshState(cfg);
+    io::SensorSample s = ZeroSample();
+    (void)SensorsToPoseStep(s, &st);
+    const double x = 0.0, y = 0.017, th = 1e-3 * (n + 1) / 50.0;
+    for (int b = 0; b < 3; ++b) {
+      const double m = BeamReading_m(cfg.beam[b], x, y, th) - BeamReading_m(cfg.beam[b], 0, 0, 0);
+      s.interferometer_counts[b] = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::llround(m / kLsb_m)));
+    }
+    const PoseMeasurement pm = SensorsToPoseStep(s, &st);
+    worst_uncorrected = std::fmax(worst_uncorrected, std::fabs(static_cast<double>(pm.pose.x_pm) * 1e-12 - x));
+  }
+  std::printf("\n  beam solve: worst |x,y err| = %.3g m, |theta_z err| = %.3g rad (LSB 0.618 nm);"
+              " uncorrected Abbe error = %.3g m",
+              worst_xy, worst_th, worst_uncorrected);
+  // Quantisation: each beam +-0.5 LSB (0.31 nm); x,y mix two beams, theta_z
+  // = (y2 - y1)/s -> 1 LSB / 0.08 m; plus < 1 pm arithmetic.
+  CHECK(worst_xy < 1.0e-9);
+  CHECK(worst_th < 1.0e-8);
+  CHECK(worst_uncorrected > 1.5e-5);  // 17 mm * 1 mrad
+}
+
+TEST(SensorsToPose, DisplacementPlaneFit) {
+  SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
+  SensorsToPoseState& st = FreshState(cfg);
+  const double gain = 20e-6 * 10.0 / 32768.0;  // m per code
+  std::mt19937 rng(9);
+  std::uniform_int_distribution<int> code(-30000, 30000);
+  for (int n = 0; n < 2000; ++n) {
+    io::SensorSample s = ZeroSample();
+    double h[3];
+    for (int i = 0; i < 3; ++i) {
+      s.displacement_adc[i] = static_cast<std::int16_t>(code(rng));
+      h[i] = 100e-6 + s.displacement_adc[i] * gain;
+    }
+    // Independent solve: z_i = z + tx*y_i - ty*x_i with the stage's corners
+    // (x, y) = (a, a), (-a, a), (-a, -a):
+    //   h0 - h1 = -ty*2a  ->  ty = (h1 - h0)/(2a);   h1 - h2 = tx*2a.
+    const double a = 0.0615;
+    const double ty = (h[1] - h[0]) / (2 * a);
+    const double tx = (h[1] - h[2]) / (2 * a);
+    const double z = h[1] - tx * a - ty * a;
+    const PoseMeasurement pm = SensorsToPoseStep(s, &st);
+    DOUBLES_EQUAL(z, static_cast<double>(pm.pose.z_pm) * 1e-12, 2e-12);
+    DOUBLES_EQUAL(tx, static_cast<double>(pm.pose.theta_x_prad) * 1e-12, 2e-11);
+    DOUBLES_EQUAL(ty, static_cast<double>(pm.pose.theta_y_prad) * 1e-12, 2e-11);
+  }
+  // Sign convention: a positive theta_x lifts the sensors at positive y.
+  io::SensorSample s = ZeroSample();
+  s.displacement_adc[0] = 1000;  // (a, a)
+  s.displacement_adc[1] = 1000;  // (-a, a)
+  s.displacement_adc[2] = -1000; // (-a, -a)
+  const PoseMeasurement pm = SensorsToPoseStep(s, &st);
+  CHECK(pm.pose.theta_x_prad > 0);
+  CHECK_EQUAL(0, pm.pose.theta_y_prad);
+}
+
+TEST(SensorsToPose, ValidityFlags) {
+  SensorsToPoseState& st = FreshState(DefaultSensorsToPoseConfig());
+  io::SensorSample s = ZeroSample();
+  CHECK_EQUAL(kPoseValidAll, SensorsToPoseStep(s, &st).valid_axes);
+  s.status_flags = io::kBeamLoss1;
+  PoseMeasurement pm = SensorsToPoseStep(s, &st);
+  CHECK_EQUAL(kPoseValidOutOfPlane, pm.valid_axes);
+  CHECK_EQUAL(2, pm.beam_loss);
+  s.status_flags = io::kDisplacementOutOfRange2;
+  pm = SensorsToPoseStep(s, &st);
+  CHECK_EQUAL(kPoseValidInPlane, pm.valid_axes);
+  CHECK_EQUAL(4, pm.displacement_bad);
+  s.status_flags = 0;
+  s.displacement_adc[0] = 32767;  // at the rail
+  pm = SensorsToPoseStep(s, &st);
+  CHECK_EQUAL(kPoseValidInPlane, pm.valid_axes);
+  CHECK_EQUAL(1, pm.displacement_bad);
+  s.displacement_adc[0] = -32768;
+  CHECK_EQUAL(kPoseValidInPlane, SensorsToPoseStep(s, &st).valid_axes);
+  s.displacement_adc[0] = 32766;
+  CHECK_EQUAL(kPoseValidAll, SensorsToPoseStep(s, &st).valid_axes);
+  s.status_flags = io::kAdcFault;
+  CHECK_EQUAL(kPoseValidInPlane, SensorsToPoseStep(s, &st).valid_axes);
+  s.status_flags = io::kStaleFrame;
+  CHECK_EQUAL(0, SensorsToPoseStep(s, &st).valid_axes);
+  // A counter jump latches in-plane invalid until re-seeded.
+  s.status_flags = 0;
+  s.interferometer_counts[2] = 0x40000000u;
+  pm = SensorsToPoseStep(s, &st);
+  CHECK_EQUAL(kPoseValidOutOfPlane, pm.valid_axes);
+  CHECK_EQUAL(4, pm.beam_jump);
+  s.interferometer_counts[2] = 0;
+  CHECK_EQUAL(kPoseValidOutOfPlane, SensorsToPoseStep(s, &st).valid_axes);
+  ReseedInterferometers(&st);
+  CHECK_EQUAL(kPoseValidAll, SensorsToPoseStep(s, &st).valid_axes);
+  // Degenerate configurations are refused.
+  SensorsToPoseConfig bad = DefaultSensorsToPoseConfig();
+  bad.beam[0].axis = BeamAxis::kY;
+  bad.beam[0].perpendicular_m = 0.02;  // three Y beams: x unobservable
+  SensorsToPoseState other{};
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kSingularBeamLayout);
+  bad = DefaultSensorsToPoseConfig();
+  bad.displacement_sensor_x_m[2] = 0.0615 * 3;  // collinear with the first two? make them collinear:
+  bad.displacement_sensor_y_m[2] = 0.0615;
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kSingularDisplacementLayout);
+}
+
+TEST(SensorsToPose, HallPhaseOverAFullPitchWithFifthHarmonic) {
+  SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
+  SensorsToPoseState& st = FreshState(cfg);
+  const double eps = cfg.hall_fifth_harmonic_ratio;
+  SensorsToPoseConfig raw_cfg = cfg;
+  raw_cfg.hall_fifth_harmonic_ratio = 0.0;  // plain atan2
+  static SensorsToPoseState st_raw;
+  CHECK(ApplySensorsToPoseConfig(raw_cfg, &st_raw) == SensorsToPoseError::kOk);
+  const double amp = 20000.0;
+  double worst = 0.0, worst_raw = 0.0;
+  for (int n = 0; n < 4096; ++n) {
+    const double th = 2 * stage::kPi * n / 4096.0;
+    const double thy = th + 1.0;  // y at another phase
+    io::SensorSample s = ZeroSample();
+    // eq (1): B ~ sin(theta) + (-1)^1 c5/c1 sin(5 theta); sensor B a quarter pitch on.
+    s.hall_adc[0] = static_cast<std::int16_t>(std::lround(amp * (std::sin(th) - eps * std::sin(5 * th))));
+    s.hall_adc[1] = static_cast<std::int16_t>(std::lround(amp * (std::sin(thy) - eps * std::sin(5 * thy))));
+    s.hall_adc[2] = static_cast<std::int16_t>(std::lround(amp * (std::cos(th) - eps * std::cos(5 * th))));
+    s.hall_adc[3] = static_cast<std::int16_t>(std::lround(amp * (std::cos(thy) - eps * std::cos(5 * thy))));
+    const HallPhase hp = HallToPhase(s, st);
+    const HallPhase hr = HallToPhase(s, st_raw);
+    CHECK(hp.plausible);
+    const auto err = [](std::uint32_t turn, double truth) {
+      double e = turn / 4294967296.0 * 2 * stage::kPi - truth;
+      e -= 2 * stage::kPi * std::floor(e / (2 * stage::kPi) + 0.5);
+      return std::fabs(e);
+    };
+    worst = std::fmax(worst, std::fmax(err(hp.phase_x_turn, th), err(hp.phase_y_turn, thy)));
+    worst_raw = std::fmax(worst_raw, err(hr.phase_x_turn, th));
+  }
+  std::printf("\n  Hall: c5/c1 = %.4f; phase error corrected %.3g rad (%.3g um), plain atan2 %.3g rad (%.3g um)", eps,
+              worst, worst / (2 * stage::kPi) * 50800, worst_raw, worst_raw / (2 * stage::kPi) * 50800);
+  // Bound: ADC quantisation 0.5 code on a 20000-code vector -> 2.5e-5 rad per
+  // channel, ~5e-5 rad with the harmonic's gain; iteration residual < 1e-7.
+  CHECK(worst < 1.0e-4);
+  CHECK(worst_raw > 0.9 * std::asin(eps));
+  CHECK(worst_raw < 1.01 * std::asin(eps) + 1e-4);
+  // Implausible: unplugged sensor (zeros) and a railed channel.
+  io::SensorSample z = ZeroSample();
+  CHECK_FALSE(HallToPhase(z, st).plausible);
+  z.hall_adc[0] = 32767;
+  z.hall_adc[2] = 100;
+  CHECK_FALSE(HallToPhase(z, st).plausible);
+}
+
+TEST(SensorsToPose, HomingMakesXyMagnetFrame) {
+  SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
+  const double eps = cfg.hall_fifth_harmonic_ratio;
+  const double g = 2 * stage::kPi / stage::kPitch_m;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> pos(-0.1, 0.1);
+  for (int n = 0; n < 200; ++n) {
+    SensorsToPoseState& st = FreshState(cfg);
+    const double x_true = pos(rng), y_true = pos(rng);
+    io::SensorSample s = ZeroSample();
+    const double ax = g * (x_true + cfg.hall_a_x_m), ay = g * (y_true + cfg.hall_a_y_m);
+    s.hall_adc[0] = static_cast<std::int16_t>(std::lround(20000 * (std::sin(ax) - eps * std::sin(5 * ax))));
+    s.hall_adc[1] = static_cast<std::int16_t>(std::lround(20000 * (std::sin(ay) - eps * std::sin(5 * ay))));
+    s.hall_adc[2] = static_cast<std::int16_t>(std::lround(20000 * (std::cos(ax) - eps * std::cos(5 * ax))));
+    s.hall_adc[3] = static_cast<std::int16_t>(std::lround(20000 * (std::cos(ay) - eps * std::cos(5 * ay))));
+    // The interferometer zero is wherever the platen was at power-up.
+    const PoseMeasurement pm0 = SensorsToPoseStep(s, &st);
+    CHECK_EQUAL(0, pm0.pose_unhomed.x_pm);
+    const HomingOffsets off = ComputeHomingOffsets(HallToPhase(s, st), pm0.pose_unhomed, st);
+    CHECK(off.x_pm >= -st.pitch_pm / 2 && off.x_pm < st.pitch_pm / 2);
+    SetHomingOffsets(off, &st);
+    const PoseMeasurement pm = SensorsToPoseStep(s, &st);
+    // x now equals x_true modulo the pitch, within the Hall error (< 1 um).
+    const auto mod_err = [&](std::int64_t got_pm, double truth) {
+      double e = static_cast<double>(got_pm) * 1e-12 - truth;
+      e -= stage::kPitch_m * std::floor(e / stage::kPitch_m + 0.5);
+      return std::fabs(e);
+    };
+    CHECK(mod_err(pm.pose.x_pm, x_true) < 1e-6);
+    CHECK(mod_err(pm.pose.y_pm, y_true) < 1e-6);
+  }
+}
+
+TEST(SensorsToPose, PoseErrorsSaturate) {
+  Pose64 ref{1000000, -2500000, 30000000, 100000, -100000, 1000000};
+  Pose64 meas{0, 0, 0, 0, 0, 0};
+  float e[6];
+  PoseErrors<float>(ref, meas, e);
+  DOUBLES_EQUAL(1.0, static_cast<double>(e[0]), 1e-7);   // x 1 um
+  DOUBLES_EQUAL(-2.5, static_cast<double>(e[1]), 1e-7);  // y
+  DOUBLES_EQUAL(1.0, static_cast<double>(e[2]), 1e-7);   // theta_z 1 urad
+  DOUBLES_EQUAL(30.0, static_cast<double>(e[3]), 1e-6);  // z
+  DOUBLES_EQUAL(0.1, static_cast<double>(e[4]), 1e-7);
+  DOUBLES_EQUAL(-0.1, static_cast<double>(e[5]), 1e-7);
+  maglev::numeric::Q7_24 q[6];
+  ref.x_pm = INT64_MAX;
+  meas.x_pm = -5;
+  ref.y_pm = -1000000000000;  // -1 m
+  PoseErrors<maglev::numeric::Q7_24>(ref, meas, q);
+  CHECK(q[0] == maglev::numeric::Q7_24::max());
+  CHECK(q[1] == maglev::numeric::Q7_24::min());
+  DOUBLES_EQUAL(30.0, q[3].to_double(), 1e-7);
+}

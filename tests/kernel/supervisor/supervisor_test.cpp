@@ -1,0 +1,273 @@
+// Every supervisor fault path, the reaction choice and first-fault latching.
+#include <CppUTest/TestHarness.h>
+
+#include "maglev/supervisor/supervisor.hpp"
+
+using namespace maglev;
+using namespace maglev::kernel;
+
+namespace {
+
+constexpr float kRate = 2500.0f;
+
+struct Rig {
+  Supervisor sup;
+  io::SensorSample sample{};
+  SupervisorInputs in;
+  Rig() {
+    SupervisorConfig c;
+    CHECK(validate(c, kRate) == SupervisorConfigError::kOk);
+    sup.configure(c, kRate);
+    sup.reset();
+    in.sample = &sample;
+    in.positions_valid = true;
+    in.envelope_active = true;
+    in.closed_axes = kAxisMaskAll;
+    in.pose[3] = 30e-6f;
+  }
+  const SupervisorStatus& tick() {
+    ++in.tick;
+    return sup.step(in);
+  }
+};
+
+}  // namespace
+
+TEST_GROUP(Supervisor){};
+
+TEST(Supervisor, NominalTicksRaiseNothing) {
+  Rig r;
+  for (int n = 0; n < 1000; ++n) {
+    r.sample.interferometer_counts[0] += 100;  // 62 nm per tick = 0.15 m/s
+    const auto& s = r.tick();
+    CHECK(s.active == FaultCode::kNone);
+  }
+  CHECK(r.sup.status().reaction == FaultReaction::kNone);
+  CHECK(r.sup.status().first_fault.code == FaultCode::kNone);
+}
+
+TEST(Supervisor, TravelWindowLatchesWithAxisAndValueAndLands) {
+  Rig r;
+  r.tick();
+  r.in.pose[0] = 0.0285f;
+  const auto& s = r.tick();
+  CHECK(s.first_fault.code == FaultCode::kTravelX);
+  LONGS_EQUAL(2, s.first_fault.tick);
+  LONGS_EQUAL(0, s.first_fault.axis);
+  DOUBLES_EQUAL(0.0285, s.first_fault.value, 1e-7);
+  CHECK(s.reaction == FaultReaction::kLand);
+  // A later, different fault does not overwrite the first-fault record.
+  r.in.pose[1] = -0.02f;
+  r.tick();
+  CHECK(r.sup.status().first_fault.code == FaultCode::kTravelX);
+  CHECK(r.sup.status().active == FaultCode::kTravelX);
+  LONGS_EQUAL(2, r.sup.status().fault_count);
+}
+
+TEST(Supervisor, TravelYAndThetaZ) {
+  Rig r;
+  r.in.pose[1] = 0.018f;
+  CHECK(r.tick().first_fault.code == FaultCode::kTravelY);
+  Rig r2;
+  r2.in.pose[2] = -6e-3f;
+  CHECK(r2.tick().first_fault.code == FaultCode::kTravelThetaZ);
+  // Not homed: positions mean nothing, the travel check is off.
+  Rig r3;
+  r3.in.positions_valid = false;
+  r3.in.pose[0] = 1.0f;
+  CHECK(r3.tick().active == FaultCode::kNone);
+}
+
+TEST(Supervisor, ZAndTiltEnvelopeOnlyWhileZClosed) {
+  Rig r;
+  r.in.pose[3] = 45e-6f;
+  r.in.envelope_active = false;
+  CHECK(r.tick().active == FaultCode::kNone);
+  r.in.envelope_active = true;
+  const auto& s = r.tick();
+  CHECK(s.first_fault.code == FaultCode::kZEnvelope);
+  LONGS_EQUAL(3, s.first_fault.axis);
+  Rig t;
+  t.in.pose[5] = -400e-6f;
+  const auto& st = t.tick();
+  CHECK(st.first_fault.code == FaultCode::kTiltEnvelope);
+  LONGS_EQUAL(5, st.first_fault.axis);
+  CHECK(st.reaction == FaultReaction::kLand);
+}
+
+TEST(Supervisor, FollowingErrorOnlyOnClosedAxes) {
+  Rig r;
+  r.in.closed_axes = kAxisMaskInPlane;
+  r.in.following_error[3] = 1e-3f;  // z open: ignored
+  CHECK(r.tick().active == FaultCode::kNone);
+  r.in.following_error[1] = -250e-6f;
+  const auto& s = r.tick();
+  CHECK(s.first_fault.code == FaultCode::kFollowingError);
+  LONGS_EQUAL(1, s.first_fault.axis);
+  DOUBLES_EQUAL(-250e-6, s.first_fault.value, 1e-10);
+}
+
+TEST(Supervisor, RmsCurrentFollowsTheThermalTimeConstant) {
+  Rig r;
+  // 3.5 A dc on coil 4: filtered i^2 crosses 9 A^2 when 1 - exp(-t/tau) = 9/12.25,
+  // t = -10 s * ln(1 - 0.7347) = 13.27 s = 33170 ticks.
+  r.in.coil_current_cmd_A[4] = 3.5f;
+  int n = 0;
+  while (r.tick().active == FaultCode::kNone && n < 100000) ++n;
+  DOUBLES_EQUAL(33170.0, n, 60.0);
+  CHECK(r.sup.status().first_fault.code == FaultCode::kRmsCurrent);
+  LONGS_EQUAL(4, r.sup.status().first_fault.axis);
+  CHECK(r.sup.status().reaction == FaultReaction::kLand);
+  DOUBLES_EQUAL(3.0, r.sup.status().rms_current_A[4], 0.01);
+}
+
+TEST(Supervisor, PeakCurrentCommandedLandsMeasuredCutsCurrents) {
+  Rig r;
+  r.in.coil_current_cmd_A[2] = -4.2f;
+  CHECK(r.tick().first_fault.code == FaultCode::kPeakCurrentCommanded);
+  CHECK(r.sup.status().reaction == FaultReaction::kLand);
+  Rig m;
+  m.in.coil_current_measured_A[7] = 4.6f;  // beyond 4.0 + 0.5 margin
+  const auto& s = m.tick();
+  CHECK(s.first_fault.code == FaultCode::kPeakCurrentMeasured);
+  LONGS_EQUAL(7, s.first_fault.axis);
+  CHECK(s.reaction == FaultReaction::kCurrentsOff);
+  Rig ok;
+  ok.in.coil_current_measured_A[7] = 4.4f;  // inside the margin
+  CHECK(ok.tick().active == FaultCode::kNone);
+}
+
+TEST(Supervisor, TickOverrunAfterConsecutiveLimit) {
+  Rig r;
+  r.in.tick_overrun = true;
+  CHECK(r.tick().active == FaultCode::kNone);
+  CHECK(r.tick().active == FaultCode::kNone);
+  r.in.tick_overrun = false;  // a good tick resets the run
+  r.tick();
+  r.in.tick_overrun = true;
+  r.tick();
+  r.tick();
+  CHECK(r.sup.status().active == FaultCode::kNone);
+  CHECK(r.tick().first_fault.code == FaultCode::kTickOverrun);
+  CHECK(r.sup.status().reaction == FaultReaction::kLand);
+}
+
+TEST(Supervisor, BeamLossCutsCurrents) {
+  Rig r;
+  r.sample.status_flags = io::kBeamLoss2;
+  const auto& s = r.tick();
+  CHECK(s.first_fault.code == FaultCode::kBeamLoss);
+  LONGS_EQUAL(2, s.first_fault.axis);
+  CHECK_FALSE(s.in_plane_sensors_valid);
+  CHECK(s.reaction == FaultReaction::kCurrentsOff);
+}
+
+TEST(Supervisor, CounterJumpIsWrapSafeAndCutsCurrents) {
+  Rig r;
+  r.sample.interferometer_counts[1] = 0xFFFFFF00u;
+  r.tick();
+  r.sample.interferometer_counts[1] = 0x00000100u;  // +512 counts through the wrap: fine
+  CHECK(r.tick().active == FaultCode::kNone);
+  // 0.5 m/s / 2500 Hz / 0.618 nm = 323 624 counts per tick is the limit.
+  r.sample.interferometer_counts[1] += 400000u;
+  const auto& s = r.tick();
+  CHECK(s.first_fault.code == FaultCode::kCounterJump);
+  LONGS_EQUAL(1, s.first_fault.axis);
+  DOUBLES_EQUAL(400000 * 0.618e-9, s.first_fault.value, 1e-6);
+  CHECK(s.reaction == FaultReaction::kCurrentsOff);
+}
+
+TEST(Supervisor, StaleFramesAfterConsecutiveLimit) {
+  Rig r;
+  r.sample.status_flags = io::kStaleFrame;
+  CHECK(r.tick().active == FaultCode::kNone);
+  CHECK(r.tick().active == FaultCode::kNone);
+  const auto& s = r.tick();
+  CHECK(s.first_fault.code == FaultCode::kStaleFrames);
+  DOUBLES_EQUAL(3.0, s.first_fault.value, 0.0);
+  CHECK(s.reaction == FaultReaction::kCurrentsOff);
+}
+
+TEST(Supervisor, DisplacementOutOfRangeLandsWithoutZ) {
+  Rig r;
+  r.sample.displacement_adc[1] = 32767;  // at the rail
+  const auto& s = r.tick();
+  CHECK(s.first_fault.code == FaultCode::kDisplacementOutOfRange);
+  LONGS_EQUAL(1, s.first_fault.axis);
+  CHECK_FALSE(s.z_sensors_valid);
+  CHECK(s.in_plane_sensors_valid);
+  CHECK(s.reaction == FaultReaction::kLand);
+  Rig b;
+  b.sample.status_flags = io::kDisplacementOutOfRange0;
+  CHECK(b.tick().first_fault.code == FaultCode::kDisplacementOutOfRange);
+}
+
+TEST(Supervisor, AdcFaultAndCurrentMonitorRail) {
+  Rig r;
+  r.sample.status_flags = io::kAdcFault;
+  CHECK(r.tick().first_fault.code == FaultCode::kAdcFault);
+  CHECK(r.sup.status().reaction == FaultReaction::kLand);
+  Rig m;
+  m.sample.coil_current_adc[5] = -32768;
+  const auto& s = m.tick();
+  CHECK(s.first_fault.code == FaultCode::kCurrentMonitorOutOfRange);
+  LONGS_EQUAL(5, s.first_fault.axis);
+}
+
+TEST(Supervisor, SensorCauseOutranksItsSymptoms) {
+  Rig r;
+  r.sample.status_flags = io::kBeamLoss0;
+  r.in.following_error[0] = 1e-3f;  // a lost beam also looks like a following error
+  CHECK(r.tick().first_fault.code == FaultCode::kBeamLoss);
+}
+
+TEST(Supervisor, LandingEscalatesToCurrentsOffNeverBack) {
+  Rig r;
+  r.in.pose[0] = 0.03f;
+  r.tick();
+  CHECK(r.sup.status().reaction == FaultReaction::kLand);
+  r.sample.status_flags = io::kBeamLoss0;
+  r.tick();
+  CHECK(r.sup.status().reaction == FaultReaction::kCurrentsOff);
+  CHECK(r.sup.status().first_fault.code == FaultCode::kTravelX);
+  r.sample.status_flags = 0;
+  r.tick();
+  CHECK(r.sup.status().reaction == FaultReaction::kCurrentsOff);
+}
+
+TEST(Supervisor, ClearOnlyWhenTheCauseIsGone) {
+  Rig r;
+  r.in.pose[0] = 0.03f;
+  r.tick();
+  CHECK_FALSE(r.sup.clear_fault());
+  CHECK(r.sup.status().first_fault.code == FaultCode::kTravelX);
+  r.in.pose[0] = 0.0f;
+  r.tick();
+  CHECK(r.sup.cause_present() == false);
+  CHECK(r.sup.clear_fault());
+  CHECK(r.sup.status().first_fault.code == FaultCode::kNone);
+  CHECK(r.sup.status().reaction == FaultReaction::kNone);
+}
+
+TEST(Supervisor, ConfigValidation) {
+  SupervisorConfig c;
+  CHECK(validate(c, kRate) == SupervisorConfigError::kOk);
+  SupervisorConfig b = c;
+  b.x_min_m = 0.03f;
+  CHECK(validate(b, kRate) == SupervisorConfigError::kBadTravel);
+  b = c;
+  b.z_max_m = 1e-3f;
+  CHECK(validate(b, kRate) == SupervisorConfigError::kBadEnvelope);
+  b = c;
+  b.following_error_limit[4] = -1.0f;
+  CHECK(validate(b, kRate) == SupervisorConfigError::kBadFollowingError);
+  b = c;
+  b.rms_current_A = 4.5f;  // above peak
+  CHECK(validate(b, kRate) == SupervisorConfigError::kBadCurrentLimit);
+  b = c;
+  b.thermal_time_constant_s = 0.0f;
+  CHECK(validate(b, kRate) == SupervisorConfigError::kBadThermal);
+  b = c;
+  b.interferometer_lsb_m = 0.0f;
+  CHECK(validate(b, kRate) == SupervisorConfigError::kBadPlausibility);
+}

@@ -1,0 +1,284 @@
+// Persistence: save/load, bank alternation, corrupt-bank fallback, schema
+// migration/refusal, FileFlash, and a power cut at every flash step of a save.
+#include <CppUTest/TestHarness.h>
+
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <unistd.h>
+
+#include "maglev/persistence/config_store.hpp"
+#include "maglev/persistence/file_flash.hpp"
+
+using namespace maglev;
+using modbus::ConfigImage;
+using modbus::RegId;
+using persistence::FlashError;
+
+namespace {
+
+constexpr std::size_t kSector = 4096;
+
+// Flash that loses power after `budget` erase/program operations. The
+// operation that meets the cut is TORN: a program writes only the first half
+// of its word with garbage in the second; an erase erases only half the
+// sector. Everything after the cut fails.
+class CutFlash final : public persistence::Flash {
+ public:
+  CutFlash(persistence::RamFlash& inner, long budget) : inner_(inner), budget_(budget) {}
+  std::size_t sector_size() const override { return inner_.sector_size(); }
+  std::size_t sector_count() const override { return inner_.sector_count(); }
+  FlashError erase(std::size_t sector) override {
+    if (dead_) return FlashError::kFailed;
+    ++ops;
+    if (budget_-- == 0) {
+      dead_ = true;
+      std::memset(inner_.data() + sector * kSector, 0xFF, kSector / 2);
+      return FlashError::kFailed;
+    }
+    return inner_.erase(sector);
+  }
+  FlashError program(std::size_t offset, const std::uint8_t* word) override {
+    if (dead_) return FlashError::kFailed;
+    ++ops;
+    if (budget_-- == 0) {
+      dead_ = true;
+      std::uint8_t torn[persistence::kFlashWordBytes];
+      for (std::size_t i = 0; i < sizeof torn; ++i) torn[i] = i < 16 ? word[i] : static_cast<std::uint8_t>(0x5A ^ i);
+      inner_.program(offset, torn);
+      return FlashError::kFailed;
+    }
+    return inner_.program(offset, word);
+  }
+  FlashError read(std::size_t offset, std::uint8_t* out, std::size_t len) const override {
+    return inner_.read(offset, out, len);
+  }
+  long ops = 0;
+
+ private:
+  persistence::RamFlash& inner_;
+  long budget_;
+  bool dead_ = false;
+};
+
+ConfigImage variant(float kp) {
+  ConfigImage c = ConfigImage::defaults();
+  c.set(RegId::gain_x_kp, kp);
+  c.set(RegId::limit_peak_current, 3.5);
+  return c;
+}
+
+}  // namespace
+
+TEST_GROUP(Persistence) {
+  std::uint8_t storage[kSector * 2];
+  void setup() override { std::memset(storage, 0xFF, sizeof storage); }
+};
+
+TEST(Persistence, FirstBootLoadsDefaultsAndSaysSo) {
+  persistence::RamFlash flash(storage, kSector, 2);
+  persistence::ConfigStore store(flash, 0, 1);
+  const auto r = store.load();
+  CHECK(r.config == ConfigImage::defaults());
+  CHECK(r.status.flags & modbus::kLoadedDefaults);
+  LONGS_EQUAL(static_cast<int>(persistence::Reason::kNoRecord), r.status.reason);
+}
+
+TEST(Persistence, SaveAlternatesBanksAndLoadsHighestSequence) {
+  persistence::RamFlash flash(storage, kSector, 2);
+  {
+    persistence::ConfigStore store(flash, 0, 1);
+    store.load();
+    CHECK(store.save(variant(1000.0f)));
+    CHECK(store.save(variant(2000.0f)));
+    CHECK(store.save(variant(3000.0f)));  // A(1) B(2) A(3)
+  }
+  persistence::ConfigStore store(flash, 0, 1);
+  const auto r = store.load();
+  DOUBLES_EQUAL(3000.0, r.config.get(RegId::gain_x_kp), 0.0);
+  DOUBLES_EQUAL(3.5, r.config.get(RegId::limit_peak_current), 0.0);
+  CHECK(r.status.flags & modbus::kLoadedBankA);
+  LONGS_EQUAL(3, static_cast<long>(r.status.sequence));
+  LONGS_EQUAL(0, r.status.flags & (modbus::kBankACorrupt | modbus::kBankBCorrupt | modbus::kMigrated));
+}
+
+TEST(Persistence, CorruptNewestBankFallsBackToOtherAndFlags) {
+  persistence::RamFlash flash(storage, kSector, 2);
+  {
+    persistence::ConfigStore store(flash, 0, 1);
+    store.load();
+    CHECK(store.save(variant(1000.0f)));  // A seq 1
+    CHECK(store.save(variant(2000.0f)));  // B seq 2
+  }
+  storage[kSector + 32 + 9] ^= 0x01;  // flip one payload bit in B
+  persistence::ConfigStore store(flash, 0, 1);
+  const auto r = store.load();
+  DOUBLES_EQUAL(1000.0, r.config.get(RegId::gain_x_kp), 0.0);
+  CHECK(r.status.flags & modbus::kLoadedBankA);
+  CHECK(r.status.flags & modbus::kBankBCorrupt);
+  LONGS_EQUAL(static_cast<int>(persistence::Reason::kBankCorrupt), r.status.reason);
+  // Both corrupt: defaults, both flagged.
+  storage[32 + 9] ^= 0x01;
+  const auto r2 = store.load();
+  CHECK(r2.config == ConfigImage::defaults());
+  CHECK(r2.status.flags & modbus::kLoadedDefaults);
+  CHECK(r2.status.flags & modbus::kBankACorrupt);
+  CHECK(r2.status.flags & modbus::kBankBCorrupt);
+  // The next save still works, into a corrupt bank, and is loaded afterwards.
+  CHECK(store.save(variant(4000.0f)));
+  persistence::ConfigStore again(flash, 0, 1);
+  DOUBLES_EQUAL(4000.0, again.load().config.get(RegId::gain_x_kp), 0.0);
+}
+
+// Rewrites the record in bank A entry by entry through `edit`, with correct
+// CRCs, as an older/newer firmware with another schema would have stored it.
+namespace {
+std::uint32_t rd32(const std::uint8_t* p) {
+  return static_cast<std::uint32_t>(p[0] | (p[1] << 8) | (p[2] << 16)) | (static_cast<std::uint32_t>(p[3]) << 24);
+}
+void wr32(std::uint8_t* p, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+void reseal(std::uint8_t* bank, std::uint32_t schema_hash) {
+  const std::uint32_t payload_bytes = rd32(bank + 16);
+  wr32(bank + 8, schema_hash);
+  wr32(bank + 20, persistence::crc32(bank + 32, payload_bytes));
+  wr32(bank + 24, persistence::crc32(bank, 24));
+}
+std::uint8_t* find_entry(std::uint8_t* bank, const char* name) {
+  const std::uint32_t h = modbus::fnv1a(name);
+  for (std::size_t e = 0; e < modbus::kPersistedCount; ++e) {
+    if (rd32(bank + 32 + e * 12) == h) return bank + 32 + e * 12;
+  }
+  return nullptr;
+}
+}  // namespace
+
+TEST(Persistence, OtherSchemaIsMigratedByName) {
+  persistence::RamFlash flash(storage, kSector, 2);
+  persistence::ConfigStore store(flash, 0, 1);
+  store.load();
+  CHECK(store.save(variant(1234.0f)));
+  // The "old firmware" had no seq.home_timeout and an entry we dropped since.
+  std::uint8_t* e = find_entry(storage, "seq.homing_timeout");
+  CHECK(e != nullptr);
+  wr32(e, modbus::fnv1a("legacy.removed_entry"));
+  wr32(e + 8, 0x12345678);
+  reseal(storage, 0xDEADBEEF);
+  const auto r = store.load();
+  CHECK(r.status.flags & modbus::kLoadedBankA);
+  CHECK(r.status.flags & modbus::kMigrated);
+  LONGS_EQUAL(static_cast<int>(persistence::Reason::kSchemaMigrated), r.status.reason);
+  DOUBLES_EQUAL(1234.0, r.config.get(RegId::gain_x_kp), 0.0);  // matched by name
+  DOUBLES_EQUAL(modbus::def(RegId::seq_homing_timeout).default_value, r.config.get(RegId::seq_homing_timeout),
+                1e-6);  // new entry: default
+}
+
+TEST(Persistence, TypeChangeIsRefusedWithReason) {
+  persistence::RamFlash flash(storage, kSector, 2);
+  persistence::ConfigStore store(flash, 0, 1);
+  store.load();
+  CHECK(store.save(variant(1234.0f)));
+  std::uint8_t* e = find_entry(storage, "gain.y.kp");
+  e[4] = static_cast<std::uint8_t>(modbus::RegType::kI32);
+  reseal(storage, 0xDEADBEEF);
+  const auto r = store.load();
+  CHECK(r.config == ConfigImage::defaults());
+  CHECK(r.status.flags & modbus::kRefused);
+  CHECK(r.status.flags & modbus::kLoadedDefaults);
+  LONGS_EQUAL(static_cast<int>(persistence::Reason::kTypeChanged), r.status.reason);
+}
+
+TEST(Persistence, OutOfRangeStoredValueIsRefused) {
+  persistence::RamFlash flash(storage, kSector, 2);
+  persistence::ConfigStore store(flash, 0, 1);
+  store.load();
+  CHECK(store.save(variant(1234.0f)));
+  std::uint8_t* e = find_entry(storage, "limit.peak_current");
+  wr32(e + 8, modbus::encode(modbus::RegType::kF32, 9.0));  // > 4 A
+  reseal(storage, modbus::kSchemaHash);
+  const auto r = store.load();
+  CHECK(r.status.flags & modbus::kRefused);
+  LONGS_EQUAL(static_cast<int>(persistence::Reason::kValueOutOfRange), r.status.reason);
+  CHECK(r.config == ConfigImage::defaults());
+}
+
+TEST(Persistence, PowerCutAtEveryStepLeavesAValidConfiguration) {
+  const ConfigImage old_cfg = variant(1000.0f);
+  const ConfigImage new_cfg = variant(2000.0f);
+  // Count the steps of a save first.
+  long steps = 0;
+  {
+    std::memset(storage, 0xFF, sizeof storage);
+    persistence::RamFlash ram(storage, kSector, 2);
+    CutFlash counting(ram, 1 << 30);
+    persistence::ConfigStore store(counting, 0, 1);
+    store.load();
+    CHECK(store.save(old_cfg));
+    steps = counting.ops;
+  }
+  LONGS_EQUAL(static_cast<long>(persistence::ConfigStore::kSaveSteps), steps);
+  int loaded_old = 0;
+  int loaded_new = 0;
+  // Two histories: the save targets bank B (old record in A), and bank A
+  // (old record in B, after a second save).
+  for (int history = 0; history < 2; ++history) {
+    for (long n = 0; n <= steps; ++n) {
+      std::memset(storage, 0xFF, sizeof storage);
+      persistence::RamFlash ram(storage, kSector, 2);
+      {
+        persistence::ConfigStore setup_store(ram, 0, 1);
+        setup_store.load();
+        if (history == 1) CHECK(setup_store.save(variant(500.0f)));
+        CHECK(setup_store.save(old_cfg));
+      }
+      CutFlash cut(ram, n);
+      persistence::ConfigStore store(cut, 0, 1);
+      store.load();
+      const bool ok = store.save(new_cfg);
+      CHECK_EQUAL(n >= steps, ok);
+      // Reboot on healthy flash.
+      persistence::ConfigStore rebooted(ram, 0, 1);
+      const auto r = rebooted.load();
+      CHECK_FALSE(r.status.flags & modbus::kLoadedDefaults);
+      if (r.config == new_cfg) {
+        ++loaded_new;
+        CHECK(n >= steps);
+      } else {
+        CHECK(r.config == old_cfg);
+        ++loaded_old;
+      }
+      // And the store keeps working after the cut.
+      CHECK(rebooted.save(variant(3000.0f)));
+      persistence::ConfigStore again(ram, 0, 1);
+      DOUBLES_EQUAL(3000.0, again.load().config.get(RegId::gain_x_kp), 0.0);
+    }
+  }
+  LONGS_EQUAL(2 * steps, loaded_old);
+  LONGS_EQUAL(2, loaded_new);
+}
+
+TEST(Persistence, FileFlashKeepsConfigurationAcrossInstances) {
+  char path[] = "/tmp/maglev_fileflash_XXXXXX";
+  const int fd = mkstemp(path);
+  CHECK(fd >= 0);
+  close(fd);
+  std::remove(path);
+  {
+    persistence::FileFlash flash(path, kSector, 2);
+    CHECK(flash.ok());
+    persistence::ConfigStore store(flash, 0, 1);
+    CHECK(store.load().status.flags & modbus::kLoadedDefaults);
+    CHECK(store.save(variant(777.0f)));
+    std::uint8_t word[32] = {};
+    LONGS_EQUAL(static_cast<int>(FlashError::kNotErased), static_cast<int>(flash.program(0, word)));
+  }
+  {
+    persistence::FileFlash flash(path, kSector, 2);
+    persistence::ConfigStore store(flash, 0, 1);
+    const auto r = store.load();
+    DOUBLES_EQUAL(777.0, r.config.get(RegId::gain_x_kp), 0.0);
+    CHECK(r.status.flags & modbus::kLoadedBankA);
+  }
+  std::remove(path);
+}
