@@ -62,7 +62,7 @@ int check_candump(const std::string& dbc_path, unsigned seed, unsigned counter) 
     const std::string hex = frame.substr(sep + 3);  // skip the flags nibble
     std::uint8_t data[64] = {};
     const int len = static_cast<int>(hex.size() / 2);
-    for (int i = 0; i < len && i < 64; ++i) data[i] = static_cast<std::uint8_t>(std::stoul(hex.substr(2 * i, 2), nullptr, 16));
+    for (int i = 0; i < len && i < 64; ++i) data[i] = static_cast<std::uint8_t>(std::stoul(hex.substr(static_cast<std::size_t>(2 * i), 2), nullptr, 16));
     const auto it = dbc.find(id);
     if (it == dbc.end() || it->second.length != len) {
       std::fprintf(stderr, "id %03X len %d not in the DBC\n", id, len);
@@ -75,9 +75,9 @@ int check_candump(const std::string& dbc_path, unsigned seed, unsigned counter) 
       bool known = true;
       if (sig.name == "e2e_counter") want_raw = counter;
       else if (sig.name == "status_flags") want_raw = s.status_flags;
-      else if (sig.name.rfind("interferometer_count_", 0) == 0) want_raw = s.interferometer_counts[sig.name.back() - '0'];
-      else if (sig.name.rfind("displacement_adc_", 0) == 0) want_raw = s.displacement_adc[sig.name.back() - '0'];
-      else if (sig.name.rfind("hall_adc_", 0) == 0) want_raw = s.hall_adc[sig.name.back() - '0'];
+      else if (sig.name.rfind("interferometer_count_", 0) == 0) want_raw = s.interferometer_counts[static_cast<std::size_t>(sig.name.back() - '0')];
+      else if (sig.name.rfind("displacement_adc_", 0) == 0) want_raw = s.displacement_adc[static_cast<std::size_t>(sig.name.back() - '0')];
+      else if (sig.name.rfind("hall_adc_", 0) == 0) want_raw = s.hall_adc[static_cast<std::size_t>(sig.name.back() - '0')];
       else known = false;  // e2e_crc: checked by the codec below
       if (!known) continue;
       const double want = want_raw * sig.factor + sig.offset;

@@ -36,6 +36,7 @@ struct FlashModel {
       if (m.last_key == f::kKey1 && value == f::kKey2) bus.preset(cr, bus.peek(cr) & ~f::kCrLock);
       m.last_key = value;
     } else if ((addr == kCr2 || addr == kCr1) && (value & f::kCrStart) != 0) {
+      bus.preset(addr, value & ~f::kCrStart);  // START is cleared by hardware
       m.start();
     } else if (addr >= r::memory::kFlashBank1 && addr < r::memory::kFlashBank1 + 0x200000u) {
       if (++m.words_in_buffer == 8) {

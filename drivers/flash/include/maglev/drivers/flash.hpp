@@ -75,7 +75,7 @@ class Flash {
     bus_.write32(bank + f::kCr, cr);
     bus_.write32(bank + f::kCr, cr | f::kCrStart);
     s = finish(bank);
-    stm32h7::modify32(bus_, bank + f::kCr, f::kCrSer | f::kCrSnbMask, 0u);
+    stm32h7::modify32(bus_, bank + f::kCr, f::kCrSer | f::kCrSnbMask | f::kCrStart, 0u);
     lock(bank);
     return s;
   }

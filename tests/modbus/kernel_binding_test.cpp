@@ -1,0 +1,185 @@
+// The register map bound to the REAL kernel (kernel::Controller<float>) and
+// persistence, driven by a libmodbus TCP client through the bench adapter.
+#include <CppUTest/TestHarness.h>
+#include <modbus/modbus.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "maglev/modbus/controller_binding.hpp"
+#include "maglev/modbus_tcp/tcp_server.hpp"
+
+using namespace maglev;
+using namespace maglev::modbus;
+
+namespace {
+
+std::uint16_t addr(RegId id) { return def(id).address; }
+void set_f32(float v, std::uint16_t* w) { split_words(encode(RegType::kF32, static_cast<double>(v)), w); }
+double get_f32(const std::uint16_t* w) { return decode(RegType::kF32, join_words(w)); }
+
+bool same_config(const kernel::KernelConfig& a, const kernel::KernelConfig& b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+constexpr std::size_t kSector = 4096;
+
+struct Stage {
+  std::uint8_t* flash_bytes;
+  persistence::RamFlash flash;
+  persistence::ConfigStore store{flash, 0, 1};
+  std::unique_ptr<kernel::Controller<float>> controller = std::make_unique<kernel::Controller<float>>();
+  ControllerDevice<float> device{*controller, &store};
+  RegisterServer server{device, device.boot()};
+  modbus_tcp::TcpServer tcp{server, "127.0.0.1", 0, 1};
+  std::mutex m;
+  std::atomic<bool> stop{false};
+  std::thread thread;
+  modbus_t* ctx = nullptr;
+
+  explicit Stage(std::uint8_t* bytes) : flash_bytes(bytes), flash(bytes, kSector, 2) {
+    thread = std::thread([this] {
+      while (!stop) {
+        std::lock_guard<std::mutex> lock(m);
+        tcp.poll(2);
+      }
+    });
+    ctx = modbus_new_tcp("127.0.0.1", tcp.port());
+    modbus_set_slave(ctx, 1);
+    modbus_connect(ctx);
+  }
+  ~Stage() {
+    modbus_close(ctx);
+    modbus_free(ctx);
+    stop = true;
+    thread.join();
+  }
+  kernel::KernelConfig config() {
+    std::lock_guard<std::mutex> lock(m);
+    return controller->config();
+  }
+};
+
+#define EXPECT_EXCEPTION(rc, code)          \
+  do {                                      \
+    const int rc_ = (rc);                   \
+    const int errno_ = errno;               \
+    LONGS_EQUAL(-1, rc_);                   \
+    LONGS_EQUAL(MODBUS_ENOBASE + (code), errno_); \
+  } while (0)
+
+}  // namespace
+
+TEST_GROUP(KernelBinding) {
+  std::uint8_t flash[kSector * 2];
+  void setup() override { std::memset(flash, 0xFF, sizeof flash); }
+};
+
+TEST(KernelBinding, TableDefaultsAreTheKernelDefaults) {
+  const ConfigImage from_kernel = image_from_kernel(kernel::default_kernel_config());
+  const ConfigImage table = ConfigImage::defaults();
+  for (std::size_t s = 0; s < kPersistedCount; ++s) {
+    const RegisterDef& d = persisted_def(s);
+    kernel::KernelConfig cfg = kernel::default_kernel_config();
+    CHECK_TEXT(config_field(cfg, d.id) != nullptr, d.name);
+    if (from_kernel.raw[s] != table.raw[s]) {
+      FAIL(d.name);
+    }
+    CHECK_TEXT(value_in_range(d, from_kernel.get(d.id)), d.name);
+  }
+}
+
+TEST(KernelBinding, GainWritesReachTheKernelWhole) {
+  Stage st(flash);
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+  std::uint16_t w[14];
+  const float v[7] = {30000.0f, 2.0e6f, 90.0f, 800.0f, 0.6f, 0.2f, 3.5f};
+  for (int i = 0; i < 7; ++i) set_f32(v[i], w + 2 * i);
+  LONGS_EQUAL(14, modbus_write_registers(st.ctx, addr(RegId::gain_y_kp), 14, w));
+  const kernel::KernelConfig c = st.config();
+  DOUBLES_EQUAL(30000.0, static_cast<double>(c.axis[1].pid.kp), 0.0);
+  DOUBLES_EQUAL(2.0e6, static_cast<double>(c.axis[1].pid.ki), 0.0);
+  DOUBLES_EQUAL(90.0, static_cast<double>(c.axis[1].pid.kd), 0.0);
+  DOUBLES_EQUAL(800.0, static_cast<double>(c.axis[1].pid.derivative_filter_hz), 0.0);
+  DOUBLES_EQUAL(0.6, static_cast<double>(c.axis[1].pid.setpoint_weight_p), 1e-7);
+  DOUBLES_EQUAL(0.2, static_cast<double>(c.axis[1].pid.setpoint_weight_d), 1e-7);
+  DOUBLES_EQUAL(3.5, static_cast<double>(c.axis[1].pid.effort_limit_A), 0.0);
+  DOUBLES_EQUAL(36000.0, static_cast<double>(c.axis[0].pid.kp), 0.0);  // x untouched
+  // Read back through the map.
+  std::uint16_t r[2];
+  LONGS_EQUAL(2, modbus_read_registers(st.ctx, addr(RegId::gain_y_kp), 2, r));
+  DOUBLES_EQUAL(30000.0, get_f32(r), 0.0);
+}
+
+TEST(KernelBinding, RefusedWritesLeaveTheKernelConfigUnchanged) {
+  Stage st(flash);
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+  const kernel::KernelConfig before = st.config();
+  std::uint16_t w[4];
+  // Out of the map's range: 03.
+  set_f32(5000.0f, w);
+  EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::gain_x_derivative_filter), 2, w), 3);
+  // In the map's range but refused by the kernel: the travel window would no
+  // longer contain the reference limits (ConfigError::kReferenceLimits) -> 03.
+  set_f32(0.001f, w);
+  EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::limit_x_max), 2, w), 3);
+  std::uint16_t err = 0;
+  LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::status_config_error), 1, &err));
+  CHECK(err != 0);
+  CHECK(same_config(before, st.config()));
+  // A multi-register write with a good kp and a bad ki: neither lands.
+  set_f32(20000.0f, w);
+  set_f32(-1.0f, w + 2);
+  EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::gain_x_kp), 4, w), 3);
+  CHECK(same_config(before, st.config()));
+}
+
+TEST(KernelBinding, GainWriteWhileTheKernelIsBusyIsServerBusy) {
+  Stage st(flash);
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+  // Home: the sequencer leaves Idle at once.
+  std::uint16_t cmd[4] = {0, 0, 0, static_cast<std::uint16_t>(CommandCode::kHome)};
+  LONGS_EQUAL(4, modbus_write_registers(st.ctx, addr(RegId::cmd_axis), 4, cmd));
+  std::uint16_t result = 0xFFFF;
+  LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::cmd_result), 1, &result));
+  LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kAccepted), result);
+  const kernel::KernelConfig before = st.config();
+  std::uint16_t w[2];
+  set_f32(20000.0f, w);
+  EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::gain_x_kp), 2, w), 6);
+  set_f32(3.0f, w);
+  EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::limit_peak_current), 2, w), 6);
+  CHECK(same_config(before, st.config()));
+  // A move is refused by the kernel (not levitated): cmd.result says why.
+  cmd[0] = 0;
+  set_f32(1.0e-3f, cmd + 1);
+  cmd[3] = static_cast<std::uint16_t>(CommandCode::kMove);
+  LONGS_EQUAL(4, modbus_write_registers(st.ctx, addr(RegId::cmd_axis), 4, cmd));
+  LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::cmd_result), 1, &result));
+  LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kRefusedNotReady), result);
+}
+
+TEST(KernelBinding, SavedConfigurationIsAppliedAtBoot) {
+  {
+    Stage st(flash);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+    std::uint16_t w[2];
+    set_f32(2.75f, w);
+    LONGS_EQUAL(2, modbus_write_registers(st.ctx, addr(RegId::limit_rms_current), 2, w));
+    set_f32(250.0f, w);
+    LONGS_EQUAL(2, modbus_write_registers(st.ctx, addr(RegId::gain_theta_z_kp), 2, w));
+    EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::limit_rms_current), 2, w), 3);  // 250 A
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::config_save), 1));
+  }
+  Stage rebooted(flash);
+  const kernel::KernelConfig c = rebooted.config();
+  DOUBLES_EQUAL(250.0, static_cast<double>(c.axis[2].pid.kp), 0.0);
+  DOUBLES_EQUAL(2.75, static_cast<double>(c.supervisor.rms_current_A), 0.0);
+  std::uint16_t flags = 0;
+  LONGS_EQUAL(1, modbus_read_registers(rebooted.ctx, addr(RegId::persist_flags), 1, &flags));
+  LONGS_EQUAL(kLoadedBankA, flags);
+}
