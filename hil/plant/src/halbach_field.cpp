@@ -55,11 +55,7 @@ namespace {
 
 // sum_h amp[h] e^{-gamma_n z} (sin, cos)(gamma_n s) by recurrences: one
 // sincos and one exp per call, whatever the number of harmonics.
-inline FieldSZ SumHarmonics(const double* amp, int harmonics, double gamma1, double s, double z) {
-  const double th = gamma1 * s;
-  const double s1 = std::sin(th);
-  const double c1 = std::cos(th);
-  const double e1 = std::exp(-gamma1 * z);
+inline FieldSZ SumHarmonicsFrom(const double* amp, int harmonics, double s1, double c1, double e1) {
   double bs = amp[0] * e1 * s1;
   double bz = amp[0] * e1 * c1;
   if (harmonics > 1) {
@@ -86,6 +82,11 @@ inline FieldSZ SumHarmonics(const double* amp, int harmonics, double gamma1, dou
   return {bs, bz};
 }
 
+inline FieldSZ SumHarmonics(const double* amp, int harmonics, double gamma1, double s, double z) {
+  const double th = gamma1 * s;
+  return SumHarmonicsFrom(amp, harmonics, std::sin(th), std::cos(th), std::exp(-gamma1 * z));
+}
+
 }  // namespace
 
 FieldSZ HalbachField::PointField(double s_m, double height_m) const {
@@ -94,6 +95,10 @@ FieldSZ HalbachField::PointField(double s_m, double height_m) const {
 
 FieldSZ HalbachField::SideAverageField(double s_m, double gap_m) const {
   return SumHarmonics(side_amp_, harmonics_, gamma1_, s_m, gap_m);
+}
+
+FieldSZ HalbachField::SideAverageFieldFrom(double sin1, double cos1, double exp1) const {
+  return SumHarmonicsFrom(side_amp_, harmonics_, sin1, cos1, exp1);
 }
 
 double HalbachField::BStar(double gap_m) const { return m0_ * BStarPerM0(1, gap_m, config_); }

@@ -134,8 +134,16 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
       cs.array_axis = fx_coil ? 0 : 1;
       cs.r_body_m = r;
       cs.u_body = rot_alpha * (odd ? -u_ref : u_ref);
+      cs.quarter_turns = 0;
       sides_[static_cast<std::size_t>(k++)] = cs;
     }
+  }
+  // Quarter-pitch offsets of each side from its forcer's first side.
+  for (std::size_t idx = 0; idx < sides_.size(); ++idx) {
+    const CoilSide& ref = sides_[idx - idx % 4];
+    const int ax = sides_[idx].array_axis;
+    sides_[idx].quarter_turns =
+        static_cast<int>(std::nearbyint((sides_[idx].r_body_m[ax] - ref.r_body_m[ax]) / (pitch / 4.0)));
   }
   for (int f = 0; f < kForcers; ++f) {
     if (config.forcer_errors.epsilon_tangential[f] != 0.0 || config.forcer_errors.epsilon_off_axis_z[f] != 0.0) {
@@ -208,114 +216,218 @@ Eigen::Vector3d Plant::CoilForceWorld(const BodyState& state, int coil, double c
   return total;
 }
 
-Wrench Plant::MagneticWrench(const BodyState& state, const double* currents_A) const {
+namespace {
+
+Kinematics MakeKinematics(const BodyState& state) {
+  Kinematics k;
   const Eigen::Matrix3d r = state.attitude.normalized().toRotationMatrix();
-  Eigen::Vector3d force = Eigen::Vector3d::Zero();
-  Eigen::Vector3d torque_w = Eigen::Vector3d::Zero();
-  const double rest_gap = config_.field.rest_gap_m;
-  for (const CoilSide& cs : sides_) {
-    const double i = currents_A[cs.coil];
-    const Eigen::Vector3d rw = r * cs.r_body_m;
-    const double gap = rest_gap + state.position_m.z() + rw.z() - cs.r_body_m.z();
-    Eigen::Vector3d f;
-    if (cs.array_axis == 0) {
-      const FieldSZ b = field_.SideAverageField(state.position_m.x() + rw.x(), gap);
-      f = (r * cs.u_body).cross(Eigen::Vector3d(b.b_s_T, 0.0, b.b_z_T));
-    } else {
-      const FieldSZ b = field_.SideAverageField(state.position_m.y() + rw.y(), gap);
-      f = (r * cs.u_body).cross(Eigen::Vector3d(0.0, b.b_s_T, b.b_z_T));
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      k.r[a][b] = r(a, b);
     }
-    f *= side_force_per_A_ * i;
-    if (forcer_errors_active_) {
-      Eigen::Vector3d fb = r.transpose() * f;
-      const int t_axis = cs.array_axis;
-      const double ft = fb(t_axis);
-      fb(t_axis) += config_.forcer_errors.epsilon_tangential[cs.forcer] * ft;
-      fb.z() += config_.forcer_errors.epsilon_off_axis_z[cs.forcer] * ft;
-      f = r * fb;
-    }
-    force += f;
-    torque_w += rw.cross(f);
+    k.p[a] = state.position_m[a];
+    k.v[a] = state.velocity_m_per_s[a];
   }
-  Wrench w;
-  w.force_world_N = force;
-  w.torque_body_Nm = r.transpose() * torque_w;
-  return w;
+  const Eigen::Vector3d& w = state.omega_body_rad_per_s;
+  for (int a = 0; a < 3; ++a) {
+    k.omega_w[a] = k.r[a][0] * w.x() + k.r[a][1] * w.y() + k.r[a][2] * w.z();
+  }
+  return k;
 }
 
-Wrench Plant::SuspensionWrench(const BodyState& state) const {
-  Wrench w;
-  if (!config_.suspension.enabled) {
-    return w;
+inline void Rotate(const double r[3][3], const Eigen::Vector3d& x, double* out) {
+  for (int a = 0; a < 3; ++a) {
+    out[a] = r[a][0] * x.x() + r[a][1] * x.y() + r[a][2] * x.z();
   }
-  const Eigen::Matrix3d r = state.attitude.normalized().toRotationMatrix();
-  const Eigen::Vector3d omega_w = r * state.omega_body_rad_per_s;
+}
+
+inline void Cross(const double* a, const double* b, double* out) {
+  out[0] = a[1] * b[2] - a[2] * b[1];
+  out[1] = a[2] * b[0] - a[0] * b[2];
+  out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+// sin/cos/exp of small arguments (|x| < 0.02): Taylor to 5th order, relative
+// error < 1e-13; exact library calls otherwise.
+inline void SmallSinCos(double e, double* s, double* c) {
+  if (std::fabs(e) < 0.02) {
+    const double e2 = e * e;
+    *s = e * (1.0 - e2 / 6.0 * (1.0 - e2 / 20.0));
+    *c = 1.0 - e2 / 2.0 * (1.0 - e2 / 12.0 * (1.0 - e2 / 30.0));
+  } else {
+    *s = std::sin(e);
+    *c = std::cos(e);
+  }
+}
+inline double SmallExp(double x) {
+  if (std::fabs(x) < 0.02) {
+    return 1.0 + x * (1.0 + x / 2.0 * (1.0 + x / 3.0 * (1.0 + x / 4.0 * (1.0 + x / 5.0 * (1.0 + x / 6.0)))));
+  }
+  return std::exp(x);
+}
+
+}  // namespace
+
+void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* acc) const {
+  const double gamma1 = field_.gamma1_per_m();
+  const double rest_gap = config_.field.rest_gap_m;
+  double ref_s = 0.0, ref_gap = 0.0, ref_sin = 0.0, ref_cos = 1.0, ref_exp = 1.0;
+  for (std::size_t idx = 0; idx < sides_.size(); ++idx) {
+    const CoilSide& cs = sides_[idx];
+    double rw[3];
+    Rotate(k.r, cs.r_body_m, rw);
+    const int ax = cs.array_axis;
+    const double s = k.p[ax] + rw[ax];
+    const double gap = rest_gap + k.p[2] + rw[2] - cs.r_body_m.z();
+    double sin1, cos1, exp1;
+    if (idx % 4 == 0) {  // the forcer's reference side: the only full sincos/exp
+      ref_s = s;
+      ref_gap = gap;
+      ref_sin = std::sin(gamma1 * s);
+      ref_cos = std::cos(gamma1 * s);
+      ref_exp = std::exp(-gamma1 * gap);
+      sin1 = ref_sin;
+      cos1 = ref_cos;
+      exp1 = ref_exp;
+    } else {
+      // theta = theta_ref + q pi/2 + eps: exact quarter turns, then eps.
+      double sq = ref_sin, cq = ref_cos;
+      switch (cs.quarter_turns & 3) {
+        case 1: sq = ref_cos; cq = -ref_sin; break;
+        case 2: sq = -ref_sin; cq = -ref_cos; break;
+        case 3: sq = -ref_cos; cq = ref_sin; break;
+        default: break;
+      }
+      const double eps = gamma1 * (s - ref_s) - cs.quarter_turns * (io::stage::kPi / 2.0);
+      double se, ce;
+      SmallSinCos(eps, &se, &ce);
+      sin1 = sq * ce + cq * se;
+      cos1 = cq * ce - sq * se;
+      exp1 = ref_exp * SmallExp(-gamma1 * (gap - ref_gap));
+    }
+    const FieldSZ b = field_.SideAverageFieldFrom(sin1, cos1, exp1);
+    double bw[3] = {0.0, 0.0, b.b_z_T};
+    bw[ax] = b.b_s_T;
+    double uw[3];
+    Rotate(k.r, cs.u_body, uw);
+    double f[3];
+    Cross(uw, bw, f);
+    const double scale = side_force_per_A_ * currents_A[cs.coil];
+    for (double& fa : f) fa *= scale;
+    if (forcer_errors_active_) {
+      // Paper 003: F_t -> F_t (1 + eps_t), dF_z = eps_z F_t (platen frame).
+      const double ft = k.r[0][ax] * f[0] + k.r[1][ax] * f[1] + k.r[2][ax] * f[2];
+      const double et = config_.forcer_errors.epsilon_tangential[cs.forcer] * ft;
+      const double ez = config_.forcer_errors.epsilon_off_axis_z[cs.forcer] * ft;
+      for (int a = 0; a < 3; ++a) f[a] += et * k.r[a][ax] + ez * k.r[a][2];
+    }
+    double tq[3];
+    Cross(rw, f, tq);
+    for (int a = 0; a < 3; ++a) {
+      acc->f[a] += f[a];
+      acc->t[a] += tq[a];
+    }
+  }
+}
+
+void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
+  if (!config_.suspension.enabled) {
+    return;
+  }
   const double k4 = k_susp_ / 4.0;
   const double c4 = config_.suspension.damping_Ns_per_m / 4.0;
   const double h0 = config_.suspension.neutral_height_m;
-  Eigen::Vector3d torque_w = Eigen::Vector3d::Zero();
   for (int f = 0; f < kForcers; ++f) {
     const Eigen::Vector2d fc = ForcerCentre(f, config_.body.lever_arm_m);
     const Eigen::Vector3d rb(fc.x(), fc.y(), -com_arm_m_);
-    const Eigen::Vector3d rw = r * rb;
-    const double h = state.position_m.z() + rw.z() - rb.z();
-    const double hdot = state.velocity_m_per_s.z() + omega_w.cross(rw).z();
-    const Eigen::Vector3d fz(0.0, 0.0, -k4 * (h - h0) - c4 * hdot);
-    w.force_world_N += fz;
-    torque_w += rw.cross(fz);
+    double rw[3];
+    Rotate(k.r, rb, rw);
+    const double h = k.p[2] + rw[2] - rb.z();
+    const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
+    const double fz = -k4 * (h - h0) - c4 * hdot;
+    acc->f[2] += fz;
+    acc->t[0] += rw[1] * fz;
+    acc->t[1] -= rw[0] * fz;
   }
-  w.torque_body_Nm = r.transpose() * torque_w;
-  return w;
 }
 
-Plant::ContactResult Plant::ContactWrench(const BodyState& state) const {
-  ContactResult out{Wrench{}, 0.0, false};
+void Plant::AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const {
+  *normal_N = 0.0;
+  *touching = false;
   if (!config_.contact.enabled) {
-    return out;
+    return;
   }
-  const Eigen::Matrix3d r = state.attitude.normalized().toRotationMatrix();
-  const Eigen::Vector3d omega_w = r * state.omega_body_rad_per_s;
   const double c = config_.contact.corner_half_size_m;
   const double corners[4][2] = {{c, c}, {-c, c}, {-c, -c}, {c, -c}};
-  Eigen::Vector3d torque_w = Eigen::Vector3d::Zero();
   for (const auto& corner : corners) {
     const Eigen::Vector3d rb(corner[0], corner[1], -com_arm_m_);
-    const Eigen::Vector3d rw = r * rb;
-    const double h = state.position_m.z() + rw.z() - rb.z();
+    double rw[3];
+    Rotate(k.r, rb, rw);
+    const double h = k.p[2] + rw[2] - rb.z();
     if (h >= 0.0) {
       continue;
     }
-    const Eigen::Vector3d vel = state.velocity_m_per_s + omega_w.cross(rw);
+    double wxr[3];
+    Cross(k.omega_w, rw, wxr);
+    const double vel[3] = {k.v[0] + wxr[0], k.v[1] + wxr[1], k.v[2] + wxr[2]};
     // One-sided: the surface pushes, never pulls.
-    const double fn = std::max(0.0, -config_.contact.stiffness_N_per_m * h - config_.contact.damping_Ns_per_m * vel.z());
-    out.touching = true;
+    const double fn = std::max(0.0, -config_.contact.stiffness_N_per_m * h - config_.contact.damping_Ns_per_m * vel[2]);
+    *touching = true;
     if (fn <= 0.0) {
       continue;
     }
-    Eigen::Vector3d f(0.0, 0.0, fn);
-    const double vt = std::hypot(vel.x(), vel.y());
     const double vs = config_.contact.friction_velocity_m_per_s;
-    const double scale = config_.contact.friction_coefficient * fn / std::sqrt(vt * vt + vs * vs);
-    f.x() = -scale * vel.x();
-    f.y() = -scale * vel.y();
-    out.normal_N += fn;
-    out.wrench.force_world_N += f;
-    torque_w += rw.cross(f);
+    const double scale =
+        config_.contact.friction_coefficient * fn / std::sqrt(vel[0] * vel[0] + vel[1] * vel[1] + vs * vs);
+    const double f[3] = {-scale * vel[0], -scale * vel[1], fn};
+    double tq[3];
+    Cross(rw, f, tq);
+    for (int a = 0; a < 3; ++a) {
+      acc->f[a] += f[a];
+      acc->t[a] += tq[a];
+    }
+    *normal_N += fn;
   }
-  out.wrench.torque_body_Nm = r.transpose() * torque_w;
+}
+
+Wrench Plant::ToWrench(const Kinematics& k, const Accum& acc) {
+  Wrench w;
+  for (int a = 0; a < 3; ++a) {
+    w.force_world_N[a] = acc.f[a];
+    // body torque = R^T * world torque
+    w.torque_body_Nm[a] = k.r[0][a] * acc.t[0] + k.r[1][a] * acc.t[1] + k.r[2][a] * acc.t[2];
+  }
+  return w;
+}
+
+Wrench Plant::MagneticWrench(const BodyState& state, const double* currents_A) const {
+  const Kinematics k = MakeKinematics(state);
+  Accum acc{};
+  AddMagnetic(k, currents_A, &acc);
+  return ToWrench(k, acc);
+}
+
+Plant::ContactResult Plant::ContactWrench(const BodyState& state) const {
+  const Kinematics k = MakeKinematics(state);
+  Accum acc{};
+  ContactResult out{};
+  AddContact(k, &acc, &out.normal_N, &out.touching);
+  out.wrench = ToWrench(k, acc);
   return out;
 }
 
 Wrench Plant::TotalWrench(const BodyState& state, const double* currents_A) const {
-  Wrench w = MagneticWrench(state, currents_A);
-  const Wrench s = SuspensionWrench(state);
-  const ContactResult c = ContactWrench(state);
-  w.force_world_N += s.force_world_N + c.wrench.force_world_N;
-  w.torque_body_Nm += s.torque_body_Nm + c.wrench.torque_body_Nm;
+  const Kinematics k = MakeKinematics(state);
+  Accum acc{};
+  AddMagnetic(k, currents_A, &acc);
+  AddSuspension(k, &acc);
+  double normal = 0.0;
+  bool touching = false;
+  AddContact(k, &acc, &normal, &touching);
   if (config_.body.gravity_enabled) {
-    w.force_world_N.z() -= mass_ * config_.body.gravity_m_per_s2;
+    acc.f[2] -= mass_ * config_.body.gravity_m_per_s2;
   }
-  return w;
+  return ToWrench(k, acc);
 }
 
 BodyDerivative Plant::Derivative(const BodyState& state, const double* currents_A) const {

@@ -100,8 +100,8 @@ TEST(PlantAmplifier, NoiseFollowsPaper003Table1) {
   PlantConfig c = Floating();
   c.amplifier.current_noise_scale = 1.0;
   Plant plant(c, 42);
-  const auto cmd = AllCoils(13986, true);  // 213.4 mA
-  const double nominal = 0.5 * 13986 * 10.0 / 32768.0;
+  const auto cmd = AllCoils(1399, true);  // 213.5 mA
+  const double nominal = 0.5 * 1399 * 10.0 / 32768.0;
   double sum = 0, sum2 = 0;
   const int n = 20000;
   for (int k = 0; k < n; ++k) {

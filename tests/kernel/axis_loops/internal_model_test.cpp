@@ -23,7 +23,8 @@ struct TrackResult {
   double max_effort;
 };
 
-// Closed loop on one axis plant; r = amp sin(w0 t) (+ step), 1-tick delay.
+// Closed loop on one axis plant; r = amp cos(w0 t) (+ step), 1-tick delay.
+// Starting at y = 0 against r(0) = amp gives a transient to recover from.
 template <typename Scalar>
 TrackResult track(Axis axis, double amp, double seconds, double step_um = 0.0, double limit = 0.0,
                   double tt = 0.0) {
@@ -42,11 +43,11 @@ TrackResult track(Axis axis, double amp, double seconds, double step_um = 0.0, d
   TrackResult res{0, 0, 0};
   double u_prev = 0.0;
   for (int k = 0; k < n; ++k) {
-    const double r = amp * std::sin(w0 * k * kT) + step_um;
+    const double r = amp * std::cos(w0 * k * kT) + step_um;
     const double e = r - plant.y;
     if (k >= 2500 && k < 7500) res.max_err_first = std::fmax(res.max_err_first, std::fabs(e));
     if (k >= n - 5000) res.max_err_last = std::fmax(res.max_err_last, std::fabs(e));
-    const Scalar v = imr.update(Tr::from_double(e), Tr::from_double(k == 0 ? step_um : 0.0), Tr::zero());
+    const Scalar v = imr.update(Tr::from_double(e), Tr::from_double(k == 0 ? step_um + amp : 0.0), Tr::zero());
     const Scalar u = imr.saturate(v);
     imr.apply_limit(u);
     plant.step(u_prev);
@@ -54,6 +55,30 @@ TrackResult track(Axis axis, double amp, double seconds, double step_um = 0.0, d
     res.max_effort = std::fmax(res.max_effort, std::fabs(u_prev));
   }
   return res;
+}
+
+// The same experiment with the default PID: finite loop gain at w0, so a
+// finite (if small) tracking error remains.
+double pid_track_err(Axis axis, double amp, double seconds) {
+  AxisLoopConfig cfg = default_axis_loop_config(axis);
+  Pid2DofCoefficients<float> c;
+  CHECK(design_pid2dof<float>(cfg.pid, kFs, &c) == LoopDesignError::kOk);
+  Pid2DofState<float> st{};
+  Pid2Dof<float> pid(&c, &st);
+  const AxisPlant p = axis_plant(axis);
+  loops_test::AxisSim plant{p.gain * 1e6, p.damping_per_s, p.stiffness_per_s2};
+  const double w0 = static_cast<double>(cfg.imr.omega0_rad_s);
+  const int n = static_cast<int>(seconds * kFs);
+  double u_prev = 0.0, err = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double e = amp * std::cos(w0 * k * kT) - plant.y;
+    if (k >= n - 5000) err = std::fmax(err, std::fabs(e));
+    const float u = pid.saturate(pid.update(static_cast<float>(e), k == 0 ? static_cast<float>(amp) : 0.0f, 0.0f));
+    pid.apply_limit(u);
+    plant.step(u_prev);
+    u_prev = static_cast<double>(u);
+  }
+  return err;
 }
 
 }  // namespace
@@ -148,17 +173,27 @@ TEST(InternalModel, ClosedLoopTracksOmega0SinusoidWithVanishingError) {
     const double amp = 30.0;
     const TrackResult f = track<float>(axis, amp, 30.0);
     const TrackResult q = track<Q7_24>(axis, amp, 30.0);
-    std::printf("\n[imr %-3s] 30 um at w0: max|e| 1-3 s %.3g um, last 2 s: float %.3g um, Q7.24 %.3g um",
-                kAxisNames[axis_index(axis)], f.max_err_first, f.max_err_last, q.max_err_last);
-    CHECK(f.max_err_last < 1e-4 * amp);
+    const double pid_err = pid_track_err(axis, amp, 30.0);
+    std::printf("\n[imr %-3s] 30 um at w0: max|e| 1-3 s %.3g um, last 2 s: float %.3g um, Q7.24 %.3g um"
+                " (PID (27)-(33): %.3g um)",
+                kAxisNames[axis_index(axis)], f.max_err_first, f.max_err_last, q.max_err_last, pid_err);
+    // Vanishing: float down to its rounding floor (< 1e-6 of the amplitude).
+    // Q7.24's floor is set by the effort LSB (2^-24 A = 6e-8 A): on theta_z
+    // (473 rad/s^2 per A) that LSB alone is 2.8e-5 rad/s^2, and the loop
+    // dithers at ~0.4 nrad; tolerance 1e-4 of the amplitude (3 nm, 3 nrad).
+    CHECK(f.max_err_last < 1e-6 * amp);
     CHECK(q.max_err_last < 1e-4 * amp);
-    CHECK(f.max_err_last < 0.1 * f.max_err_first);
+    CHECK(f.max_err_last < 1e-3 * f.max_err_first);
+    CHECK(f.max_err_last < 0.01 * pid_err);
   }
 }
 
 TEST(InternalModel, AntiWindupOfEq17) {
-  // 50 um step on x with the effort limited to 0.05 A: without E the
-  // internal model winds up during saturation and overshoots badly.
+  // 50 um step on x with the effort limited to 0.05 A (the unsaturated
+  // response needs ~2.3 A): without E the internal model winds up during
+  // saturation and overshoots 60 %; eq (17)'s E with Tt = 10 ms keeps it
+  // near the unsaturated response's own overshoot (21 %, from the internal
+  // model's zeros), at the price of a slower settle.
   for (int fixed = 0; fixed < 2; ++fixed) {
     auto run = [&](double tt, double* overshoot, double* settle) {
       using maglev::numeric::Q7_24;
@@ -204,7 +239,8 @@ TEST(InternalModel, AntiWindupOfEq17) {
     std::printf("\n[imr x 50um step, 0.05 A, %s] with E: overshoot %.1f %% settle %.2f s; E = 0: %.1f %%, %.2f s",
                 fixed ? "Q7.24" : "float", os_aw, st_aw, os_no, st_no);
     CHECK(os_aw < 0.5 * os_no);
-    CHECK(st_aw < st_no);
+    CHECK(os_aw < 25.0);
+    CHECK(st_aw < 1.0);
   }
 }
 

@@ -37,6 +37,9 @@ class HalbachField {
   // from gap g to g + d). N * I * p * (u x B_avg) is then exactly the volume
   // integral of eqs (5)-(7) for a straight side of effective length p.
   FieldSZ SideAverageField(double s_m, double gap_m) const;
+  // The same from sin/cos(gamma_1 s) and exp(-gamma_1 gap) already known
+  // (the plant derives them per forcer to save transcendental calls).
+  FieldSZ SideAverageFieldFrom(double sin1, double cos1, double exp1) const;
 
   // b*(z) of eq (20) with n = 1 only, N/A (force amplitude of one coil).
   double BStar(double gap_m) const;

@@ -76,6 +76,19 @@ struct CoilSide {
   int array_axis;            // 0: sees the X array (side along Y'), 1: the Y array
   Eigen::Vector3d r_body_m;  // midpoint of the cross-section centre line
   Eigen::Vector3d u_body;    // unit direction of positive coil current
+  // Nominal phase offset from the forcer's first side, in quarter pitches
+  // (the forcer's sides are L/4 apart): lets the force loop derive every
+  // side's sin/cos from one sincos per forcer.
+  int quarter_turns;
+};
+
+// Rotation and rates evaluated once per derivative (plain arrays: the 3x3
+// products stay inlined in the hot loop).
+struct Kinematics {
+  double r[3][3];
+  double p[3];
+  double v[3];
+  double omega_w[3];
 };
 
 class Plant {
@@ -125,8 +138,16 @@ class Plant {
     double normal_N;
     bool touching;
   };
+  // Force (world) and torque (world, about the CoM) accumulators.
+  struct Accum {
+    double f[3];
+    double t[3];
+  };
+  void AddMagnetic(const Kinematics& k, const double* currents_A, Accum* acc) const;
+  void AddSuspension(const Kinematics& k, Accum* acc) const;
+  void AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const;
+  static Wrench ToWrench(const Kinematics& k, const Accum& acc);
   ContactResult ContactWrench(const BodyState& state) const;
-  Wrench SuspensionWrench(const BodyState& state) const;
   void UpdateTruth();
   double InterferometerDisplacement(int axis) const;
 
