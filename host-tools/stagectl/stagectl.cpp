@@ -78,8 +78,13 @@ struct Options {
   std::vector<std::string> args;
 };
 
+// Called before exiting: an engineer unlock done by this run is undone, so
+// the controller never stays unlocked after stagectl returns.
+void (*g_relock)() = nullptr;
+
 [[noreturn]] void die(int code, const std::string& msg) {
   std::cerr << "stagectl: " << msg << "\n";
+  if (g_relock != nullptr) g_relock();
   std::exit(code);
 }
 
@@ -163,9 +168,22 @@ class Client {
                         (o.rtu_device.empty() ? o.tcp_host + ":" + std::to_string(o.tcp_port) : o.rtu_device) + ": " +
                         modbus_strerror(errno));
     }
-    if (o.engineer) write_raw(def(RegId::access_key), kEngineerKey, "access.key");
+    if (o.engineer) {
+      write_raw(def(RegId::access_key), kEngineerKey, "access.key");
+      self_ = this;
+      g_relock = [] {
+        Client* c = self_;
+        self_ = nullptr;
+        g_relock = nullptr;
+        if (c != nullptr) {
+          std::uint16_t zero = 0;
+          modbus_write_registers(c->ctx_, def(RegId::access_key).address, 1, &zero);
+        }
+      };
+    }
   }
   ~Client() {
+    if (g_relock != nullptr) g_relock();
     modbus_close(ctx_);
     modbus_free(ctx_);
   }
@@ -236,6 +254,7 @@ class Client {
     }
   }
   modbus_t* ctx_ = nullptr;
+  static inline Client* self_ = nullptr;
 };
 
 const char* const kStateNames[] = {"idle", "homing", "in-plane lock", "lift", "z lock",

@@ -183,3 +183,29 @@ TEST(KernelBinding, SavedConfigurationIsAppliedAtBoot) {
   LONGS_EQUAL(1, modbus_read_registers(rebooted.ctx, addr(RegId::persist_flags), 1, &flags));
   LONGS_EQUAL(kLoadedBankA, flags);
 }
+
+TEST(KernelBinding, RecordTheKernelRefusesFallsBackToKernelDefaults) {
+  {
+    // A record whose values are each in the map's range but that the kernel
+    // refuses as a whole (travel window no longer contains the reference limits).
+    persistence::RamFlash f(flash, kSector, 2);
+    persistence::ConfigStore store(f, 0, 1);
+    store.load();
+    ConfigImage image = ConfigImage::defaults();
+    image.set(RegId::limit_x_max, 0.001);
+    image.set(RegId::gain_x_kp, 20000.0);
+    CHECK(store.save(image));
+  }
+  Stage st(flash);
+  const kernel::KernelConfig c = st.config();
+  DOUBLES_EQUAL(36000.0, static_cast<double>(c.axis[0].pid.kp), 0.0);  // kernel default, not 20000
+  DOUBLES_EQUAL(0.028, static_cast<double>(c.supervisor.x_max_m), 1e-7);
+  std::uint16_t flags = 0;
+  LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::persist_flags), 1, &flags));
+  CHECK(flags & kRefused);
+  CHECK(flags & kLoadedDefaults);
+  // And the map serves the configuration the kernel actually runs.
+  std::uint16_t r[2];
+  LONGS_EQUAL(2, modbus_read_registers(st.ctx, addr(RegId::gain_x_kp), 2, r));
+  DOUBLES_EQUAL(36000.0, get_f32(r), 0.0);
+}

@@ -217,6 +217,18 @@ TEST(RtuPty, SaveToFlashThroughTheMap) {
   LONGS_EQUAL(1, modbus_read_registers(ctx, addr(RegId::persist_flags), 1, &flags));
   CHECK(flags & kUnsaved);
   CHECK(flags & kLoadedDefaults);
+  {
+    std::lock_guard<std::mutex> lock(pty->m);
+    pty->dev.fail_save = true;
+  }
+  LONGS_EQUAL(-1, modbus_write_register(ctx, addr(RegId::config_save), 1));
+  LONGS_EQUAL(EMBXSFAIL, errno);  // 04 server device failure
+  LONGS_EQUAL(1, modbus_read_registers(ctx, addr(RegId::persist_flags), 1, &flags));
+  CHECK(flags & kUnsaved);
+  {
+    std::lock_guard<std::mutex> lock(pty->m);
+    pty->dev.fail_save = false;
+  }
   LONGS_EQUAL(1, modbus_write_register(ctx, addr(RegId::config_save), 1));
   LONGS_EQUAL(1, modbus_read_registers(ctx, addr(RegId::persist_flags), 1, &flags));
   LONGS_EQUAL(kLoadedBankA, flags);

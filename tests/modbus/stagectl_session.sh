@@ -41,7 +41,7 @@ contains "$WORK/out" "gain.x.kp = 30000  # A/m" "kp read back"
 expect 0 "set mm" -- set max_velocity.x 120mm/s
 contains "$WORK/out" "max_velocity.x = 0.119999997  # m/s" "mm/s converted"
 expect 0 "set um" -- --engineer set following_error.z 12 um
-contains "$WORK/out" "following_error.z = 1.19999996e-05  # m" "um converted"
+contains "$WORK/out" "following_error.z = 1.20000004e-05  # m" "um converted"
 expect 0 "status" -- status
 contains "$WORK/out" "state      = idle (0)" "status state"
 contains "$WORK/out" "[unsaved changes]" "unsaved flag"
@@ -90,6 +90,30 @@ expect 0 "after restart" -- get seq.nominal_height
 contains "$WORK/out" "seq.nominal_height = 2.49999994e-05  # m" "um from the unit comment"
 expect 0 "status after restart" -- status
 contains "$WORK/out" "flags 0x1 reason 0 sequence 1" "loaded from bank A"
+stop_server
+
+# --- the same client over Modbus RTU: the firmware RtuServer on a pty -----------
+rm -f "$WORK/port"
+"$SERVE" --rtu-pty 115200 --flash "$WORK/flash.bin" --port-file "$WORK/port" --seconds 60 >"$WORK/serve-rtu.log" 2>&1 &
+SERVER_PID=$!
+for _ in $(seq 100); do [ -s "$WORK/port" ] && break; sleep 0.05; done
+PTY=$(cat "$WORK/port")
+rtu() {
+  local want=$1 what=$2; shift 3
+  "$STAGECTL" --rtu "$PTY,115200" "$@" >"$WORK/out" 2>"$WORK/err"
+  local got=$?
+  if [ "$got" -eq "$want" ]; then passes=$((passes + 1)); else
+    fails=$((fails + 1)); echo "FAIL: rtu $what: exit $got, expected $want"; cat "$WORK/out" "$WORK/err"; fi
+}
+rtu 0 "get over RTU" -- get gain.z.kp
+contains "$WORK/out" "gain.z.kp = 41000  # A/m" "RTU reads the saved gain"
+rtu 0 "set over RTU" -- --engineer set gain.x.ki 2.5e6
+contains "$WORK/out" "gain.x.ki = 2500000  # A/(m*s)" "RTU write"
+rtu 3 "range over RTU" -- --engineer set gain.x.derivative_filter 2kHz
+contains "$WORK/err" "gain.x.derivative_filter: value 2kHz is out of range [1, 1250] Hz" "RTU range message"
+rtu 7 "move over RTU" -- move y 1mm
+rtu 0 "status over RTU" -- status
+contains "$WORK/out" "state      = idle (0)" "RTU status"
 stop_server
 
 # --- cannot connect --------------------------------------------------------------

@@ -39,7 +39,7 @@ const char* when_name(WriteWhen w) {
     case WriteWhen::kAlways: return "always";
     case WriteWhen::kNotMoving: return "not moving";
     case WriteWhen::kIdle: return "idle (landed)";
-    case WriteWhen::kGains: return "not moving, or live tuning";
+    case WriteWhen::kGains: return "idle, or live tuning";
   }
   return "?";
 }
@@ -52,6 +52,16 @@ std::string num(double v, RegType t) {
     std::snprintf(buf, sizeof buf, "%.0f", v);
   }
   return buf;
+}
+
+// Markdown: a '|' inside a cell must be escaped.
+std::string cell(const char* text) {
+  std::string out;
+  for (const char* p = text; *p != '\0'; ++p) {
+    if (*p == '|') out += '\\';
+    out += *p;
+  }
+  return out;
 }
 
 std::string table() {
@@ -69,10 +79,10 @@ std::string table() {
     if (width(d.type) == 2) addr += "-" + std::to_string(d.address + 1);
     const bool ro = d.access == Access::kReadOnly;
     std::string def = ro ? "-" : num(d.default_value, d.type);
-    o << "| " << addr << " | `" << d.name << "` | " << type_name(d.type) << " | " << d.unit << " | "
+    o << "| " << addr << " | `" << d.name << "` | " << type_name(d.type) << " | " << cell(d.unit) << " | "
       << (ro ? "-" : num(d.min, d.type)) << " | " << (ro ? "-" : num(d.max, d.type)) << " | " << def << " | "
       << access_name(d.access) << " | " << when_name(d.when) << " | " << (d.persisted ? "yes" : "no") << " | "
-      << d.description << " |\n";
+      << cell(d.description) << " |\n";
   }
   o << "\n" << kEnd;
   return o.str();

@@ -53,35 +53,6 @@ HalbachField::HalbachField(const FieldConfig& config)
 
 namespace {
 
-// sum_h amp[h] e^{-gamma_n z} (sin, cos)(gamma_n s) by recurrences: one
-// sincos and one exp per call, whatever the number of harmonics.
-inline FieldSZ SumHarmonicsFrom(const double* amp, int harmonics, double s1, double c1, double e1) {
-  double bs = amp[0] * e1 * s1;
-  double bz = amp[0] * e1 * c1;
-  if (harmonics > 1) {
-    // e^{j4 th}, e^{-4 gamma1 z}
-    const double s2 = 2.0 * s1 * c1;
-    const double c2 = c1 * c1 - s1 * s1;
-    const double s4 = 2.0 * s2 * c2;
-    const double c4 = c2 * c2 - s2 * s2;
-    const double e2 = e1 * e1;
-    const double e4 = e2 * e2;
-    double sn = s1;
-    double cn = c1;
-    double en = e1;
-    for (int h = 1; h < harmonics; ++h) {
-      const double sn_next = sn * c4 + cn * s4;
-      const double cn_next = cn * c4 - sn * s4;
-      sn = sn_next;
-      cn = cn_next;
-      en *= e4;
-      bs += amp[h] * en * sn;
-      bz += amp[h] * en * cn;
-    }
-  }
-  return {bs, bz};
-}
-
 inline FieldSZ SumHarmonics(const double* amp, int harmonics, double gamma1, double s, double z) {
   const double th = gamma1 * s;
   return SumHarmonicsFrom(amp, harmonics, std::sin(th), std::cos(th), std::exp(-gamma1 * z));
@@ -95,10 +66,6 @@ FieldSZ HalbachField::PointField(double s_m, double height_m) const {
 
 FieldSZ HalbachField::SideAverageField(double s_m, double gap_m) const {
   return SumHarmonics(side_amp_, harmonics_, gamma1_, s_m, gap_m);
-}
-
-FieldSZ HalbachField::SideAverageFieldFrom(double sin1, double cos1, double exp1) const {
-  return SumHarmonicsFrom(side_amp_, harmonics_, sin1, cos1, exp1);
 }
 
 double HalbachField::BStar(double gap_m) const { return m0_ * BStarPerM0(1, gap_m, config_); }

@@ -163,7 +163,7 @@ TEST(PlantDynamics, LinearizedPlantMatchesIdentifiedTransferFunctions) {
   // theta_z: the plant has a real (unmodelled by eq 25) torsional stiffness:
   // the two Fx forcers' base points sit at x -/+ l theta_z, so the lift
   // currents, commutated at the centre's x, leave a thrust gamma_1 l theta_z
-  // F_z per forcer: k_thz = gamma_1 l^2 m g ~ 2.5 N m/rad (4.2 Hz with Iz).
+  // F_z per forcer: k_thz = -gamma_1 l^2 m g ~ -2.5 N m/rad (negative: 4.2 Hz with Iz).
   // The pure-mass model (25) therefore holds from ~30 Hz on (crossover 81 Hz).
   for (double f : {50.0, 81.3, 200.0}) {
     worst = std::max(worst, CheckTf(lin, 2, f, stage::kIz_kgm2, 0, 0, "thz (25)"));
@@ -172,7 +172,7 @@ TEST(PlantDynamics, LinearizedPlantMatchesIdentifiedTransferFunctions) {
   const double l = stage::kLeverArm_m;
   std::printf("  theta_z stiffness from commutation %.3f N m/rad (gamma_1 l^2 m g = %.3f)\n", k_thz,
               stage::kGamma1_per_m * l * l * m * stage::kGravity_m_per_s2);
-  DOUBLES_EQUAL(stage::kGamma1_per_m * l * l * m * stage::kGravity_m_per_s2, k_thz, 0.1);
+  DOUBLES_EQUAL(-stage::kGamma1_per_m * l * l * m * stage::kGravity_m_per_s2, k_thz, 0.1);  // destabilizing
   for (double f : {0.5, 5.0, 50.0, 200.0}) {
     worst = std::max(worst, CheckTf(lin, 3, f, m, stage::kZDamping_Ns_per_m, stage::kZStiffness_N_per_m, "z (30)"));
     worst = std::max(worst, CheckTf(lin, 4, f, stage::kIx_kgm2, 1.21, 128.0, "thx (31)"));

@@ -84,6 +84,8 @@ TEST(Pid2Dof, DefaultsAreThePapersGains) {
   DOUBLES_EQUAL(473.25, axis_plant(Axis::kThetaZ).gain, 0.01);
   DOUBLES_EQUAL(896.68, axis_plant(Axis::kThetaX).gain, 0.01);
   DOUBLES_EQUAL(94600.0 / 0.75, axis_plant(Axis::kZ).stiffness_per_s2, 1e-6);
+  // u_ff = m a / (2 b*): 1.2 m/s^2 on x needs 0.75 * 1.2 / 1.7037 = 0.528 A.
+  DOUBLES_EQUAL(0.75 * 1.2 / 1.7037, 1.2 * acceleration_feedforward_A_per_si(Axis::kX), 1e-12);
 }
 
 TEST(Pid2Dof, FrequencyResponseMatchesExactDiscreteAndContinuous) {

@@ -41,7 +41,7 @@ class ProtocolDevice final : public Device {
     commands.push_back({code, axis, value});
     return 0;
   }
-  bool save_config(const ConfigImage& config) override { return store_.save(config); }
+  bool save_config(const ConfigImage& config) override { return !fail_save && store_.save(config); }
   PersistStatus persist_status() const override { return store_.status(); }
 
   struct Command {
@@ -51,6 +51,7 @@ class ProtocolDevice final : public Device {
   };
   Activity activity_ = Activity::kIdle;
   bool refuse_config = false;
+  bool fail_save = false;  // flash write failure
   bool last_live_tuning = false;
   int apply_calls = 0;
   ConfigImage applied = ConfigImage::defaults();

@@ -50,6 +50,10 @@ KernelConfig default_kernel_config() {
   c.supervisor.interferometer_lsb_m = static_cast<float>(stage::kInterferometerLsb_m);
   c.payload_mass_kg = 0.0f;
   c.live_tuning = false;
+  c.acceleration_feedforward = true;
+  c.antiwindup = true;
+  for (float& j : c.payload_inertia_kgm2) j = 0.0f;
+  c.excitation = ExcitationLimits{};
   return c;
 }
 
@@ -84,11 +88,18 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
   }
   Applied& scratch = applied_[1 - active_];
   for (int a = 0; a < kAxisCount; ++a) {
-    if (c.axis[a].type != LoopType::kPid2Dof) {
+    const LoopType type = c.axis[a].type;
+    if (type != LoopType::kPid2Dof && type != LoopType::kInternalModel) {
       status_.config_axis = static_cast<std::uint8_t>(a);
       return refuse(ConfigError::kUnsupportedLoopType);
     }
-    if (design_pid2dof<Scalar>(c.axis[a].pid, rate, &scratch.pid[a]) != LoopDesignError::kOk) {
+    scratch.type[a] = type;
+    // Only the selected loop must design; the other keeps zero coefficients.
+    const LoopDesignError de =
+        type == LoopType::kPid2Dof
+            ? design_pid2dof<Scalar>(c.axis[a].pid, rate, &scratch.pid[a])
+            : design_internal_model<Scalar>(c.axis[a].imr, rate, &scratch.imr[a]);  // paper 002 (14)-(17)
+    if (de != LoopDesignError::kOk) {
       status_.config_axis = static_cast<std::uint8_t>(a);
       return refuse(ConfigError::kAxisLoop);
     }
@@ -105,20 +116,28 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
   if (ApplyForceAllocationConfig<Scalar>(alloc, &scratch.allocation) != ForceAllocationError::kOk) {
     return refuse(ConfigError::kAllocation);
   }
+  for (float j : c.payload_inertia_kgm2) {
+    if (!(j >= 0.0f && j <= 0.01f)) return refuse(ConfigError::kPayload);
+  }
   const double two_b_star = scratch.allocation.two_b_star_N_per_A;
-  const double inertia[kAxisCount] = {alloc.mass_kg + alloc.payload_kg, alloc.mass_kg + alloc.payload_kg,
-                                      stage::kIz_kgm2, alloc.mass_kg + alloc.payload_kg,
-                                      stage::kIx_kgm2, stage::kIy_kgm2};
+  const double m_total = alloc.mass_kg + alloc.payload_kg;
+  const double inertia[kAxisCount] = {m_total,
+                                      m_total,
+                                      stage::kIz_kgm2 + static_cast<double>(c.payload_inertia_kgm2[0]),
+                                      m_total,
+                                      stage::kIx_kgm2 + static_cast<double>(c.payload_inertia_kgm2[1]),
+                                      stage::kIy_kgm2 + static_cast<double>(c.payload_inertia_kgm2[2])};
   for (int a = 0; a < kAxisCount; ++a) {
-    // Feed-forward effort per kernel acceleration unit (um/s^2): A per um/s^2.
-    scratch.inertia_over_two_b_star[a] = Traits::from_double(inertia[a] / two_b_star);
+    // Acceleration feed-forward, eq (22) inverted: U = (m or I) a / (2 b*), A per SI acceleration.
+    scratch.inertia_over_two_b_star[a] = inertia[a] / two_b_star;
   }
   // Reference limits: inside the supervisor window, positive rates.
   const ReferenceLimits& r = c.references;
   const SupervisorConfig& sv = c.supervisor;
   for (int a = 0; a < kAxisCount; ++a) {
     if (!(r.position_min[a] < r.position_max[a]) || !finite_positive(r.max_velocity[a]) ||
-        !finite_positive(r.max_acceleration[a]) || !finite_positive(r.max_step[a]) || r.max_step[a] > 100e-6f) {
+        !finite_positive(r.max_acceleration[a]) || !finite_positive(r.max_step[a]) || r.max_step[a] > 100e-6f ||
+        !finite_positive(r.max_jerk[a])) {
       return refuse(ConfigError::kReferenceLimits);
     }
   }
@@ -128,6 +147,14 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
       r.position_max[3] > sv.z_max_m || r.position_min[4] < -sv.tilt_limit_rad ||
       r.position_max[4] > sv.tilt_limit_rad || r.position_min[5] < -sv.tilt_limit_rad ||
       r.position_max[5] > sv.tilt_limit_rad) {
+    return refuse(ConfigError::kReferenceLimits);
+  }
+  // Excitation: bounded amplitude (never more than the coil peak), lines below Nyquist.
+  const ExcitationLimits& ex = c.excitation;
+  if (!finite_positive(ex.max_amplitude_A) || ex.max_amplitude_A > c.supervisor.peak_current_A ||
+      !finite_positive(ex.max_frequency_Hz) || ex.max_frequency_Hz >= 0.5f * c.servo_rate_Hz ||
+      !finite_positive(ex.max_duration_s) ||
+      static_cast<double>(ex.max_duration_s) * rate > 4.0e9) {
     return refuse(ConfigError::kReferenceLimits);
   }
   if (validate(c.sequencer, c.servo_rate_Hz) != SequencerConfigError::kOk) return refuse(ConfigError::kSequencer);
@@ -143,10 +170,13 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
                              same_bytes(c.references, config_.references) &&
                              same_bytes(c.sequencer, config_.sequencer) &&
                              same_bytes(c.supervisor, config_.supervisor) &&
-                             c.payload_mass_kg == config_.payload_mass_kg;
+                             c.payload_mass_kg == config_.payload_mass_kg &&
+                             same_bytes(c.payload_inertia_kgm2, config_.payload_inertia_kgm2);
     if (!locked_same) return refuse(ConfigError::kLockedWhileLevitated);
     bool gains_same = true;
     for (int a = 0; a < kAxisCount; ++a) gains_same = gains_same && same_bytes(c.axis[a], config_.axis[a]);
+    gains_same = gains_same && c.acceleration_feedforward == config_.acceleration_feedforward &&
+                 c.antiwindup == config_.antiwindup;
     if (!gains_same && !c.live_tuning) return refuse(ConfigError::kGainsLockedWhileLevitated);
   }
 
@@ -155,6 +185,22 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
   if (!same_bytes(c.measurement, config_.measurement) || !s2p_.lsb_den) s2p_ = s2p_scratch;
   active_ = 1 - active_;
   config_ = c;
+  // A live loop-type switch hands the effort over (approximately bumpless):
+  // the new loop's integral state starts at the old loop's last output.
+  for (int a = 0; a < kAxisCount; ++a) {
+    const LoopType t = applied_[active_].type[a];
+    if (t == running_type_[a]) continue;
+    const Scalar e = running_type_[a] == LoopType::kPid2Dof ? pid_state_[a].prev_error : imr_state_[a].prev_d_input;
+    if (t == LoopType::kInternalModel) {
+      const Scalar u = pid_state_[a].last_output;
+      InternalModelRegulator<Scalar>(&applied_[active_].imr[a], &imr_state_[a]).reset(e);
+      imr_state_[a].xi[0] = Traits::acc_from_scalar(u);
+      imr_state_[a].last_output = u;
+    } else {
+      Pid2Dof<Scalar>(&applied_[active_].pid[a], &pid_state_[a]).reset(imr_state_[a].last_output, e);
+    }
+    running_type_[a] = t;
+  }
   sequencer_.configure(c.sequencer, c.servo_rate_Hz);
   supervisor_.configure(c.supervisor, c.servo_rate_Hz);
   homing_needed_ticks_ = static_cast<std::uint32_t>(c.sequencer.homing_time_s * c.servo_rate_Hz) + 1u;
@@ -188,8 +234,14 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
   }
   if (cmd.type == MotionType::kHold) {
     for (Profile& p : profile_) p.active = false;
+    excitation_.active = false;
     return CommandResult::kAccepted;
   }
+  if (cmd.type == MotionType::kStopExcitation) {
+    excitation_.active = false;
+    return CommandResult::kAccepted;
+  }
+  if (cmd.type == MotionType::kExcite) return start_excitation(cmd);
   if (cmd.type == MotionType::kMoveJerkLimited || cmd.type == MotionType::kCircle ||
       cmd.type == MotionType::kSinusoid) {
     return CommandResult::kUnsupported;
@@ -238,6 +290,82 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
   p.tick = 0;
   p.active = true;
   return CommandResult::kAccepted;
+}
+
+template <typename Scalar>
+CommandResult Controller<Scalar>::start_excitation(const MotionCommand& cmd) {
+  if (!sequencer_.output().motion_allowed) return CommandResult::kRefusedNotReady;
+  const int a = axis_index(cmd.axis);
+  if (a < 0 || a >= kAxisCount) return CommandResult::kRefusedOutOfRange;
+  const ExcitationLimits& lim = config_.excitation;
+  const int n = cmd.harmonics;
+  const double fs = static_cast<double>(config_.servo_rate_Hz);
+  if (n < 1 || n > kMaxExcitationHarmonics || !(cmd.amplitude > 0.0) ||
+      !(cmd.amplitude <= static_cast<double>(lim.max_amplitude_A)) || !(cmd.frequency_Hz > 0.0) ||
+      !(cmd.frequency_Hz * n <= static_cast<double>(lim.max_frequency_Hz)) || !(cmd.duration_s >= 0.0) ||
+      !(cmd.duration_s <= static_cast<double>(lim.max_duration_s))) {
+    return CommandResult::kRefusedExcitation;
+  }
+  // Line k at k f (quantised to the phase-increment grid fs / 2^32 = 0.6 uHz),
+  // Schroeder phase -pi k (k-1) / N (low crest factor), amplitude A / N each:
+  // |d| <= A holds for every tick whatever the phases.
+  constexpr double kTurn = 4294967296.0;
+  const double inc1 = std::round(cmd.frequency_Hz / fs * kTurn);
+  if (!(inc1 >= 1.0)) return CommandResult::kRefusedExcitation;
+  Excitation ex;
+  ex.axis = a;
+  for (int k = 0; k < kMaxExcitationHarmonics; ++k) {
+    const int h = k + 1;
+    const bool used = h <= n;
+    ex.increment[k] = used ? static_cast<std::uint32_t>(static_cast<double>(h) * inc1) : 0u;
+    const double frac = -static_cast<double>(h * (h - 1)) / (2.0 * n);
+    const double wrapped = frac - std::floor(frac);
+    ex.phase[k] = static_cast<std::uint32_t>(static_cast<std::uint64_t>(std::llround(wrapped * kTurn)) & 0xFFFFFFFFu);
+    ex.amplitude[k] = used ? Traits::from_double(cmd.amplitude / n) : Traits::zero();
+  }
+  ex.tick = 0;
+  ex.duration_ticks = static_cast<std::uint32_t>(std::llround(cmd.duration_s * fs));
+  ex.active = true;
+  excitation_ = ex;
+  status_.excitation_frequency_Hz = static_cast<float>(inc1 * fs / kTurn);
+  status_.excitation_axis = static_cast<std::uint8_t>(a);
+  return CommandResult::kAccepted;
+}
+
+template <typename Scalar>
+Scalar Controller<Scalar>::loop_update(int a, Scalar e_um, Scalar step_um, Scalar ff_A) {
+  const Applied& ap = applied_[active_];
+  if (ap.type[a] == LoopType::kInternalModel) {
+    return InternalModelRegulator<Scalar>(&ap.imr[a], &imr_state_[a]).update(e_um, step_um, ff_A);
+  }
+  return Pid2Dof<Scalar>(&ap.pid[a], &pid_state_[a]).update(e_um, step_um, ff_A);
+}
+
+template <typename Scalar>
+Scalar Controller<Scalar>::loop_saturate(int a, Scalar v) const {
+  const Applied& ap = applied_[active_];
+  return numeric::clamp_abs(v, ap.type[a] == LoopType::kInternalModel ? ap.imr[a].effort_limit
+                                                                      : ap.pid[a].effort_limit);
+}
+
+template <typename Scalar>
+void Controller<Scalar>::loop_apply_limit(int a, Scalar applied_A) {
+  const Applied& ap = applied_[active_];
+  if (ap.type[a] == LoopType::kInternalModel) {
+    InternalModelRegulator<Scalar>(&ap.imr[a], &imr_state_[a]).apply_limit(applied_A);
+  } else {
+    Pid2Dof<Scalar>(&ap.pid[a], &pid_state_[a]).apply_limit(applied_A);
+  }
+}
+
+template <typename Scalar>
+void Controller<Scalar>::loop_reset(int a, Scalar e_um) {
+  const Applied& ap = applied_[active_];
+  if (ap.type[a] == LoopType::kInternalModel) {
+    InternalModelRegulator<Scalar>(&ap.imr[a], &imr_state_[a]).reset(e_um);
+  } else {
+    Pid2Dof<Scalar>(&ap.pid[a], &pid_state_[a]).reset(Traits::zero(), e_um);
+  }
 }
 
 template <typename Scalar>
@@ -344,9 +472,25 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
       reference_pm_[a] = numeric::si_to_pico(static_cast<double>(so.z_reference_m));
     }
     profile_accel_[a] = acc_now;
-    // m a / (2 b*), acceleration in kernel units (um/s^2 -> scaled by 1e6 below).
-    accel_ff[a] = Traits::from_double(acc_now * 1e6) * ap.inertia_over_two_b_star[a];
+    // u_ff = (m or I) a / (2 b*) in double (a in SI, up to 1.5e6 um/s^2 would
+    // not fit a Scalar), one rounding to A.
+    accel_ff[a] = config_.acceleration_feedforward ? Traits::from_double(acc_now * ap.inertia_over_two_b_star[a])
+                                                   : Traits::zero();
   }
+
+  // --- 5b. excitation d (constant work: every harmonic slot runs) ------------------
+  Excitation& ex = excitation_;
+  if (ex.active && (!so.motion_allowed || (ex.duration_ticks != 0 && ex.tick >= ex.duration_ticks))) {
+    ex.active = false;
+  }
+  Scalar d_sum = Traits::zero();
+  for (int k = 0; k < kMaxExcitationHarmonics; ++k) {
+    d_sum += ex.amplitude[k] * Traits::sin_cos(ex.phase[k]).sin;
+    ex.phase[k] += ex.increment[k];  // uint32 wrap = one turn
+  }
+  Scalar excitation[kAxisCount];
+  for (int a = 0; a < kAxisCount; ++a) excitation[a] = (ex.active && a == ex.axis) ? d_sum : Traits::zero();
+  ex.tick += ex.active ? 1u : 0u;
 
   // --- 6. axis loops (all run; outputs selected by the closed mask) ----------------
   const Scalar ff_fraction = Traits::from_float(so.feedforward_fraction);
@@ -355,19 +499,22 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   const Scalar gravity_A = ff_fraction * GravityFeedForward_A<Scalar>(Traits::one(), ap.allocation);
   Scalar effort[kAxisCount];
   Scalar loop_out[kAxisCount];
+  Scalar aw_offset[kAxisCount];  // loop output before the biquads minus after them
   for (int a = 0; a < kAxisCount; ++a) {
     // Only the error (and this tick's explicit step) become Scalar: +-128 um.
     const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_pm_[a] - measured_pm_[a]);
     const Scalar dr_um = numeric::pico_to_micro<Scalar>(step_pm[a]);
     const Scalar ff = a == axis_index(Axis::kZ) ? gravity_A + accel_ff[a] : accel_ff[a];
-    Pid2Dof<Scalar> pid(&ap.pid[a], &pid_state_[a]);
-    Scalar v = pid.update(e_um, dr_um, ff);
+    const Scalar v_loop = loop_update(a, e_um, dr_um, ff);
+    Scalar v = v_loop;
     for (int f = 0; f < kMaxBiquadStages; ++f) v = biquad_update(ap.filter[a][f], filter_state_[a][f], v);
-    loop_out[a] = pid.saturate(v);
+    aw_offset[a] = v_loop - v;
+    loop_out[a] = loop_saturate(a, v);
     const bool closed = (so.closed_axes & (1u << a)) != 0;
     // Open axis: no feedback, only the feed-forward (the gravity lift of z).
-    effort[a] = closed ? loop_out[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
-    if (!closed) pid.reset(Traits::zero(), e_um);
+    // Closed axis: the loop plus the excitation d (zero unless kExcite runs).
+    effort[a] = closed ? loop_out[a] + excitation[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
+    if (!closed) loop_reset(a, e_um);
   }
 
   // --- 7. force allocation with the whole-vector current limit ----------------------
@@ -375,11 +522,16 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   AllocateCurrents<Scalar>(effort, measured_pm_[0], measured_pm_[1], ap.allocation, &out);
 
   // --- 8. anti-windup: the loops learn what was really applied (k U) ----------------
+  // The loop's share of k U is k U - d; the comparison is against the signal
+  // that entered the clamp (after the biquads), so the back-calculation sees
+  // exactly the clamp + current-limit loss: pass (k U - d) + (v_loop - v_filtered).
   for (int a = 0; a < kAxisCount; ++a) {
-    Pid2Dof<Scalar> pid(&ap.pid[a], &pid_state_[a]);
     const bool closed = (so.closed_axes & (1u << a)) != 0;
-    // Open axes: applied == last output, i.e. no correction (their state was reset).
-    pid.apply_limit(closed ? out.applied_effort_A[a] : pid.state().last_output);
+    const Scalar last = ap.type[a] == LoopType::kInternalModel ? imr_state_[a].last_output
+                                                                : pid_state_[a].last_output;
+    const Scalar applied_loop = out.applied_effort_A[a] - excitation[a] + aw_offset[a];
+    // Open axes (state reset) and anti-windup off: no correction.
+    loop_apply_limit(a, (closed && config_.antiwindup) ? applied_loop : last);
   }
 
   // --- 9. DAC codes; amplifiers only when the sequencer says so ---------------------
@@ -406,7 +558,16 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   status_.reaction = sup.reaction;
   status_.saturated = out.saturated;
   status_.scale_k = Traits::to_float(out.scale_k);
-  for (int a = 0; a < kAxisCount; ++a) status_.effort_A[a] = enable ? Traits::to_float(effort[a]) : 0.0f;
+  for (int a = 0; a < kAxisCount; ++a) {
+    status_.effort_A[a] = enable ? Traits::to_float(effort[a]) : 0.0f;
+    status_.total_effort_A[a] = status_.effort_A[a];
+    status_.loop_effort_A[a] = enable ? Traits::to_float(loop_out[a]) : 0.0f;
+    status_.applied_effort_A[a] = enable ? Traits::to_float(out.applied_effort_A[a]) : 0.0f;
+    status_.excitation_A[a] = Traits::to_float(excitation[a]);
+    status_.reference_acceleration[a] = profile_accel_[a];
+  }
+  status_.excitation_active = ex.active;
+  status_.excitation_tick = ex.tick;
   return cmd;
 }
 

@@ -7,11 +7,13 @@
 //   1. A timer's PWM output drives CONVST A/B; the rising edge starts all 16
 //      track-and-holds at the same instant, BUSY goes high (t_CONV ~4 us).
 //   2. BUSY falling edge -> the top-priority interrupt -> read().
-//   3. Per device: CS low, 128 SCLKs on DOUTA only (the serial interface
-//      clocks V1..V8 out of DOUTA in order when DOUTB is unused), MSB first,
-//      the MSB is valid at CS falling and each further bit after an SCLK
-//      falling edge -> SPI mode 2 (CPOL = 1, CPHA = 0). We clock it as four
-//      32-bit words: word w = V(2w+1) << 16 | V(2w+2).
+//   3. Per device: CS low for 128 SCLKs on DOUTA only (with one DOUT line the
+//      datasheet recommends DOUTA because it outputs V1..V8 in ascending
+//      order; DOUTB would start at V5). CS falling clocks out the MSB, each
+//      SCLK RISING edge clocks out the next bit, data is valid on the
+//      FALLING edge -> SPI mode 2 (CPOL = 1, CPHA = 0: idle high, sample on
+//      the first = falling edge). We clock it as four 32-bit words:
+//      word w = V(2w+1) << 16 | V(2w+2).
 //   4. Codes are two's complement: 0x7FFF = +FS * 32767/32768, 0x8000 = -FS.
 //
 // Channel map (ours; docs/PINMAP in firmware/board/stm32h743/README.md):
@@ -50,7 +52,12 @@ struct State {
 class Adc {
  public:
   // cs_device[d] = the SPI master's chip-select index of ADC d.
-  Adc(SpiMaster& spi, const std::uint8_t (&cs_device)[kDevices], InputPin& busy) : spi_(spi), busy_(busy) {
+  // `rx_buffer` (optional, kDevices x 4 words): where the raw SPI words land.
+  // The board passes a buffer in non-cacheable D2 SRAM, the same one a DMA
+  // stream fills in the DMA variant of the read; null: a stack buffer.
+  Adc(SpiMaster& spi, const std::uint8_t (&cs_device)[kDevices], InputPin& busy,
+      std::uint32_t (*rx_buffer)[kChannelsPerDevice / 2] = nullptr)
+      : spi_(spi), busy_(busy), rx_buffer_(rx_buffer) {
     for (std::size_t d = 0; d < kDevices; ++d) cs_[d] = cs_device[d];
   }
 
@@ -60,7 +67,8 @@ class Adc {
       return Status::kStillBusy;
     }
     for (std::size_t d = 0; d < kDevices; ++d) {
-      std::uint32_t rx[kChannelsPerDevice / 2];
+      std::uint32_t local[kChannelsPerDevice / 2];
+      std::uint32_t* rx = rx_buffer_ != nullptr ? rx_buffer_[d] : local;
       const BusStatus bs = spi_.transfer(SpiTransfer{cs_[d], kWordBits, nullptr, rx, kChannelsPerDevice / 2});
       if (bs != BusStatus::kOk) {
         ++state_.bus_errors;
@@ -80,6 +88,7 @@ class Adc {
  private:
   SpiMaster& spi_;
   InputPin& busy_;
+  std::uint32_t (*rx_buffer_)[kChannelsPerDevice / 2];
   std::uint8_t cs_[kDevices]{};
   State state_{};
 };

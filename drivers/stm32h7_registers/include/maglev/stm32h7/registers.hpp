@@ -218,6 +218,7 @@ inline constexpr std::uint32_t kOcModePwm2 = 7;  // OCxM = 0111: inactive while 
 namespace spi {
 inline constexpr Addr kSpi1 = 0x40013000;
 inline constexpr Addr kSpi2 = 0x40003800;
+inline constexpr Addr kSpi3 = 0x40003C00;
 inline constexpr Addr kSpi4 = 0x40013400;
 inline constexpr Addr kCr1 = 0x00;
 inline constexpr std::uint32_t kCr1Spe = bit(0);
@@ -380,6 +381,11 @@ inline constexpr Addr kIser = 0xE000E100;  // + 4 * (irq / 32)
 inline constexpr Addr kIcer = 0xE000E180;
 inline constexpr Addr kIpr = 0xE000E400;   // one byte per IRQ; M7 implements the top 4 bits
 }  // namespace nvic
+namespace systick {
+inline constexpr Addr kCsr = 0xE000E010;  // ENABLE 0, TICKINT 1, CLKSOURCE 2 (1 = CPU clock)
+inline constexpr Addr kRvr = 0xE000E014;
+inline constexpr Addr kCvr = 0xE000E018;
+}  // namespace systick
 namespace dwt {
 inline constexpr Addr kCtrl = 0xE0001000;    // CYCCNTENA bit 0
 inline constexpr Addr kCyccnt = 0xE0001004;
@@ -393,6 +399,7 @@ inline constexpr int kExti9_5 = 23;
 inline constexpr int kTim2 = 28;
 inline constexpr int kTim3 = 29;
 inline constexpr int kTim4 = 30;
+inline constexpr int kUsart2 = 38;
 inline constexpr int kUsart3 = 39;
 inline constexpr int kExti15_10 = 40;
 inline constexpr int kTim5 = 50;

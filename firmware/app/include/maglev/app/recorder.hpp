@@ -23,7 +23,7 @@ class Recorder {
  public:
   void record(const io::SensorSample& s, const io::ActuatorCommand& c) {
     entries_[head_ % kCapacity] = RecordEntry{head_, s, c};
-    ++head_;
+    head_ = head_ + 1u;
   }
   // Oldest-first read of everything newer than `cursor`; returns false if
   // the ring already overwrote that entry (reader too slow) or nothing new.

@@ -25,6 +25,34 @@ struct FieldSZ {
   double b_z_T;
 };
 
+// sum_h amp[h] e^{-gamma_n z} (sin, cos)(gamma_n s) from sin/cos(gamma_1 s)
+// and e^{-gamma_1 z} by recurrences (n = 1, 5, 9, 13: steps of e^{j 4 theta}).
+inline FieldSZ SumHarmonicsFrom(const double* amp, int harmonics, double s1, double c1, double e1) {
+  double bs = amp[0] * e1 * s1;
+  double bz = amp[0] * e1 * c1;
+  if (harmonics > 1) {
+    const double s2 = 2.0 * s1 * c1;
+    const double c2 = c1 * c1 - s1 * s1;
+    const double s4 = 2.0 * s2 * c2;
+    const double c4 = c2 * c2 - s2 * s2;
+    const double e2 = e1 * e1;
+    const double e4 = e2 * e2;
+    double sn = s1;
+    double cn = c1;
+    double en = e1;
+    for (int h = 1; h < harmonics; ++h) {
+      const double sn_next = sn * c4 + cn * s4;
+      const double cn_next = cn * c4 - sn * s4;
+      sn = sn_next;
+      cn = cn_next;
+      en *= e4;
+      bs += amp[h] * en * sn;
+      bz += amp[h] * en * cn;
+    }
+  }
+  return {bs, bz};
+}
+
 class HalbachField {
  public:
   explicit HalbachField(const FieldConfig& config);
@@ -39,7 +67,9 @@ class HalbachField {
   FieldSZ SideAverageField(double s_m, double gap_m) const;
   // The same from sin/cos(gamma_1 s) and exp(-gamma_1 gap) already known
   // (the plant derives them per forcer to save transcendental calls).
-  FieldSZ SideAverageFieldFrom(double sin1, double cos1, double exp1) const;
+  FieldSZ SideAverageFieldFrom(double sin1, double cos1, double exp1) const {
+    return SumHarmonicsFrom(side_amp_, harmonics_, sin1, cos1, exp1);
+  }
 
   // b*(z) of eq (20) with n = 1 only, N/A (force amplitude of one coil).
   double BStar(double gap_m) const;

@@ -165,7 +165,7 @@ struct AdcConfig {
 // --- Integration -------------------------------------------------------------
 struct IntegrationConfig {
   double servo_rate_Hz = io::stage::kServoRate_Hz;
-  int substeps_per_tick = 4;  // RK4 sub-steps inside each servo tick
+  int substeps_per_tick = 2;  // RK4 sub-steps inside each servo tick (200 us at 2.5 kHz)
 };
 
 // Initial state (world frame fixed to the magnets; z above landed rest).

@@ -19,6 +19,12 @@
 //    which also carries the ~4.3 A dc lift (m g / 2b*). These are sanity
 //    clamps: the allocator's coil-current scaling is the real limit and
 //    reports back through apply_limit().
+// Internal-model regulator (alternative, LoopType::kInternalModel): w0 =
+// 1.5 pi rad/s (paper 002), plant pole pair at 20 Hz (x, y), 30 Hz (theta_z)
+// or the identified suspension's own poles (z, theta_x/y); internal-model
+// poles at 1.5 Hz (Bessel-3); Tt = 10 ms. Tracks a w0 sinusoid to the
+// rounding floor, but a step overshoots ~21 % (the internal model's zeros):
+// use the PID for the step experiments.
 #pragma once
 
 #include <cmath>
@@ -69,6 +75,11 @@ constexpr AxisPlant axis_plant(Axis axis) {
   }
   return {0.0, 0.0, 0.0};
 }
+
+// Acceleration feed-forward gain: u_ff [A] = m a / (2 b*) = a / gain, in A
+// per m/s^2 (A per rad/s^2 for rotations, with m -> I). Multiply the
+// references' float acceleration by this.
+constexpr double acceleration_feedforward_A_per_si(Axis axis) { return 1.0 / axis_plant(axis).gain; }
 
 inline AxisLoopConfig default_axis_loop_config(Axis axis) {
   AxisLoopConfig c;

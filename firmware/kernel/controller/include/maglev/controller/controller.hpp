@@ -36,6 +36,19 @@ struct ReferenceLimits {
   float max_acceleration[kAxisCount] = {1.5f, 1.5f, 0.5f, 5e-3f, 0.05f, 0.05f};
   // Steps are applied in one tick: bounded so the error fits the Scalar range (128 um).
   float max_step[kAxisCount] = {100e-6f, 100e-6f, 100e-6f, 10e-6f, 20e-6f, 20e-6f};
+  // Jerk bound of S-curve moves and of the circle's arc-length profile (m/s^3, rad/s^3).
+  float max_jerk[kAxisCount] = {150.0f, 150.0f, 50.0f, 0.5f, 5.0f, 5.0f};
+};
+
+// Excitation injection (frequency-response measurement on the running loop):
+// a known disturbance d is added to one axis' effort U before allocation.
+// Bounded, deterministic (integer phase accumulators + the kernel's sine
+// table), only in Ready, off by default.
+inline constexpr int kMaxExcitationHarmonics = 8;
+struct ExcitationLimits {
+  float max_amplitude_A = 0.5f;       // |d| <= this, always (A of effort)
+  float max_frequency_Hz = 1000.0f;   // highest line (< servo_rate / 2)
+  float max_duration_s = 600.0f;
 };
 
 struct KernelConfig {
@@ -49,6 +62,15 @@ struct KernelConfig {
   float payload_mass_kg;
   // Allows changing axis-loop gains while levitated (all other fields stay locked).
   bool live_tuning;
+  // --- added in round 2 (default_kernel_config() sets them) ---
+  // u_ff = (m or I) a / (2 b*) on every profiled axis (payload included).
+  bool acceleration_feedforward;
+  // Back-calculation / eq (17) anti-windup of every loop (off only for tests
+  // and comparisons: the integrators then wind up while the current limit acts).
+  bool antiwindup;
+  // Payload inertia about the platen CoM axes z, x, y (kg m^2), added to Iz, Ix, Iy.
+  float payload_inertia_kgm2[3];
+  ExcitationLimits excitation;
 };
 
 KernelConfig default_kernel_config();
@@ -75,7 +97,12 @@ enum class MotionType : std::uint8_t {
   kStep,               // axis, delta
   kCircle,             // diameter, period, turns (x, y)
   kSinusoid,           // axis, amplitude, frequency
-  kHold,               // every axis holds its present reference
+  kHold,               // every axis holds its present reference (stops profiles and excitation)
+  // Excitation: axis, amplitude (A of effort, peak of the sum), frequency_Hz,
+  // harmonics (1 = one sine; N > 1 = Schroeder multisine on f, 2f, ..., Nf,
+  // each amplitude/N), duration_s (0 = until kStopExcitation / kHold).
+  kExcite,
+  kStopExcitation,
 };
 
 struct MotionCommand {
@@ -89,7 +116,9 @@ struct MotionCommand {
   double frequency_Hz = 0.0;
   double diameter_m = 0.0;
   double period_s = 0.0;
-  double turns = 0.0;
+  double turns = 0.0;           // circle turns; sinusoid cycles (0 = until kHold)
+  double duration_s = 0.0;      // kExcite
+  std::uint8_t harmonics = 1;   // kExcite
 };
 
 enum class CommandResult : std::uint8_t {
@@ -104,6 +133,7 @@ enum class CommandResult : std::uint8_t {
   kRefusedOutOfRange,     // target / step beyond ReferenceLimits
   kRefusedBadProfile,     // v, a, jerk <= 0 or beyond the limits
   kUnsupported,           // profile type not available in this build
+  kRefusedExcitation,     // amplitude / frequency / duration / harmonics beyond ExcitationLimits
 };
 
 struct ControllerStatus {
@@ -120,10 +150,23 @@ struct ControllerStatus {
   bool saturated = false;
   float scale_k = 1.0f;
   float coil_current_A[io::kCoils] = {};
-  float effort_A[kAxisCount] = {};
+  float effort_A[kAxisCount] = {};          // U into the allocation (= total_effort_A)
   std::uint32_t tick = 0;
   ConfigError last_config_error = ConfigError::kOk;
   std::uint8_t config_axis = 0xFF;
+  // --- added in round 2 ---
+  // Per axis: the loop's own effort (after its clamp, incl. its feed-forward),
+  // the total U = loop + excitation d that goes into the allocation, and k U
+  // (what was applied). Open-loop gain at the excitation line: L = -u_loop / u_total.
+  float loop_effort_A[kAxisCount] = {};
+  float total_effort_A[kAxisCount] = {};
+  float applied_effort_A[kAxisCount] = {};
+  float excitation_A[kAxisCount] = {};
+  bool excitation_active = false;
+  std::uint8_t excitation_axis = 0;
+  float excitation_frequency_Hz = 0.0f;     // the fundamental actually generated (phase-increment quantised)
+  std::uint32_t excitation_tick = 0;        // ticks since the excitation started
+  double reference_acceleration[kAxisCount] = {};  // SI, of the active profile
 };
 
 template <typename Scalar>
@@ -150,13 +193,31 @@ class Controller {
     std::uint32_t tick = 0;
   };
   struct Applied {
+    LoopType type[kAxisCount];
     Pid2DofCoefficients<Scalar> pid[kAxisCount];
+    InternalModelCoefficients<Scalar> imr[kAxisCount];
     BiquadCoefficients<Scalar> filter[kAxisCount][kMaxBiquadStages];
     ForceAllocationState<Scalar> allocation;
-    Scalar inertia_over_two_b_star[kAxisCount];  // (m or I) / (2 b*): A per (m/s^2)
+    double inertia_over_two_b_star[kAxisCount];  // (m or I) / (2 b*): A per (m/s^2) or (rad/s^2)
   };
+  // Excitation generator: integer phase accumulators (2^32 = one turn).
+  struct Excitation {
+    bool active = false;
+    int axis = 0;
+    std::uint32_t phase[kMaxExcitationHarmonics] = {};
+    std::uint32_t increment[kMaxExcitationHarmonics] = {};
+    Scalar amplitude[kMaxExcitationHarmonics] = {};
+    std::uint32_t tick = 0;
+    std::uint32_t duration_ticks = 0;  // 0: until stopped
+  };
+  // One loop tick of axis a, whichever type the config selected.
+  Scalar loop_update(int a, Scalar e_um, Scalar step_um, Scalar ff_A);
+  Scalar loop_saturate(int a, Scalar v) const;
+  void loop_apply_limit(int a, Scalar applied_A);
+  void loop_reset(int a, Scalar e_um);
 
   bool levitated_or_busy() const;
+  CommandResult start_excitation(const MotionCommand& cmd);
 
   KernelConfig config_{};
   Applied applied_[2]{};
@@ -165,6 +226,9 @@ class Controller {
   Sequencer sequencer_{};
   Supervisor supervisor_{};
   Pid2DofState<Scalar> pid_state_[kAxisCount]{};
+  InternalModelState<Scalar> imr_state_[kAxisCount]{};
+  LoopType running_type_[kAxisCount] = {};  // detects a live loop-type switch (bumpless hand-over)
+  Excitation excitation_{};
   BiquadState<Scalar> filter_state_[kAxisCount][kMaxBiquadStages]{};
   Profile profile_[kAxisCount]{};
   std::int64_t reference_pm_[kAxisCount] = {};

@@ -165,8 +165,8 @@ class Fixed {
 
 using Q7_24 = Fixed<24>;
 // Coefficient format for gains and filter taps in the fixed-point kernel:
-// range +-8, LSB 3.7e-9 (the smallest default gain, Ki*T of theta_x/y =
-// 7.0e-6 A/(urad*tick), is then quantised to 0.03 %).
+// range +-8, LSB 3.7e-9 (the smallest default coefficient, ki T/2 of
+// theta_x/y = 3.5e-6 A/(urad*tick), is then quantised to <= 0.053 %).
 using Q3_28 = Fixed<28>;
 
 // Wide accumulator, int64 Q(63-F).F. Saturating.

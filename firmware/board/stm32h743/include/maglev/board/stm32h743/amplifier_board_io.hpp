@@ -1,0 +1,74 @@
+// The board's implementation of the app::SensorSource / app::ActuatorSink
+// seam: AD7606 pair + three quadrature counters in, AD5764 chain + the
+// amplifier-enable line out. The HIL build swaps exactly these two objects
+// for CAN-frame versions; nothing else in the image changes.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "maglev/app/board_io.hpp"
+#include "maglev/drivers/ad5764.hpp"
+#include "maglev/drivers/ad7606.hpp"
+#include "maglev/drivers/amplifier_enable.hpp"
+
+namespace maglev::board::stm32h743 {
+
+template <typename Encoder>
+class AmplifierBoardSensors final : public app::SensorSource {
+ public:
+  AmplifierBoardSensors(drivers::ad7606::Adc& adc, Encoder& enc0, Encoder& enc1, Encoder& enc2)
+      : adc_(adc), encoders_{&enc0, &enc1, &enc2} {}
+
+  bool read(io::SensorSample& s) override {
+    std::uint16_t flags = 0;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(io::kInterferometerAxes); ++i) {
+      s.interferometer_counts[i] = encoders_[i]->update();
+      if (encoders_[i]->signal_lost()) flags = static_cast<std::uint16_t>(flags | (io::kBeamLoss0 << i));
+    }
+    drivers::ad7606::Codes codes{};
+    const bool adc_ok = adc_.read(codes) == drivers::ad7606::Status::kOk;
+    if (adc_ok) {
+      drivers::ad7606::map_to_sample(codes, s);
+      // A laser sensor with no target rails its output: treat full scale as out of range.
+      for (std::size_t i = 0; i < static_cast<std::size_t>(io::kDisplacementSensors); ++i) {
+        if (s.displacement_adc[i] == INT16_MAX || s.displacement_adc[i] == INT16_MIN) {
+          flags = static_cast<std::uint16_t>(flags | (io::kDisplacementOutOfRange0 << i));
+        }
+      }
+    } else {
+      flags = static_cast<std::uint16_t>(flags | io::kAdcFault);
+    }
+    s.status_flags = flags;
+    return adc_ok;
+  }
+
+ private:
+  drivers::ad7606::Adc& adc_;
+  Encoder* encoders_[3];
+};
+
+class AmplifierBoardActuators final : public app::ActuatorSink {
+ public:
+  AmplifierBoardActuators(drivers::ad5764::Chain<2>& dac, drivers::AmplifierEnable& enable)
+      : dac_(dac), enable_(enable) {}
+
+  // Disable before changing currents when switching off; load currents
+  // before enabling when switching on. A DAC link we cannot trust trips the
+  // (latched) amplifier enable.
+  void write(const io::ActuatorCommand& c) override {
+    if (!c.amplifier_enable) enable_.request(false);
+    const auto status = dac_.write_codes(c.dac_code);
+    if (status != drivers::ad5764::Status::kOk) {
+      enable_.trip();
+      return;
+    }
+    if (c.amplifier_enable) enable_.request(true);
+  }
+
+ private:
+  drivers::ad5764::Chain<2>& dac_;
+  drivers::AmplifierEnable& enable_;
+};
+
+}  // namespace maglev::board::stm32h743

@@ -1,0 +1,301 @@
+// maglev-stm32h743: the board image. Owns every static object (drivers,
+// kernel, servo loop, recorder), the interrupt priorities and the
+// low-priority communications loop.
+//
+// Priorities (4 implemented bits, lower = more urgent):
+//   0  EXTI15_10 (AD7606 BUSY falling = servo tick) and TIM3 (16-bit encoder
+//      extension): the same level, so they never preempt each other.
+//   1  SysTick 1 kHz: missed-tick deadline check.
+//   thread mode: Modbus RTU (USART2/RS-485), CAN FD telemetry (FDCAN1),
+//      recorder drain, watchdog service.
+#include <cstdint>
+
+#include "maglev/app/recorder.hpp"
+#include "maglev/app/servo_loop.hpp"
+#include "maglev/board/stm32h743/amplifier_board_io.hpp"
+#include "maglev/board/stm32h743/clock.hpp"
+#include "maglev/board/stm32h743/mpu_cache.hpp"
+#include "maglev/board/stm32h743/pinmap.hpp"
+#include "maglev/board/stm32h743/servo_kernel.hpp"
+#include "maglev/drivers/ad5764.hpp"
+#include "maglev/drivers/ad7606.hpp"
+#include "maglev/drivers/amplifier_enable.hpp"
+#include "maglev/drivers/convst_timer.hpp"
+#include "maglev/drivers/fdcan.hpp"
+#include "maglev/drivers/iwdg.hpp"
+#include "maglev/drivers/quadrature_encoder.hpp"
+#include "maglev/drivers/stm32h7_gpio.hpp"
+#include "maglev/drivers/stm32h7_spi.hpp"
+#include "maglev/drivers/usart_rs485.hpp"
+#include "maglev/stm32h7/register_bus.hpp"
+
+namespace r = maglev::stm32h7;
+namespace d = maglev::drivers;
+namespace b = maglev::board::stm32h743;
+namespace pins = maglev::board::stm32h743::pins;
+using Bus = r::MmioBus;
+
+extern "C" {
+void board_early_init();
+void board_main();
+void HardFault_Handler();
+void SysTick_Handler();
+void EXTI15_10_IRQHandler();
+void TIM3_IRQHandler();
+}
+
+namespace {
+
+constexpr std::uint32_t kServoRate_Hz = 2500;
+constexpr std::uint32_t kPeriodCycles = b::kCpu_Hz / kServoRate_Hz;  // 192000
+constexpr std::uint32_t kCycleBudget = kPeriodCycles / 2;            // 50 % of the period
+
+// --- fault log in backup SRAM (survives reset; read over Modbus after boot) ---
+struct FaultLog {
+  std::uint32_t magic;
+  std::uint32_t count;
+  std::uint32_t cfsr, hfsr, mmfar, bfar, stacked_pc;
+};
+constexpr std::uint32_t kFaultMagic = 0x4D41474Cu;  // "MAGL"
+[[gnu::section(".backup_sram")]] FaultLog g_fault_log;
+
+// --- DMA buffers in D2 SRAM (MPU: non-cacheable): the AD7606 raw words. The
+// polled SPI read fills it today; the SPI3 RX DMA stream fills it unchanged. ---
+[[gnu::section(".dma_bss")]] alignas(32) std::uint32_t g_adc_dma_rx[2][4];
+
+// --- recorder in AXI SRAM ---
+[[gnu::section(".axi_bss")]] maglev::app::Recorder<2048> g_recorder;
+
+Bus g_bus;
+
+// GPIO
+d::Stm32OutputPin<Bus> g_dac_sync{g_bus, pins::kDacSync};
+d::Stm32OutputPin<Bus> g_dac_ldac{g_bus, pins::kDacLdac};
+d::Stm32OutputPin<Bus> g_adc0_cs{g_bus, pins::kAdc0Cs};
+d::Stm32OutputPin<Bus> g_adc1_cs{g_bus, pins::kAdc1Cs};
+d::Stm32OutputPin<Bus> g_amp_enable_pin{g_bus, pins::kAmpEnable};
+d::Stm32OutputPin<Bus> g_led{g_bus, pins::kLed};
+d::Stm32InputPin<Bus> g_adc_busy{g_bus, pins::kAdcBusy};
+d::Stm32InputPin<Bus> g_loss0{g_bus, pins::kLoss0};
+d::Stm32InputPin<Bus> g_loss1{g_bus, pins::kLoss1};
+d::Stm32InputPin<Bus> g_loss2{g_bus, pins::kLoss2};
+
+// SPI: pll1_q 80 MHz kernel clock. DAC: /4 = 20 MHz (AD5764 max 30 MHz),
+// mode 1 (data latched on SCLK falling edges). ADC: /8 = 10 MHz, mode 2.
+const d::SpiDeviceSettings kDacSpi[1] = {{&g_dac_sync, 1, false, true}};
+const d::SpiDeviceSettings kAdcSpi[2] = {{&g_adc0_cs, 2, true, false}, {&g_adc1_cs, 2, true, false}};
+d::Stm32SpiMaster<Bus, 1> g_spi_dac{g_bus, r::spi::kSpi1, kDacSpi};
+d::Stm32SpiMaster<Bus, 2> g_spi_adc{g_bus, r::spi::kSpi3, kAdcSpi};
+
+// Parts
+d::ad5764::Chain<2> g_dac{g_spi_dac, 0, g_dac_ldac};
+const std::uint8_t kAdcCs[2] = {0, 1};
+d::ad7606::Adc g_adc{g_spi_adc, kAdcCs, g_adc_busy, g_adc_dma_rx};
+using Encoder = d::QuadratureEncoder<Bus>;
+Encoder g_enc0{g_bus, {r::tim::kTim2, true, 1, false}, g_loss0};
+Encoder g_enc1{g_bus, {r::tim::kTim5, true, 1, false}, g_loss1};
+Encoder g_enc2{g_bus, {r::tim::kTim3, false, 1, false}, g_loss2};
+d::AmplifierEnable* g_amp = nullptr;  // constructed in main() after the GPIO is configured
+d::fdcan::Fdcan<Bus> g_can{g_bus, d::fdcan::Config{}};
+d::rs485::UsartRs485<Bus> g_rs485{g_bus, d::rs485::Config{r::usart::kUsart2, b::kApb_Hz, 115'200, 1'000, 1'000}};
+d::iwdg::Watchdog<Bus> g_watchdog{g_bus};
+d::iwdg::FeedGate g_feed_gate;
+
+// Kernel + servo loop
+b::ServoKernel g_kernel;
+b::AmplifierBoardSensors<Encoder> g_sensors{g_adc, g_enc0, g_enc1, g_enc2};
+b::AmplifierBoardActuators* g_actuators = nullptr;
+maglev::app::ServoLoop<b::ServoKernel>* g_servo = nullptr;
+
+std::uint32_t cycle_counter() { return g_bus.read32(r::dwt::kCyccnt); }
+bool busy_irq_pending_again() { return (g_bus.read32(r::exti::kBase + r::exti::kCpupr1) & r::bit(11)) != 0; }
+void servo_ran() { g_feed_gate.servo_ran(); }
+void record(const maglev::io::SensorSample& s, const maglev::io::ActuatorCommand& c) { g_recorder.record(s, c); }
+
+void nvic_enable(int irq, std::uint32_t priority) {
+  const auto n = static_cast<std::uint32_t>(irq);
+  const r::Addr ipr = r::nvic::kIpr + (n & ~3u);
+  const unsigned shift = 8u * (n & 3u);
+  r::modify32(g_bus, ipr, 0xFFu << shift, ((priority << 4) & 0xFFu) << shift);
+  g_bus.write32(r::nvic::kIser + 4u * (n / 32u), 1u << (n % 32u));
+}
+
+void enable_peripheral_clocks() {
+  r::modify32(g_bus, r::rcc::kBase + r::rcc::kAhb4enr, 0u, 0x7Fu | r::bit(28));  // GPIOA..G, BKPRAM
+  r::modify32(g_bus, r::rcc::kBase + r::rcc::kApb1lenr, 0u,
+              r::bit(0) | r::bit(1) | r::bit(3) | r::bit(15) | r::bit(17));  // TIM2/3/5, SPI3, USART2
+  r::modify32(g_bus, r::rcc::kBase + r::rcc::kApb1henr, 0u, r::bit(8));      // FDCAN
+  r::modify32(g_bus, r::rcc::kBase + r::rcc::kApb2enr, 0u, r::bit(0) | r::bit(12));  // TIM1, SPI1
+  (void)g_bus.read32(r::rcc::kBase + r::rcc::kApb2enr);
+}
+
+void configure_pins() {
+  d::configure_alternate_pin(g_bus, pins::kDacSck, pins::kAfSpi1);
+  d::configure_alternate_pin(g_bus, pins::kDacMiso, pins::kAfSpi1);
+  d::configure_alternate_pin(g_bus, pins::kDacMosi, pins::kAfSpi1);
+  d::configure_alternate_pin(g_bus, pins::kAdcSck, pins::kAfSpi3);
+  d::configure_alternate_pin(g_bus, pins::kAdcMiso, pins::kAfSpi3);
+  d::configure_alternate_pin(g_bus, pins::kAdcMosi, pins::kAfSpi3);
+  d::configure_alternate_pin(g_bus, pins::kAdcConvst, pins::kAfTim1);
+  d::configure_alternate_pin(g_bus, pins::kEnc0A, pins::kAfTim2, 2);
+  d::configure_alternate_pin(g_bus, pins::kEnc0B, pins::kAfTim2, 2);
+  d::configure_alternate_pin(g_bus, pins::kEnc1A, pins::kAfTim5, 2);
+  d::configure_alternate_pin(g_bus, pins::kEnc1B, pins::kAfTim5, 2);
+  d::configure_alternate_pin(g_bus, pins::kEnc2A, pins::kAfTim3, 2);
+  d::configure_alternate_pin(g_bus, pins::kEnc2B, pins::kAfTim3, 2);
+  d::configure_alternate_pin(g_bus, pins::kCanRx, pins::kAfFdcan1);
+  d::configure_alternate_pin(g_bus, pins::kCanTx, pins::kAfFdcan1);
+  d::configure_alternate_pin(g_bus, pins::kRs485Tx, pins::kAfUsart2);
+  d::configure_alternate_pin(g_bus, pins::kRs485Rx, pins::kAfUsart2, 3, 1);  // pull-up: idle mark
+  d::configure_alternate_pin(g_bus, pins::kRs485De, pins::kAfUsart2);
+  g_amp_enable_pin.configure(false);  // OFF before anything else can run
+  g_dac_sync.configure(true);
+  g_dac_ldac.configure(true);
+  g_adc0_cs.configure(true);
+  g_adc1_cs.configure(true);
+  g_led.configure(false);
+  g_adc_busy.configure();
+  g_loss0.configure(1);
+  g_loss1.configure(1);
+  g_loss2.configure(1);
+}
+
+void configure_busy_exti() {
+  // PE11 -> EXTI11 (SYSCFG_EXTICR3 bits 15:12 = 4: port E), falling edge, unmasked for CPU1.
+  r::modify32(g_bus, r::syscfg::kBase + r::syscfg::kExticr1 + 8u, 0xFu << 12, 4u << 12);
+  r::modify32(g_bus, r::exti::kBase + r::exti::kFtsr1, 0u, r::bit(11));
+  g_bus.write32(r::exti::kBase + r::exti::kCpupr1, r::bit(11));
+  r::modify32(g_bus, r::exti::kBase + r::exti::kCpuimr1, 0u, r::bit(11));
+}
+
+void enable_cycle_counter() {
+  r::modify32(g_bus, r::dwt::kDemcr, 0u, r::bit(24));  // TRCENA
+  g_bus.write32(r::dwt::kLar, 0xC5ACCE55u);
+  g_bus.write32(r::dwt::kCyccnt, 0u);
+  r::modify32(g_bus, r::dwt::kCtrl, 0u, 1u);
+}
+
+// Board diagnostic frame (ours, outside the can_link catalog): servo counters at 100 Hz.
+void send_diagnostics(const maglev::app::ServoState& s) {
+  maglev::can::CanFrame f{};
+  f.id = 0x7F0;
+  f.len = 16;
+  f.flags = maglev::can::kFlagFd | maglev::can::kFlagBrs;
+  const std::uint32_t words[4] = {s.ticks, s.overruns, s.max_cycles, s.sensor_faults};
+  for (unsigned i = 0; i < 16; ++i) f.data[i] = static_cast<std::uint8_t>(words[i / 4] >> (8 * (i % 4)));
+  (void)g_can.send(f);
+}
+
+}  // namespace
+
+extern "C" void board_early_init() {
+  if (b::configure_clock_480MHz(g_bus) != b::ClockStatus::kOk) {
+    for (;;) {  // no valid clock: stay here with the amplifiers off (reset state)
+    }
+  }
+  b::configure_mpu(g_bus);
+  b::enable_caches(g_bus);
+}
+
+// Entered from Reset_Handler after static construction; never returns.
+extern "C" void board_main() {
+  enable_peripheral_clocks();
+  configure_pins();
+  static d::AmplifierEnable amp(g_amp_enable_pin);
+  g_amp = &amp;
+  static b::AmplifierBoardActuators actuators(g_dac, amp);
+  g_actuators = &actuators;
+  enable_cycle_counter();
+
+  g_spi_dac.init();
+  g_spi_adc.init();
+  g_dac.init();
+  (void)g_dac.write_zero();  // outputs at 0 A before the amplifiers can ever be enabled
+  g_enc0.init();
+  g_enc1.init();
+  g_enc2.init();
+  (void)g_can.init();
+  g_rs485.init();
+
+  static const maglev::app::ServoHooks hooks{&cycle_counter, &busy_irq_pending_again, &servo_ran, &record};
+  static maglev::app::ServoLoop<b::ServoKernel> servo(g_sensors, actuators, g_kernel,
+                                                      maglev::app::ServoConfig{kCycleBudget, kPeriodCycles, 3}, hooks);
+  g_servo = &servo;
+
+  configure_busy_exti();
+  nvic_enable(r::irq::kExti15_10, 0);
+  nvic_enable(r::irq::kTim3, 0);
+  g_bus.write32(r::scb::kBase + r::scb::kShpr3, 1u << 28);  // SysTick priority 1
+  g_bus.write32(r::systick::kRvr, b::kCpu_Hz / 1000u - 1u);
+  g_bus.write32(r::systick::kCvr, 0u);
+  g_bus.write32(r::systick::kCsr, 0x7u);  // CPU clock, interrupt, enable
+
+  // The servo clock: TIM1 CH1 PWM on CONVST (APB2 timer clock 240 MHz).
+  d::start_convst_timer(g_bus, r::tim::kTim1, d::convst_timing(b::kApbTimer_Hz, kServoRate_Hz, 1000));
+  (void)g_watchdog.start(50);
+
+  std::uint32_t last_diag_tick = 0;
+  std::uint32_t recorder_cursor = 0;
+  for (;;) {
+    // Modbus RTU: bytes into the frame buffer; a t3.5 gap ends the frame.
+    // (firmware/modbus's RTU server takes the frame here.)
+    std::uint8_t byte = 0;
+    while (g_rs485.receive_byte(byte)) {
+    }
+    (void)g_rs485.frame_gap_elapsed();
+    // CAN FD: drain received frames (firmware/can_link decodes them here).
+    maglev::can::CanFrame rx{};
+    while (g_can.receive(rx, 0) == maglev::can::PortStatus::kOk) {
+    }
+    const maglev::app::ServoState& s = servo.state();
+    if (s.ticks - last_diag_tick >= kServoRate_Hz / 100u) {
+      last_diag_tick = s.ticks;
+      send_diagnostics(s);
+      g_led.write(((s.ticks / kServoRate_Hz) & 1u) != 0u);
+    }
+    // Recorder drain: keep up with the ring (a reader falling behind skips ahead).
+    maglev::app::RecordEntry entry{};
+    while (g_recorder.read(recorder_cursor, entry)) ++recorder_cursor;
+    if (g_recorder.head() - recorder_cursor > 2048u) recorder_cursor = g_recorder.head();
+    g_feed_gate.comms_ran();
+    (void)g_feed_gate.service(g_watchdog);
+  }
+}
+
+extern "C" {
+
+// Servo tick: AD7606 BUSY fell -> both ADCs hold fresh results. ITCM-resident.
+[[gnu::section(".itcm_text")]] void EXTI15_10_IRQHandler() {
+  g_bus.write32(r::exti::kBase + r::exti::kCpupr1, r::bit(11));
+  if (g_servo != nullptr) g_servo->on_tick();
+}
+
+// 16-bit encoder extension points (wrap, 0x4000, 0xC000). Same priority as the tick.
+[[gnu::section(".itcm_text")]] void TIM3_IRQHandler() { g_enc2.on_timer_irq(); }
+
+void SysTick_Handler() {
+  if (g_servo != nullptr) (void)g_servo->check_deadline(cycle_counter());
+}
+
+// Any fault: coils off first, log to backup SRAM, reset.
+void HardFault_Handler() {
+  g_bus.write32(pins::kAmpEnable.port + r::gpio::kBsrr, 1u << (pins::kAmpEnable.pin + 16u));
+  r::modify32(g_bus, r::rcc::kBase + r::rcc::kAhb4enr, 0u, r::bit(28));
+  r::modify32(g_bus, r::pwr::kBase + r::pwr::kCr1, 0u, r::pwr::kCr1Dbp);
+  if (g_fault_log.magic != kFaultMagic) {
+    g_fault_log.magic = kFaultMagic;
+    g_fault_log.count = 0;
+  }
+  ++g_fault_log.count;
+  g_fault_log.cfsr = g_bus.read32(0xE000ED28u);
+  g_fault_log.hfsr = g_bus.read32(0xE000ED2Cu);
+  g_fault_log.mmfar = g_bus.read32(0xE000ED34u);
+  g_fault_log.bfar = g_bus.read32(0xE000ED38u);
+  g_fault_log.stacked_pc = 0;
+  r::barrier(g_bus);
+  g_bus.write32(r::scb::kBase + r::scb::kAircr, (0x05FAu << 16) | (1u << 2));  // SYSRESETREQ
+  for (;;) {
+  }
+}
+
+}  // extern "C"

@@ -1,0 +1,94 @@
+// The HIL bench runner: one scenario, plant + controller node over CAN.
+//
+// Lockstep tick N (default, --can virtual):
+//   plant endpoint: SensorSample s = plant.sample(); sensor frame N (+ current
+//                   monitor every 5th tick) -> bus
+//   controller node: receives/decodes frame N, Controller::step, actuator frame N
+//   plant endpoint: receives actuator frame N (E2E + counter must answer N),
+//                   plant.apply() (ZOH), plant.advance_tick() (RK4 sub-steps)
+// Everything runs on one thread: deterministic, same seed -> same CSV.
+// --mode realtime paces the ticks with a timerfd (PeriodicTimer) instead.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "maglev/controller_node/controller_node.hpp"
+#include "maglev/scenario/scenario.hpp"
+
+namespace maglev::bench {
+
+enum class Mode : std::uint8_t { kLockstep = 0, kRealtime = 1 };
+
+struct RunOptions {
+  std::optional<hil::KernelKind> kernel;  // overrides the scenario's `kernel`
+  std::string can = "virtual";            // "virtual" or a SocketCAN interface
+  Mode mode = Mode::kLockstep;
+  std::optional<std::uint64_t> seed;      // overrides the scenario's `seed`
+  bool verbose = true;                    // print command results while running
+};
+
+// The recorded time series: one row per servo tick (SI units).
+// Axis order of pose/reference: x, y, z, theta_x, theta_y, theta_z.
+struct Trace {
+  std::vector<double> t_s;
+  std::vector<double> pose[6];       // measured by the kernel (m, rad)
+  std::vector<double> reference[6];  // kernel references (m, rad)
+  std::vector<double> current_cmd_A[8];
+  std::vector<double> current_A[8];  // actual coil currents (plant)
+  std::vector<double> effort_A[6];   // kernel efforts, kernel axis order x y thz z thx thy
+  std::vector<double> disturbance_A[6];  // injected excitation (same order)
+  std::vector<int> state;            // kernel::SequencerState
+  std::size_t size() const { return t_s.size(); }
+};
+
+inline constexpr const char* kPoseNames[6] = {"x", "y", "z", "theta_x", "theta_y", "theta_z"};
+
+struct CommandLog {
+  double t_s;
+  std::string text;
+  std::string result;
+  bool accepted;
+};
+
+struct RunResult {
+  std::string name;
+  std::string title;
+  std::string kernel;
+  std::uint64_t seed = 0;
+  Trace trace;
+  std::map<std::string, double> metrics;  // flat, SI units in the names
+  std::map<std::string, double> paper;    // the scenario's [paper] values
+  std::vector<CommandLog> commands;
+  std::vector<std::string> warnings;
+  double wall_s = 0.0;
+  double real_time_factor = 0.0;
+  double bus_load_percent = 0.0;
+  std::uint64_t ticks = 0;
+  std::string final_state;
+  std::string fault;
+  bool completed = false;  // ran to duration_s without a link/controller failure
+};
+
+struct ScenarioError {
+  std::string message;  // "file:line: what" (like the parser's errors)
+};
+
+// Validates the timeline/metrics/overrides of a parsed scenario (verbs,
+// argument counts, units). Empty = fine.
+std::vector<ScenarioError> validate(const scenario::Scenario& sc);
+
+// Runs one scenario. Errors in the scenario come back in *errors (nothing ran).
+std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt,
+                             std::vector<ScenarioError>* errors);
+
+// The plant side alone over an external CAN interface (two-process mode).
+int run_plant_process(const scenario::Scenario& sc, const RunOptions& opt, const std::string& out_dir);
+// The controller node alone over an external CAN interface.
+int run_controller_process(const std::string& can, hil::KernelKind kind, bool levitate, double max_s);
+
+}  // namespace maglev::bench

@@ -1,0 +1,284 @@
+// maglev-hil: the HIL bench. See docs/BENCH.md.
+//
+//   maglev-hil list [--scenarios DIR]
+//   maglev-hil run NAME|FILE --out DIR [--can virtual|IFACE] [--kernel float32|q7.24]
+//                  [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet]
+//   maglev-hil suite --out DIR [same options]
+//   maglev-hil check NAME|FILE...             parse + validate only
+//   maglev-hil controller --can IFACE [--kernel K] [--levitate] [--max-time S]
+//   maglev-hil plant NAME|FILE --can IFACE [--mode lockstep|realtime] [--seed N]
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "maglev/bench/runner.hpp"
+#include "maglev/report/report.hpp"
+#include "maglev/scenario/scenario.hpp"
+
+#ifndef MAGLEV_SCENARIO_DIR
+#define MAGLEV_SCENARIO_DIR "hil/scenarios"
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+using maglev::bench::RunOptions;
+
+struct Args {
+  std::string cmd;
+  std::vector<std::string> positional;
+  std::string out;
+  std::string scenarios = MAGLEV_SCENARIO_DIR;
+  RunOptions run;
+  bool plots = true;
+  bool levitate = false;
+  double max_time_s = 0.0;
+  std::string error;
+};
+
+void usage() {
+  std::fputs(
+      "usage:\n"
+      "  maglev-hil list [--scenarios DIR]\n"
+      "  maglev-hil run NAME|FILE --out DIR [--can virtual|vcan0] [--kernel float32|q7.24]\n"
+      "                 [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet] [--scenarios DIR]\n"
+      "  maglev-hil suite --out DIR [run options]\n"
+      "  maglev-hil check NAME|FILE...\n"
+      "  maglev-hil controller --can IFACE [--kernel K] [--levitate] [--max-time S]\n"
+      "  maglev-hil plant NAME|FILE --can IFACE [--mode lockstep|realtime] [--seed N]\n"
+      "see docs/BENCH.md\n",
+      stderr);
+}
+
+Args parse_args(int argc, char** argv) {
+  Args a;
+  if (argc < 2) {
+    a.error = "no command";
+    return a;
+  }
+  a.cmd = argv[1];
+  for (int i = 2; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto value = [&](std::string* dst) {
+      if (i + 1 >= argc) {
+        a.error = s + " needs a value";
+        return false;
+      }
+      *dst = argv[++i];
+      return true;
+    };
+    std::string v;
+    if (s == "--out") {
+      value(&a.out);
+    } else if (s == "--scenarios") {
+      value(&a.scenarios);
+    } else if (s == "--can") {
+      value(&a.run.can);
+    } else if (s == "--kernel") {
+      if (value(&v)) {
+        maglev::hil::KernelKind k{};
+        if (!maglev::hil::parse_kernel_kind(v, &k)) a.error = "--kernel: expected float32 or q7.24, got '" + v + "'";
+        a.run.kernel = k;
+      }
+    } else if (s == "--mode") {
+      if (value(&v)) {
+        if (v == "lockstep") a.run.mode = maglev::bench::Mode::kLockstep;
+        else if (v == "realtime") a.run.mode = maglev::bench::Mode::kRealtime;
+        else a.error = "--mode: expected lockstep or realtime, got '" + v + "'";
+      }
+    } else if (s == "--seed") {
+      if (value(&v)) {
+        char* end = nullptr;
+        const unsigned long long n = std::strtoull(v.c_str(), &end, 10);
+        if (end == v.c_str() || *end != '\0') a.error = "--seed: not an integer: '" + v + "'";
+        a.run.seed = n;
+      }
+    } else if (s == "--max-time") {
+      if (value(&v)) a.max_time_s = std::atof(v.c_str());
+    } else if (s == "--no-plots") {
+      a.plots = false;
+    } else if (s == "--quiet") {
+      a.run.verbose = false;
+    } else if (s == "--levitate") {
+      a.levitate = true;
+    } else if (!s.empty() && s[0] == '-') {
+      a.error = "unknown option " + s;
+    } else {
+      a.positional.push_back(s);
+    }
+  }
+  return a;
+}
+
+std::vector<fs::path> scenario_files(const std::string& dir) {
+  std::vector<fs::path> out;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    if (e.path().extension() == ".scenario") out.push_back(e.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// NAME (a file in the scenario dir) or a path to a file.
+std::string resolve(const std::string& name_or_file, const std::string& dir) {
+  if (fs::exists(name_or_file) && fs::is_regular_file(name_or_file)) return name_or_file;
+  const fs::path p = fs::path(dir) / (name_or_file + ".scenario");
+  return p.string();
+}
+
+bool load(const std::string& name_or_file, const std::string& dir, maglev::scenario::Scenario* out) {
+  const std::string path = resolve(name_or_file, dir);
+  if (!fs::exists(path)) {
+    std::fprintf(stderr, "maglev-hil: no scenario '%s' (not a file, and no %s); try 'maglev-hil list'\n",
+                 name_or_file.c_str(), path.c_str());
+    return false;
+  }
+  auto r = maglev::scenario::load_scenario_file(path);
+  if (!r.ok()) {
+    for (const auto& e : r.errors) std::fprintf(stderr, "%s\n", e.to_string().c_str());
+    return false;
+  }
+  const auto errs = maglev::bench::validate(*r.scenario);
+  for (const auto& e : errs) std::fprintf(stderr, "%s\n", e.message.c_str());
+  if (!errs.empty()) return false;
+  *out = *r.scenario;
+  return true;
+}
+
+std::string primary_of(const maglev::scenario::Scenario& sc) {
+  const auto it = sc.scenario.find("primary");
+  return it == sc.scenario.end() ? "x" : it->second == "thx" ? "theta_x" : it->second == "thy" ? "theta_y"
+       : it->second == "thz" ? "theta_z" : it->second;
+}
+
+// Runs one scenario into dir; returns 0 when it completed.
+int run_one(const maglev::scenario::Scenario& sc, const Args& a, const std::string& dir,
+            maglev::bench::RunResult* keep) {
+  std::printf("== %s: %s (kernel %s, CAN %s, %s)\n", sc.name().c_str(),
+              sc.scenario.count("title") ? sc.scenario.at("title").c_str() : "",
+              a.run.kernel ? maglev::hil::to_string(*a.run.kernel)
+                           : (sc.scenario.count("kernel") ? sc.scenario.at("kernel").c_str() : "float32"),
+              a.run.can.c_str(), a.run.mode == maglev::bench::Mode::kLockstep ? "lockstep" : "realtime");
+  std::vector<maglev::bench::ScenarioError> errs;
+  auto r = maglev::bench::run(sc, a.run, &errs);
+  if (!r) {
+    for (const auto& e : errs) std::fprintf(stderr, "%s\n", e.message.c_str());
+    return 2;
+  }
+  std::string err;
+  const bool wrote = maglev::report::write_run(*r, dir, primary_of(sc), a.plots, &err);
+  if (!wrote) std::fprintf(stderr, "maglev-hil: %s\n", err.c_str());
+  std::fputs(maglev::report::format_table(*r).c_str(), stdout);
+  for (const auto& w : r->warnings) std::printf("  warning: %s\n", w.c_str());
+  std::printf("  final state %s, fault %s; %llu ticks in %.2f s wall: real-time factor %.1f, bus load %.1f %%\n",
+              r->final_state.c_str(), r->fault.c_str(), static_cast<unsigned long long>(r->ticks), r->wall_s,
+              r->real_time_factor, r->bus_load_percent);
+  std::printf("  results in %s\n", dir.c_str());
+  const int rc = r->completed && wrote ? 0 : 1;
+  if (keep != nullptr) *keep = std::move(*r);
+  return rc;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args a = parse_args(argc, argv);
+  if (!a.error.empty()) {
+    std::fprintf(stderr, "maglev-hil: %s\n", a.error.c_str());
+    usage();
+    return 2;
+  }
+  if (a.cmd == "list") {
+    const auto files = scenario_files(a.scenarios);
+    if (files.empty()) {
+      std::fprintf(stderr, "maglev-hil: no .scenario files in %s\n", a.scenarios.c_str());
+      return 1;
+    }
+    for (const auto& f : files) {
+      auto r = maglev::scenario::load_scenario_file(f.string());
+      if (!r.ok()) {
+        std::printf("  %-28s (parse error: %s)\n", f.stem().c_str(), r.errors.front().to_string().c_str());
+        continue;
+      }
+      const auto& sc = *r.scenario;
+      std::printf("  %-28s %6.1f s  %s\n", sc.name().c_str(), sc.duration_s(),
+                  sc.scenario.count("title") ? sc.scenario.at("title").c_str() : "");
+    }
+    return 0;
+  }
+  if (a.cmd == "check") {
+    int bad = 0;
+    for (const auto& p : a.positional) {
+      maglev::scenario::Scenario sc;
+      if (!load(p, a.scenarios, &sc)) ++bad;
+      else std::printf("%s: ok\n", p.c_str());
+    }
+    return bad == 0 && !a.positional.empty() ? 0 : 2;
+  }
+  if (a.cmd == "run") {
+    if (a.positional.size() != 1 || a.out.empty()) {
+      std::fprintf(stderr, "maglev-hil run: needs one scenario NAME|FILE and --out DIR\n");
+      return 2;
+    }
+    maglev::scenario::Scenario sc;
+    if (!load(a.positional[0], a.scenarios, &sc)) return 2;
+    return run_one(sc, a, a.out, nullptr);
+  }
+  if (a.cmd == "suite") {
+    if (a.out.empty()) {
+      std::fprintf(stderr, "maglev-hil suite: needs --out DIR\n");
+      return 2;
+    }
+    struct Row {
+      std::string name, state;
+      int rc;
+      double rtf, load, sim_s, wall_s;
+    };
+    std::vector<Row> rows;
+    double sim_total = 0, wall_total = 0;
+    for (const auto& f : scenario_files(a.scenarios)) {
+      maglev::scenario::Scenario sc;
+      if (!load(f.string(), a.scenarios, &sc)) {
+        rows.push_back({f.stem().string(), "scenario error", 2, 0, 0, 0, 0});
+        continue;
+      }
+      maglev::bench::RunResult r;
+      const int rc = run_one(sc, a, (fs::path(a.out) / sc.name()).string(), &r);
+      const double sim = static_cast<double>(r.ticks) / 2500.0;
+      rows.push_back({sc.name(), r.final_state, rc, r.real_time_factor, r.bus_load_percent, sim, r.wall_s});
+      sim_total += sim;
+      wall_total += r.wall_s;
+    }
+    std::printf("\n%-28s %-12s %8s %8s %10s %8s\n", "scenario", "final state", "sim s", "wall s", "RT factor",
+                "bus %");
+    int failed = 0;
+    for (const auto& r : rows) {
+      std::printf("%-28s %-12s %8.1f %8.2f %10.1f %8.1f%s\n", r.name.c_str(), r.state.c_str(), r.sim_s, r.wall_s,
+                  r.rtf, r.load, r.rc == 0 ? "" : "  FAILED");
+      failed += r.rc != 0;
+    }
+    std::printf("%-28s %-12s %8.1f %8.2f %10.1f\n", "TOTAL", "", sim_total, wall_total,
+                wall_total > 0 ? sim_total / wall_total : 0.0);
+    return failed == 0 ? 0 : 1;
+  }
+  if (a.cmd == "controller") {
+    maglev::hil::KernelKind k = a.run.kernel.value_or(maglev::hil::KernelKind::kFloat32);
+    return maglev::bench::run_controller_process(a.run.can, k, a.levitate, a.max_time_s);
+  }
+  if (a.cmd == "plant") {
+    if (a.positional.size() != 1) {
+      std::fprintf(stderr, "maglev-hil plant: needs one scenario NAME|FILE\n");
+      return 2;
+    }
+    maglev::scenario::Scenario sc;
+    if (!load(a.positional[0], a.scenarios, &sc)) return 2;
+    return maglev::bench::run_plant_process(sc, a.run, a.out);
+  }
+  std::fprintf(stderr, "maglev-hil: unknown command '%s'\n", a.cmd.c_str());
+  usage();
+  return 2;
+}

@@ -1,0 +1,103 @@
+// The host controller node of the HIL bench: the firmware kernel
+// (maglev::kernel::Controller<Scalar>) with its I/O over CAN frames.
+//
+// firmware/app (the shared servo application with its BoardIo seam) did not
+// exist when this was written, so the node reproduces that seam here:
+//   ServoIo        -- what the servo loop needs from "the board": read this
+//                     tick's io::SensorSample, write its io::ActuatorCommand.
+//   CanServoIo     -- ServoIo over the CAN link: sensor + current-monitor
+//                     frames in (E2E-checked by a LinkReceiver), actuator frame
+//                     out with the answered sensor frame's counter, status and
+//                     heartbeat frames at their catalog rates.
+//   ControllerNode -- the servo application: on every accepted sensor frame,
+//                     one kernel step, one actuator frame. Commands come in
+//                     through command() (in-process bench) -- the CAN
+//                     host-command frame is not in the catalog yet.
+// When firmware/app lands, ControllerNode should become a thin wrapper around
+// it with CanServoIo as its BoardIo.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "maglev/can_link/bus_load.hpp"
+#include "maglev/can_link/receiver.hpp"
+#include "maglev/can_port/can_port.hpp"
+#include "maglev/controller/controller.hpp"
+#include "maglev/io/actuator_command.hpp"
+#include "maglev/io/sensor_sample.hpp"
+
+namespace maglev::hil {
+
+enum class KernelKind : std::uint8_t { kFloat32 = 0, kQ7_24 = 1 };
+const char* to_string(KernelKind k);
+// "float32" / "float" -> kFloat32, "q7.24" / "q7_24" / "fixed" -> kQ7_24.
+bool parse_kernel_kind(const std::string& s, KernelKind* out);
+
+// The BoardIo-shaped seam between the servo application and its I/O.
+class ServoIo {
+ public:
+  virtual ~ServoIo() = default;
+  // Waits up to timeout_us for this tick's sensors. false: nothing (yet).
+  virtual bool read_sensors(io::SensorSample& sample, std::uint32_t timeout_us) = 0;
+  virtual void write_actuators(const io::ActuatorCommand& command) = 0;
+  // Telemetry after the step (decimated inside the transport).
+  virtual void publish_status(const kernel::ControllerStatus& status) = 0;
+};
+
+// ServoIo over one CanPort (virtual bus or SocketCAN).
+class CanServoIo final : public ServoIo {
+ public:
+  explicit CanServoIo(can::CanPort& port, can::BusLoadMeter* tx_meter = nullptr);
+  bool read_sensors(io::SensorSample& sample, std::uint32_t timeout_us) override;
+  void write_actuators(const io::ActuatorCommand& command) override;
+  void publish_status(const kernel::ControllerStatus& status) override;
+  const can::RxStats& rx_stats() const { return rx_.stats(); }
+  std::uint32_t tx_errors() const { return tx_errors_; }
+
+ private:
+  void send(const can::CanFrame& f);
+  can::CanPort& port_;
+  can::BusLoadMeter* meter_;
+  can::LinkReceiver rx_;
+  std::uint8_t last_sensor_counter_ = 0;
+  std::int16_t coil_current_adc_[io::kCoils] = {};
+  std::uint32_t ticks_ = 0;
+  std::uint8_t status_counter_ = 0;
+  std::uint8_t heartbeat_counter_ = 0;
+  std::uint32_t tx_errors_ = 0;
+};
+
+// The servo application on the kernel, for either Scalar.
+class ControllerNode {
+ public:
+  ControllerNode(KernelKind kind, ServoIo& io);
+  ~ControllerNode();
+  ControllerNode(const ControllerNode&) = delete;
+  ControllerNode& operator=(const ControllerNode&) = delete;
+
+  // One servo tick if sensors arrive within timeout_us: read, step, write.
+  // Returns true if a tick ran.
+  bool run_once(std::uint32_t timeout_us);
+
+  kernel::CommandResult command(const kernel::MotionCommand& cmd);
+  kernel::ConfigError apply_config(const kernel::KernelConfig& config);
+  const kernel::KernelConfig& config() const;
+  const kernel::ControllerStatus& status() const;
+  KernelKind kind() const { return kind_; }
+  std::uint64_t ticks() const { return ticks_; }
+
+  struct Kernel;  // type-erased Controller<float> / Controller<Q7_24>
+
+ private:
+  KernelKind kind_;
+  ServoIo& io_;
+  std::unique_ptr<Kernel> kernel_;
+  std::uint64_t ticks_ = 0;
+};
+
+const char* to_string(kernel::CommandResult r);
+const char* to_string(kernel::SequencerState s);
+
+}  // namespace maglev::hil

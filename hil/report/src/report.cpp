@@ -1,0 +1,163 @@
+#include "maglev/report/report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#ifndef MAGLEV_PLOT_SCRIPT
+#define MAGLEV_PLOT_SCRIPT "hil/report/plot_run.py"
+#endif
+#ifndef MAGLEV_PYTHON3
+#define MAGLEV_PYTHON3 "/usr/bin/python3"
+#endif
+
+namespace maglev::report {
+namespace {
+std::string num(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream o;
+  o << std::setprecision(9) << v;
+  return o.str();
+}
+std::string json_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (c == '\n') { o += "\\n"; continue; }
+    o += c;
+  }
+  return o;
+}
+}  // namespace
+
+bool write_metrics_json(const bench::RunResult& r, const std::string& path, std::string* error) {
+  std::ofstream f(path);
+  if (!f) {
+    *error = "cannot write " + path;
+    return false;
+  }
+  f << "{\n";
+  bool first = true;
+  for (const auto& [k, v] : r.metrics) {
+    f << (first ? "" : ",\n") << "  \"" << json_escape(k) << "\": " << num(v);
+    first = false;
+  }
+  f << "\n}\n";
+  return static_cast<bool>(f);
+}
+
+bool write_trace_csv(const bench::Trace& t, const std::string& path, std::string* error) {
+  std::ofstream f(path);
+  if (!f) {
+    *error = "cannot write " + path;
+    return false;
+  }
+  f << "t_s";
+  for (int i = 0; i < 6; ++i) f << ',' << bench::kPoseNames[i] << (i < 3 ? "_m" : "_rad");
+  for (int i = 0; i < 6; ++i) f << ',' << bench::kPoseNames[i] << (i < 3 ? "_ref_m" : "_ref_rad");
+  for (int j = 0; j < 8; ++j) f << ",i" << (j + 1) << "_cmd_A";
+  for (int j = 0; j < 8; ++j) f << ",i" << (j + 1) << "_A";
+  f << ",state\n";
+  char buf[64];
+  for (std::size_t n = 0; n < t.size(); ++n) {
+    std::snprintf(buf, sizeof buf, "%.4f", t.t_s[n]);
+    f << buf;
+    for (int i = 0; i < 6; ++i) {
+      std::snprintf(buf, sizeof buf, ",%.12g", t.pose[i][n]);
+      f << buf;
+    }
+    for (int i = 0; i < 6; ++i) {
+      std::snprintf(buf, sizeof buf, ",%.12g", t.reference[i][n]);
+      f << buf;
+    }
+    for (int j = 0; j < 8; ++j) {
+      std::snprintf(buf, sizeof buf, ",%.6g", t.current_cmd_A[j][n]);
+      f << buf;
+    }
+    for (int j = 0; j < 8; ++j) {
+      std::snprintf(buf, sizeof buf, ",%.6g", t.current_A[j][n]);
+      f << buf;
+    }
+    f << ',' << t.state[n] << '\n';
+  }
+  return static_cast<bool>(f);
+}
+
+std::string format_table(const bench::RunResult& r) {
+  std::ostringstream o;
+  o << "  " << std::left << std::setw(52) << "metric" << std::right << std::setw(16) << "measured"
+    << std::setw(16) << "paper" << "\n";
+  auto row = [&](const std::string& k, double v) {
+    o << "  " << std::left << std::setw(52) << k << std::right << std::setw(16) << std::setprecision(5) << v;
+    const auto p = r.paper.find(k);
+    if (p != r.paper.end()) o << std::setw(16) << std::setprecision(5) << p->second;
+    o << "\n";
+  };
+  static const char* kHousekeeping[] = {"bus_frames", "ticks", "simulated_time_s", "missed_actuator_frames",
+                                        "controller_rx_rejected_frames", "plant_rx_rejected_frames",
+                                        "final_sequencer_state", "fault_code", "completed",
+                                        "wall_time_per_tick_us", "real_time_factor", "bus_load_percent"};
+  auto house = [&](const std::string& k) {
+    for (const char* h : kHousekeeping) {
+      if (k == h) return true;
+    }
+    return false;
+  };
+  for (const auto& [k, v] : r.metrics) {
+    if (!house(k)) row(k, v);
+  }
+  for (const auto& [k, v] : r.paper) {
+    if (!r.metrics.count(k)) o << "  " << std::left << std::setw(52) << k << std::right << std::setw(16) << "(not measured)"
+                               << std::setw(16) << std::setprecision(5) << v << "\n";
+  }
+  o << "  " << std::left << std::setw(52) << "real_time_factor" << std::right << std::setw(16) << std::setprecision(4)
+    << r.real_time_factor << "\n";
+  o << "  " << std::left << std::setw(52) << "wall_time_per_tick_us" << std::right << std::setw(16)
+    << std::setprecision(4) << r.metrics.at("wall_time_per_tick_us") << "\n";
+  o << "  " << std::left << std::setw(52) << "bus_load_percent" << std::right << std::setw(16) << std::setprecision(4)
+    << r.bus_load_percent << "\n";
+  return o.str();
+}
+
+bool make_plots(const std::string& dir, const std::string& primary, const std::string& title, std::string* error) {
+  if (!std::filesystem::exists(MAGLEV_PYTHON3)) {
+    *error = std::string("plots skipped: ") + MAGLEV_PYTHON3 + " not found (apt-get install python3-matplotlib)";
+    return false;
+  }
+  std::string safe_title;
+  for (char c : title) safe_title += (c == '\'' ? ' ' : c);
+  const std::string cmd = std::string(MAGLEV_PYTHON3) + " '" + MAGLEV_PLOT_SCRIPT + "' '" + dir + "' --primary " +
+                          primary + " --title '" + safe_title + "'";
+  const int rc = std::system(cmd.c_str());
+  if (rc != 0) {
+    *error = "plot script failed (exit " + std::to_string(rc) + "): " + cmd;
+    return false;
+  }
+  return true;
+}
+
+bool write_run(const bench::RunResult& r, const std::string& dir, const std::string& primary, bool plots,
+               std::string* error) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    *error = "cannot create " + dir + ": " + ec.message();
+    return false;
+  }
+  if (!write_metrics_json(r, dir + "/metrics.json", error)) return false;
+  if (!write_trace_csv(r.trace, dir + "/trace.csv", error)) return false;
+  {
+    std::ofstream f(dir + "/commands.txt");
+    f << "# scenario " << r.name << ", kernel " << r.kernel << ", seed " << r.seed << "\n";
+    for (const auto& c : r.commands) f << std::fixed << std::setprecision(4) << c.t_s << "  " << c.text << "  -> " << c.result << "\n";
+    for (const auto& w : r.warnings) f << "warning: " << w << "\n";
+  }
+  if (plots) return make_plots(dir, primary, r.title, error);
+  return true;
+}
+
+}  // namespace maglev::report
