@@ -12,6 +12,10 @@ HIL_PID=$!
 trap 'kill $HIL_PID 2>/dev/null; wait $HIL_PID 2>/dev/null' EXIT
 S() { "$STAGECTL" --tcp "127.0.0.1:$PORT" "$@"; }
 for _ in $(seq 100); do S get id.magic >/dev/null 2>&1 && break; sleep 0.1; done
+if ! kill -0 "$HIL_PID" 2>/dev/null || ! S get id.magic >/dev/null 2>&1; then
+  echo "maglev-hil serve did not come up on 127.0.0.1:$PORT:"; cat "$WORK/hil.log"
+  echo "0 passed, 1 failed"; exit 1
+fi
 fails=0; passes=0
 check() { if eval "$2"; then passes=$((passes + 1)); else fails=$((fails + 1)); echo "FAIL: $1"; fi; }
 val() { S get "$1" | sed -e 's/.* = //' -e 's/ *#.*//'; }

@@ -21,10 +21,17 @@ const char* to_string(RxStatus s) {
 }
 
 std::int64_t read_signal(const Signal& s, const std::uint8_t* data) {
+  // Byte-wise (up to 8 bits per step), bit-exact with the DBC Intel layout;
+  // the HIL bench decodes ~50 signals per servo tick, so this is hot.
   std::uint64_t v = 0;
-  for (std::uint32_t i = 0; i < s.length_bits; ++i) {
+  std::uint32_t i = 0;
+  while (i < s.length_bits) {
     const std::uint32_t bit = s.start_bit + i;
-    if ((data[bit / 8u] >> (bit % 8u)) & 1u) v |= std::uint64_t{1} << i;
+    const std::uint32_t off = bit % 8u;
+    const std::uint32_t take = (8u - off) < (s.length_bits - i) ? (8u - off) : (s.length_bits - i);
+    const std::uint32_t chunk = (static_cast<std::uint32_t>(data[bit / 8u]) >> off) & ((1u << take) - 1u);
+    v |= static_cast<std::uint64_t>(chunk) << i;
+    i += take;
   }
   if (s.is_signed && s.length_bits < 64 && ((v >> (s.length_bits - 1u)) & 1u) != 0) {
     v |= ~std::uint64_t{0} << s.length_bits;  // sign-extend
@@ -34,14 +41,15 @@ std::int64_t read_signal(const Signal& s, const std::uint8_t* data) {
 
 void write_signal(const Signal& s, std::int64_t raw, std::uint8_t* data) {
   const auto v = static_cast<std::uint64_t>(raw);
-  for (std::uint32_t i = 0; i < s.length_bits; ++i) {
+  std::uint32_t i = 0;
+  while (i < s.length_bits) {
     const std::uint32_t bit = s.start_bit + i;
-    const auto mask = static_cast<std::uint8_t>(1u << (bit % 8u));
-    if (((v >> i) & 1u) != 0) {
-      data[bit / 8u] = static_cast<std::uint8_t>(data[bit / 8u] | mask);
-    } else {
-      data[bit / 8u] = static_cast<std::uint8_t>(data[bit / 8u] & ~mask);
-    }
+    const std::uint32_t off = bit % 8u;
+    const std::uint32_t take = (8u - off) < (s.length_bits - i) ? (8u - off) : (s.length_bits - i);
+    const std::uint32_t mask = ((1u << take) - 1u) << off;
+    const std::uint32_t bits = (static_cast<std::uint32_t>(v >> i) << off) & mask;
+    data[bit / 8u] = static_cast<std::uint8_t>((static_cast<std::uint32_t>(data[bit / 8u]) & ~mask) | bits);
+    i += take;
   }
 }
 

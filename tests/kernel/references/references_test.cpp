@@ -18,8 +18,8 @@ constexpr double kT = 1.0 / kFs;
 constexpr double kPi = 3.14159265358979323846;
 constexpr std::int64_t kMm = 1000000000;  // pm per mm
 
-ReferenceLimits stage_limits_x() {
-  ReferenceLimits l;
+AxisReferenceLimits stage_limits_x() {
+  AxisReferenceLimits l;
   l.max_velocity = 0.3;
   l.max_acceleration = 1.2;
   l.max_jerk = 100.0;
@@ -72,7 +72,7 @@ ProfileStats scan(const Gen& g, std::int64_t ticks, double dir) {
 TEST_GROUP(References){};
 
 TEST(References, TrapezoidMovesOfFig10ReachTargetWithinLimits) {
-  const ReferenceLimits lim = stage_limits_x();
+  const AxisReferenceLimits lim = stage_limits_x();
   const double dists_mm[] = {12.0, 24.0, 56.0};
   const double accs[] = {0.6, 1.2};
   for (double dmm : dists_mm) {
@@ -117,7 +117,7 @@ TEST(References, TrapezoidMovesOfFig10ReachTargetWithinLimits) {
 }
 
 TEST(References, SCurveRespectsJerkAndReachesTarget) {
-  const ReferenceLimits lim = stage_limits_x();
+  const AxisReferenceLimits lim = stage_limits_x();
   const double cases[][4] = {// d [m], v, a, j
                              {0.024, 0.25, 1.2, 40.0},
                              {0.002, 0.25, 1.2, 40.0},   // v not reached
@@ -152,8 +152,8 @@ TEST(References, SCurveRespectsJerkAndReachesTarget) {
 }
 
 TEST(References, CircleOfFig8HasTheRightRadiusAndSmoothStart) {
-  const ReferenceLimits lx = stage_limits_x();
-  ReferenceLimits ly = lx;
+  const AxisReferenceLimits lx = stage_limits_x();
+  AxisReferenceLimits ly = lx;
   ly.travel_min_pico = -17 * kMm;  // 35 mm in y
   ly.travel_max_pico = 17 * kMm;
   CircleReference c;
@@ -188,7 +188,7 @@ TEST(References, CircleOfFig8HasTheRightRadiusAndSmoothStart) {
 }
 
 TEST(References, SinusoidOfPaper002) {
-  ReferenceLimits lim = stage_limits_x();
+  AxisReferenceLimits lim = stage_limits_x();
   SinusoidReference s;
   // w0 = 1.5 pi rad/s, 30 um amplitude, 3 cycles, starting at rest.
   const double f = 0.75;
@@ -215,7 +215,7 @@ TEST(References, SinusoidOfPaper002) {
 }
 
 TEST(References, StepAndRejectedMoves) {
-  const ReferenceLimits lim = stage_limits_x();
+  const AxisReferenceLimits lim = stage_limits_x();
   StepReference st;
   CHECK(st.plan(kMm, 8000000, lim) == ReferenceError::kOk);  // +8 um
   CHECK(st.sample(0).position_pico == kMm + 8000000);

@@ -19,9 +19,9 @@ bool finite_all(std::initializer_list<double> values) {
   return true;
 }
 
-bool inside(std::int64_t p, const ReferenceLimits& l) { return p >= l.travel_min_pico && p <= l.travel_max_pico; }
+bool inside(std::int64_t p, const AxisReferenceLimits& l) { return p >= l.travel_min_pico && p <= l.travel_max_pico; }
 
-bool limits_valid(const ReferenceLimits& l) {
+bool limits_valid(const AxisReferenceLimits& l) {
   return finite_all({l.max_velocity, l.max_acceleration}) && l.max_velocity > 0.0 && l.max_acceleration > 0.0 &&
          l.travel_min_pico <= l.travel_max_pico;
 }
@@ -38,7 +38,7 @@ std::int64_t ticks_for(double duration_s, double servo_rate_Hz) {
 
 // --- Step -----------------------------------------------------------------
 
-ReferenceError StepReference::plan(std::int64_t start_pico, std::int64_t step_pico, const ReferenceLimits& limits) {
+ReferenceError StepReference::plan(std::int64_t start_pico, std::int64_t step_pico, const AxisReferenceLimits& limits) {
   if (limits.travel_min_pico > limits.travel_max_pico) return ReferenceError::kBadParameter;
   if (step_pico == INT64_MIN) return ReferenceError::kStepTooLarge;  // -x would overflow
   const std::int64_t mag = step_pico < 0 ? -step_pico : step_pico;
@@ -79,7 +79,7 @@ void MoveReference::evaluate(double t, double* s, double* v, double* a) const {
 }
 
 ReferenceError MoveReference::finish_plan(std::int64_t start_pico, std::int64_t target_pico, double servo_rate_Hz,
-                                          const ReferenceLimits& limits) {
+                                          const AxisReferenceLimits& limits) {
   if (!inside(start_pico, limits) || !inside(target_pico, limits)) return ReferenceError::kOutsideTravel;
   // Integrate the segment start states (s, v continuous; a as given).
   double s = 0.0, v = 0.0, t = 0.0;
@@ -106,7 +106,7 @@ ReferenceError MoveReference::finish_plan(std::int64_t start_pico, std::int64_t 
 }
 
 ReferenceError MoveReference::plan_trapezoid(std::int64_t start_pico, std::int64_t target_pico, double vmax,
-                                             double amax, double servo_rate_Hz, const ReferenceLimits& limits) {
+                                             double amax, double servo_rate_Hz, const AxisReferenceLimits& limits) {
   if (!finite_all({vmax, amax, servo_rate_Hz})) return ReferenceError::kNonFinite;
   if (!limits_valid(limits) || vmax <= 0.0 || amax <= 0.0 || servo_rate_Hz <= 0.0) {
     return ReferenceError::kBadParameter;
@@ -155,7 +155,7 @@ void accel_phase(double v, double a, double j, double* tj, double* ta, double* a
 
 ReferenceError MoveReference::plan_scurve(std::int64_t start_pico, std::int64_t target_pico, double vmax,
                                           double amax, double jmax, double servo_rate_Hz,
-                                          const ReferenceLimits& limits) {
+                                          const AxisReferenceLimits& limits) {
   if (!finite_all({vmax, amax, jmax, servo_rate_Hz, limits.max_jerk})) return ReferenceError::kNonFinite;
   if (!limits_valid(limits) || vmax <= 0.0 || amax <= 0.0 || jmax <= 0.0 || servo_rate_Hz <= 0.0) {
     return ReferenceError::kBadParameter;
@@ -230,7 +230,7 @@ AxisReference MoveReference::sample(std::int64_t tick) const {
 
 ReferenceError CircleReference::plan(std::int64_t x0_pico, std::int64_t y0_pico, double diameter_m,
                                      double speed, double revolutions, double at, double jerk,
-                                     double servo_rate_Hz, const ReferenceLimits& lx, const ReferenceLimits& ly) {
+                                     double servo_rate_Hz, const AxisReferenceLimits& lx, const AxisReferenceLimits& ly) {
   if (!finite_all({diameter_m, speed, revolutions, at, jerk, servo_rate_Hz})) return ReferenceError::kNonFinite;
   if (!limits_valid(lx) || !limits_valid(ly) || diameter_m <= 0.0 || speed <= 0.0 || revolutions <= 0.0 ||
       at <= 0.0 || jerk <= 0.0 || servo_rate_Hz <= 0.0) {
@@ -252,7 +252,7 @@ ReferenceError CircleReference::plan(std::int64_t x0_pico, std::int64_t y0_pico,
     return ReferenceError::kOutsideTravel;
   }
   const double length = revolutions * 2.0 * kPi * r;
-  ReferenceLimits arc;
+  AxisReferenceLimits arc;
   arc.max_velocity = speed;
   arc.max_acceleration = at;
   arc.max_jerk = jerk;
@@ -286,7 +286,7 @@ void CircleReference::sample(std::int64_t tick, AxisReference* x, AxisReference*
 // --- Sinusoid ----------------------------------------------------------------
 
 ReferenceError SinusoidReference::plan(std::int64_t start_pico, double amplitude_m, double frequency_Hz,
-                                       double cycles, double servo_rate_Hz, const ReferenceLimits& limits,
+                                       double cycles, double servo_rate_Hz, const AxisReferenceLimits& limits,
                                        double phase_rad) {
   if (!finite_all({amplitude_m, frequency_Hz, cycles, servo_rate_Hz, phase_rad})) return ReferenceError::kNonFinite;
   if (!limits_valid(limits) || frequency_Hz <= 0.0 || cycles < 0.0 || servo_rate_Hz <= 0.0 ||

@@ -15,7 +15,7 @@
 // arithmetic is double (Cortex-M7 has a double FPU) with one rounding to pm.
 // Profiles end EXACTLY on their target (the last samples are clamped to it).
 //
-// Every plan() validates the request against the caller's ReferenceLimits
+// Every plan() validates the request against the caller's AxisReferenceLimits
 // (max velocity, acceleration, jerk, max step, travel window) and returns an
 // error code instead of a profile that would exceed them: the stage is never
 // commanded beyond its limits. On error the generator is left idle (it keeps
@@ -41,7 +41,7 @@ enum class ReferenceError : std::uint8_t {
 // Longest profile: 2^31 ticks (9.9 days at 2.5 kHz).
 inline constexpr std::int64_t kMaxProfileTicks = std::int64_t{1} << 31;
 
-struct ReferenceLimits {
+struct AxisReferenceLimits {
   double max_velocity = 0.0;      // m/s (rad/s), > 0
   double max_acceleration = 0.0;  // m/s^2 (rad/s^2), > 0
   double max_jerk = 0.0;          // m/s^3 (rad/s^3), > 0 (S-curve only)
@@ -60,7 +60,7 @@ struct AxisReference {
 // --- Step -----------------------------------------------------------------
 class StepReference {
  public:
-  ReferenceError plan(std::int64_t start_pico, std::int64_t step_pico, const ReferenceLimits& limits);
+  ReferenceError plan(std::int64_t start_pico, std::int64_t step_pico, const AxisReferenceLimits& limits);
   AxisReference sample(std::int64_t tick) const;  // tick 0 carries the step
   bool done(std::int64_t tick) const { return tick >= 0; }
 
@@ -75,11 +75,11 @@ class MoveReference {
  public:
   // Trapezoidal velocity: v and a limited (jerk unbounded), eq. Fig. 10.
   ReferenceError plan_trapezoid(std::int64_t start_pico, std::int64_t target_pico, double max_velocity,
-                                double max_acceleration, double servo_rate_Hz, const ReferenceLimits& limits);
+                                double max_acceleration, double servo_rate_Hz, const AxisReferenceLimits& limits);
   // Jerk-limited 7-segment S-curve (v, a, j limited).
   ReferenceError plan_scurve(std::int64_t start_pico, std::int64_t target_pico, double max_velocity,
                              double max_acceleration, double max_jerk, double servo_rate_Hz,
-                             const ReferenceLimits& limits);
+                             const AxisReferenceLimits& limits);
   AxisReference sample(std::int64_t tick) const;
   bool done(std::int64_t tick) const { return tick >= total_ticks_; }
   std::int64_t total_ticks() const { return total_ticks_; }
@@ -94,7 +94,7 @@ class MoveReference {
     double t0, s0, v0, a0, jerk;
   };
   ReferenceError finish_plan(std::int64_t start_pico, std::int64_t target_pico, double servo_rate_Hz,
-                             const ReferenceLimits& limits);
+                             const AxisReferenceLimits& limits);
   Segment seg_[7] = {};
   int n_seg_ = 0;
   double duration_s_ = 0.0;
@@ -115,7 +115,7 @@ class CircleReference {
  public:
   ReferenceError plan(std::int64_t x0_pico, std::int64_t y0_pico, double diameter_m, double speed_m_per_s,
                       double revolutions, double tangential_acceleration, double jerk, double servo_rate_Hz,
-                      const ReferenceLimits& limits_x, const ReferenceLimits& limits_y);
+                      const AxisReferenceLimits& limits_x, const AxisReferenceLimits& limits_y);
   void sample(std::int64_t tick, AxisReference* x, AxisReference* y) const;
   bool done(std::int64_t tick) const { return arc_.done(tick); }
   std::int64_t total_ticks() const { return arc_.total_ticks(); }
@@ -135,7 +135,7 @@ class CircleReference {
 class SinusoidReference {
  public:
   ReferenceError plan(std::int64_t start_pico, double amplitude_m, double frequency_Hz, double cycles,
-                      double servo_rate_Hz, const ReferenceLimits& limits, double phase_rad = -1.5707963267948966);
+                      double servo_rate_Hz, const AxisReferenceLimits& limits, double phase_rad = -1.5707963267948966);
   AxisReference sample(std::int64_t tick) const;
   bool done(std::int64_t tick) const { return total_ticks_ > 0 && tick >= total_ticks_; }
 
