@@ -1,7 +1,6 @@
 #include "maglev/bench/runner.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <complex>
@@ -435,19 +434,19 @@ void streamed_offset(const Streamed& s, double t, double out[6]) {
 }
 
 struct Link {
+  std::shared_ptr<can::VirtualBus> bus;  // --can virtual: a private bus per run
   std::unique_ptr<can::OwnedCanPort> plant_port, ctrl_port;
   std::string error;
 };
 
-std::atomic<int> g_bus_serial{0};
-
 Link open_link(const std::string& name, bool need_controller) {
   Link l;
   if (name == "virtual") {
-    // A fresh named bus per run: runs in one process never hear each other.
-    const std::string bus = "maglev-hil-" + std::to_string(g_bus_serial.fetch_add(1));
-    l.plant_port = can::open_can_port("virtual:" + bus, &l.error);
-    if (l.plant_port && need_controller) l.ctrl_port = can::open_can_port("virtual:" + bus, &l.error);
+    // Not the process-wide named registry: runs in one process never hear
+    // each other and nothing outlives the run.
+    l.bus = std::make_shared<can::VirtualBus>("maglev-hil");
+    l.plant_port = l.bus->open_endpoint();
+    if (need_controller) l.ctrl_port = l.bus->open_endpoint();
   } else {
     l.plant_port = can::open_can_port(name, &l.error);
     if (l.plant_port && need_controller) l.ctrl_port = can::open_can_port(name, &l.error);

@@ -15,6 +15,8 @@ using namespace maglev;
 using namespace maglev::kernel;
 using maglev::kernel::test::AxisStage;
 
+extern "C" volatile unsigned long g_alloc_count;
+
 namespace {
 
 constexpr double kFs = io::stage::kServoRate_Hz;
@@ -362,5 +364,240 @@ TEST(ClosedLoop, ExcitationMeasuresTheOpenLoopGainAndIsBounded) {
   CHECK(mag > 0.7 && mag < 1.4);
   // Paper 000: 33.2 deg at 49.8 Hz; the one-tick computation delay costs 7.2 deg at 50 Hz.
   CHECK(180.0 + phase > 20.0 && 180.0 + phase < 40.0);
+  CHECK(c.status().state == SequencerState::kReady);
+}
+
+namespace {
+
+MotionCommand move_cmd(MotionType type, Axis a, double target, double v, double acc, double jerk = 0.0) {
+  MotionCommand m;
+  m.type = type;
+  m.axis = a;
+  m.target = target;
+  m.velocity = v;
+  m.acceleration = acc;
+  m.jerk = jerk;
+  return m;
+}
+
+double x_m(const Pose64& p) { return static_cast<double>(p.x_pm) * 1e-12; }
+double y_m(const Pose64& p) { return static_cast<double>(p.y_pm) * 1e-12; }
+
+// Paper 000 Fig. 10(a): 12 mm in x at 60 mm/s and 0.6 m/s^2, with and without
+// the acceleration feed-forward m a / (2 b*). Returns the peak |e_x| (um).
+double trapezoid_peak_error_um(bool feedforward, double* end_error_um) {
+  static Controller<float> controllers[2];
+  Controller<float>& c = controllers[feedforward ? 0 : 1];
+  KernelConfig kc = default_kernel_config();
+  kc.acceleration_feedforward = feedforward;
+  if (c.apply_config(kc) != ConfigError::kOk) return -1.0;
+  AxisStage s(21);
+  if (!levitate_to_ready(c, s)) return -2.0;
+  const double x0 = x_m(c.status().reference);
+  if (c.command(move_cmd(MotionType::kMoveTo, Axis::kX, x0 + 12e-3, 0.06, 0.6)) != CommandResult::kAccepted) {
+    return -3.0;
+  }
+  double peak = 0.0;
+  for (int n = 0; n < 2500; ++n) {  // the move takes 0.3 s
+    s.tick(c);
+    peak = std::fmax(peak, std::fabs(error_x_um(c.status())));
+  }
+  *end_error_um = std::fabs(x_m(c.status().reference) - (x0 + 12e-3)) * 1e6;
+  return peak;
+}
+
+}  // namespace
+
+TEST(ClosedLoop, TrapezoidFromReferencesWithAccelerationFeedForward) {
+  double end_ff = 1, end_noff = 1;
+  const double with_ff = trapezoid_peak_error_um(true, &end_ff);
+  const double without = trapezoid_peak_error_um(false, &end_noff);
+  std::printf("\n12 mm trapezoid (0.06 m/s, 0.6 m/s^2): peak |e_x| %.3f um with a ff, %.3f um without\n", with_ff,
+              without);
+  CHECK(with_ff >= 0.0 && without >= 0.0);
+  DOUBLES_EQUAL(0.0, end_ff, 1e-6);   // ends exactly on the target (1 pm)
+  DOUBLES_EQUAL(0.0, end_noff, 1e-6);
+  CHECK(with_ff < without / 5.0);
+}
+
+TEST(ClosedLoop, EveryProfileValidatedAgainstTheLimits) {
+  static Controller<float> c;
+  AxisStage s(22);
+  CHECK(levitate_to_ready(c, s));
+  const double x0 = x_m(c.status().reference);
+  // Beyond max_velocity (0.15 m/s), max_acceleration, max_jerk, travel, max_step.
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kX, x0 + 1e-3, 0.2, 0.5)) == CommandResult::kRefusedBadProfile);
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kX, x0 + 1e-3, 0.1, 2.0)) == CommandResult::kRefusedBadProfile);
+  CHECK(c.command(move_cmd(MotionType::kMoveJerkLimited, Axis::kX, x0 + 1e-3, 0.1, 1.0, 500.0)) ==
+        CommandResult::kRefusedBadProfile);
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kX, 0.03, 0.1, 1.0)) == CommandResult::kRefusedOutOfRange);
+  CHECK(c.command(step_cmd(Axis::kZ, 11e-6)) == CommandResult::kRefusedOutOfRange);
+  MotionCommand sine;
+  sine.type = MotionType::kSinusoid;
+  sine.axis = Axis::kX;
+  sine.amplitude = 5e-3;
+  sine.frequency_Hz = 10.0;  // A w = 0.31 m/s > 0.15
+  CHECK(c.command(sine) == CommandResult::kRefusedBadProfile);
+  MotionCommand circle;
+  circle.type = MotionType::kCircle;
+  circle.diameter_m = 60e-3;  // leaves the y window
+  circle.period_s = 20.0;
+  circle.turns = 1.0;
+  CHECK(c.command(circle) == CommandResult::kRefusedOutOfRange);
+  // Nothing moved.
+  for (int n = 0; n < 100; ++n) s.tick(c);
+  DOUBLES_EQUAL(x0, x_m(c.status().reference), 1e-12);
+  // A valid S-curve: 2 mm at 0.05 m/s, 0.5 m/s^2, 50 m/s^3, ends on the target.
+  CHECK(c.command(move_cmd(MotionType::kMoveJerkLimited, Axis::kX, x0 + 2e-3, 0.05, 0.5, 50.0)) ==
+        CommandResult::kAccepted);
+  double max_jerk_seen = 0.0, prev_a = 0.0;
+  for (int n = 0; n < 2000; ++n) {
+    s.tick(c);
+    const double acc = c.status().reference_acceleration[0];
+    max_jerk_seen = std::fmax(max_jerk_seen, std::fabs(acc - prev_a) * kFs);
+    prev_a = acc;
+  }
+  DOUBLES_EQUAL(x0 + 2e-3, x_m(c.status().reference), 1e-12);
+  CHECK(max_jerk_seen <= 50.0 * 1.001);
+  CHECK(c.status().state == SequencerState::kReady);
+}
+
+TEST(ClosedLoop, SixMillimetreCircleOfPaper000Fig8) {
+  static Controller<float> c;
+  AxisStage s(23);
+  CHECK(levitate_to_ready(c, s));
+  // Homing puts this stage at y = -15.9 mm: a 6 mm circle (y0 +- 3 mm) would
+  // leave the y window and is refused; move 8 mm inwards first.
+  {
+    MotionCommand probe;
+    probe.type = MotionType::kCircle;
+    probe.diameter_m = 6e-3;
+    probe.period_s = 2.0;
+    probe.turns = 2.0;
+    if (y_m(c.status().reference) < -13.5e-3) CHECK(c.command(probe) == CommandResult::kRefusedOutOfRange);
+    CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kY, y_m(c.status().reference) + 8e-3, 0.05, 0.5)) ==
+          CommandResult::kAccepted);
+    for (int n = 0; n < 2500; ++n) s.tick(c);
+  }
+  const double x0 = x_m(c.status().reference), y0 = y_m(c.status().reference);
+  MotionCommand circle;
+  circle.type = MotionType::kCircle;
+  circle.diameter_m = 6e-3;
+  circle.period_s = 2.0;
+  circle.turns = 2.0;
+  CHECK(c.command(circle) == CommandResult::kAccepted);
+  double max_radius_dev = 0.0, max_e = 0.0, max_y = -1.0;
+  int n = 0;
+  for (; n < 30000 && (n < 10 || std::fabs(c.status().reference_acceleration[0]) > 0.0 ||
+                       std::fabs(x_m(c.status().reference) - x0) > 1e-12);
+       ++n) {
+    s.tick(c);
+    const double dx = x_m(c.status().reference) - (x0 - 3e-3), dy = y_m(c.status().reference) - y0;
+    max_radius_dev = std::fmax(max_radius_dev, std::fabs(std::hypot(dx, dy) - 3e-3));
+    max_y = std::fmax(max_y, dy);
+    max_e = std::fmax(max_e, std::fmax(std::fabs(error_x_um(c.status())),
+                                       std::fabs(static_cast<double>(c.status().reference.y_pm - c.status().pose.y_pm)) * 1e-6));
+  }
+  std::printf("\n6 mm circle x2: %d ticks (%.2f s), reference radius error %.3g m, peak |e_xy| %.3f um\n", n, n / kFs,
+              max_radius_dev, max_e);
+  CHECK(n < 30000);
+  DOUBLES_EQUAL(x0, x_m(c.status().reference), 1e-12);
+  DOUBLES_EQUAL(y0, y_m(c.status().reference), 1e-12);
+  DOUBLES_EQUAL(3e-3, max_y, 1e-6);
+  CHECK(max_radius_dev < 1e-9);
+  CHECK(max_e < 5.0);
+  CHECK(c.status().state == SequencerState::kReady);
+}
+
+namespace {
+
+// x tracks p0 + A (1 - cos w0 t), A = 5 mm, w0 = 1.5 pi (paper 002), with the
+// acceleration feed-forward OFF so that only the loop tracks. Error amplitude
+// at w0 by lock-in over 3 periods after 10 s (um).
+double sinusoid_tracking_error_um(LoopType type) {
+  static Controller<float> controllers[2];
+  Controller<float>& c = controllers[type == LoopType::kInternalModel ? 0 : 1];
+  KernelConfig kc = default_kernel_config();
+  kc.axis[0].type = type;
+  kc.acceleration_feedforward = false;
+  if (c.apply_config(kc) != ConfigError::kOk) return -1.0;
+  AxisStage s(24);
+  if (!levitate_to_ready(c, s)) return -2.0;
+  MotionCommand sine;
+  sine.type = MotionType::kSinusoid;
+  sine.axis = Axis::kX;
+  sine.amplitude = 5e-3;
+  sine.frequency_Hz = 0.75;  // w0 = 1.5 pi rad/s
+  sine.turns = 0.0;          // until kHold
+  if (c.command(sine) != CommandResult::kAccepted) return -3.0;
+  const double w0 = 1.5 * 3.14159265358979323846;
+  double ic = 0.0, is = 0.0;
+  constexpr int kSettle = 25000, kWindow = 10000;
+  for (int n = 1; n <= kSettle + kWindow; ++n) {
+    s.tick(c);
+    if (n > kSettle) {
+      const double t = n / kFs;
+      const double e = error_x_um(c.status());
+      ic += e * std::cos(w0 * t);
+      is += e * std::sin(w0 * t);
+    }
+  }
+  if (c.status().state != SequencerState::kReady) return -4.0;
+  return 2.0 * std::hypot(ic, is) / kWindow;
+}
+
+}  // namespace
+
+TEST(ClosedLoop, InternalModelTracksTheW0SinusoidReference) {
+  const double pid = sinusoid_tracking_error_um(LoopType::kPid2Dof);
+  const double imr = sinusoid_tracking_error_um(LoopType::kInternalModel);
+  std::printf("\n5 mm sinusoid at w0 = 1.5 pi rad/s, no feed-forward: error amplitude PID %.4f um, internal model %.5f um\n",
+              pid, imr);
+  CHECK(pid > 0.05);  // ~ A w0^2 m / (2 b* ki / w0) = 0.096 um
+  CHECK(imr >= 0.0);
+  CHECK(imr < 0.002);
+  CHECK(imr < pid / 20.0);
+}
+
+TEST(ClosedLoop, StepNeverAllocatesWithEveryProfileAndTheExcitation) {
+  static Controller<numeric::Q7_24> c;
+  AxisStage s(25);
+  CHECK(levitate_to_ready(c, s));
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kY, y_m(c.status().reference) + 8e-3, 0.05, 0.5)) ==
+        CommandResult::kAccepted);
+  for (int n = 0; n < 2500; ++n) s.tick(c);
+  const unsigned long before = g_alloc_count;
+  int accepted = 0;
+  accepted += c.command(move_cmd(MotionType::kMoveJerkLimited, Axis::kX, x_m(c.status().reference) + 1e-3, 0.05,
+                                 0.5, 50.0)) == CommandResult::kAccepted;
+  for (int n = 0; n < 1500; ++n) s.tick(c);
+  MotionCommand m;
+  m.type = MotionType::kCircle;
+  m.diameter_m = 6e-3;
+  m.period_s = 1.0;
+  m.turns = 1.0;
+  accepted += c.command(m) == CommandResult::kAccepted;
+  for (int n = 0; n < 4000; ++n) s.tick(c);
+  m = MotionCommand{};
+  m.type = MotionType::kSinusoid;
+  m.axis = Axis::kZ;
+  m.amplitude = 2e-6;
+  m.frequency_Hz = 0.75;
+  m.turns = 1.0;
+  accepted += c.command(m) == CommandResult::kAccepted;
+  for (int n = 0; n < 3500; ++n) s.tick(c);
+  m = MotionCommand{};
+  m.type = MotionType::kExcite;
+  m.axis = Axis::kThetaZ;
+  m.amplitude = 0.1;
+  m.frequency_Hz = 20.0;
+  m.harmonics = 8;
+  m.duration_s = 0.5;
+  accepted += c.command(m) == CommandResult::kAccepted;
+  accepted += c.command(step_cmd(Axis::kX, 5e-6)) == CommandResult::kAccepted;
+  for (int n = 0; n < 2000; ++n) s.tick(c);
+  const unsigned long after = g_alloc_count;
+  LONGS_EQUAL(5, accepted);
+  LONGS_EQUAL(0, static_cast<long>(after - before));
   CHECK(c.status().state == SequencerState::kReady);
 }

@@ -1,33 +1,53 @@
-// maglev-stm32h743: the board image. Owns every static object (drivers,
-// kernel, servo loop, recorder), the interrupt priorities and the
-// low-priority communications loop.
+// maglev-stm32h743 / maglev-stm32h743-hil: the board images. Own every static
+// object (drivers, kernel, servo loop, recorder, application services), the
+// interrupt priorities and the communications loop. One source, two images:
+//
+//   production (MAGLEV_BOARD_HIL undefined): sensors = AD7606 pair + three
+//     quadrature counters, actuators = AD5764 chain + amplifier enable
+//     (amplifier_board_io.hpp); tick = AD7606 BUSY falling edge (EXTI11).
+//   HIL (MAGLEV_BOARD_HIL=1): sensors/actuators = app::CanSensorSource /
+//     app::CanActuatorSink over FDCAN1 (sensor frame in, actuator frame out);
+//     tick = TIM2 update at 2.5 kHz (the time master). Everything else -- the
+//     kernel, ServoLoop, Application (Modbus, telemetry, persistence,
+//     watchdog policy) -- is the same code.
 //
 // Priorities (4 implemented bits, lower = more urgent):
-//   0  EXTI15_10 (AD7606 BUSY falling = servo tick) and TIM3 (16-bit encoder
-//      extension): the same level, so they never preempt each other.
-//   1  SysTick 1 kHz: missed-tick deadline check.
-//   thread mode: Modbus RTU (USART2/RS-485), CAN FD telemetry (FDCAN1),
-//      recorder drain, watchdog service.
+//   0  servo tick: EXTI15_10 (production) / TIM2 (HIL), and TIM3 (16-bit
+//      encoder extension, production): the same level, never nested.
+//   1  SysTick 1 kHz: missed-tick deadline check (safe outputs).
+//   thread mode: app::Application::service -- Modbus RTU (USART2/RS-485),
+//      CAN FD telemetry (controller_status 250 Hz, heartbeat 10 Hz), board
+//      diagnostics frame, recorder drain, watchdog (fed only when the tick
+//      AND this loop ran). Kernel accesses and (HIL) CAN sends from thread
+//      mode run with interrupts masked (PRIMASK, nesting-safe).
 #include <cstdint>
 
+#include "maglev/app/application.hpp"
 #include "maglev/app/recorder.hpp"
 #include "maglev/app/servo_loop.hpp"
-#include "maglev/board/stm32h743/amplifier_board_io.hpp"
+#include "maglev/board/stm32h743/board_flash.hpp"
 #include "maglev/board/stm32h743/clock.hpp"
 #include "maglev/board/stm32h743/mpu_cache.hpp"
 #include "maglev/board/stm32h743/pinmap.hpp"
 #include "maglev/board/stm32h743/servo_kernel.hpp"
+#include "maglev/drivers/amplifier_enable.hpp"
+#include "maglev/drivers/fdcan.hpp"
+#include "maglev/drivers/flash.hpp"
+#include "maglev/drivers/iwdg.hpp"
+#include "maglev/drivers/stm32h7_gpio.hpp"
+#include "maglev/drivers/usart_rs485.hpp"
+#include "maglev/persistence/config_store.hpp"
+#include "maglev/stm32h7/register_bus.hpp"
+#if MAGLEV_BOARD_HIL
+#include "maglev/app/can_io.hpp"
+#else
+#include "maglev/board/stm32h743/amplifier_board_io.hpp"
 #include "maglev/drivers/ad5764.hpp"
 #include "maglev/drivers/ad7606.hpp"
-#include "maglev/drivers/amplifier_enable.hpp"
 #include "maglev/drivers/convst_timer.hpp"
-#include "maglev/drivers/fdcan.hpp"
-#include "maglev/drivers/iwdg.hpp"
 #include "maglev/drivers/quadrature_encoder.hpp"
-#include "maglev/drivers/stm32h7_gpio.hpp"
 #include "maglev/drivers/stm32h7_spi.hpp"
-#include "maglev/drivers/usart_rs485.hpp"
-#include "maglev/stm32h7/register_bus.hpp"
+#endif
 
 namespace r = maglev::stm32h7;
 namespace d = maglev::drivers;
@@ -42,6 +62,10 @@ void HardFault_Handler();
 void SysTick_Handler();
 void EXTI15_10_IRQHandler();
 void TIM3_IRQHandler();
+void TIM2_IRQHandler();
+// Linker script (linker/stm32h743.ld): the two configuration sectors.
+extern std::uint32_t __config_bank_a_start;
+extern std::uint32_t __config_bank_b_start;
 }
 
 namespace {

@@ -33,6 +33,19 @@ bool same_bytes(const T& a, const T& b) {
 
 bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
 
+// sin(2 pi phase / 2^32) from the kernel's table, sine only (the excitation
+// needs no cosine): identical table values in both Scalars.
+template <typename Scalar>
+Scalar table_sin(std::uint32_t phase) {
+  using Traits = numeric::ScalarTraits<Scalar>;
+  const std::int32_t q30 = numeric::sin_q30(phase);
+  if constexpr (Traits::kIsFixed) {
+    return Scalar::from_raw(static_cast<std::int32_t>(numeric::detail::shift_round(q30, 30 - Scalar::kFracBits)));
+  } else {
+    return static_cast<float>(q30) * (1.0f / 1073741824.0f);
+  }
+}
+
 }  // namespace
 
 KernelConfig default_kernel_config() {
@@ -233,7 +246,7 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
     default: break;
   }
   if (cmd.type == MotionType::kHold) {
-    for (Profile& p : profile_) p.active = false;
+    for (Profile& p : profile_) p.kind = ProfileKind::kNone;
     excitation_.active = false;
     return CommandResult::kAccepted;
   }
@@ -242,54 +255,110 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
     return CommandResult::kAccepted;
   }
   if (cmd.type == MotionType::kExcite) return start_excitation(cmd);
-  if (cmd.type == MotionType::kMoveJerkLimited || cmd.type == MotionType::kCircle ||
-      cmd.type == MotionType::kSinusoid) {
-    return CommandResult::kUnsupported;
-  }
   if (!sequencer_.output().motion_allowed) return CommandResult::kRefusedNotReady;
   const int a = axis_index(cmd.axis);
   if (a < 0 || a >= kAxisCount) return CommandResult::kRefusedOutOfRange;
-  const ReferenceLimits& lim = config_.references;
-  const double now_si = static_cast<double>(reference_pm_[a]) * 1e-12;
-  const double target = cmd.type == MotionType::kStep ? now_si + cmd.target : cmd.target;
-  if (!std::isfinite(target) || target < static_cast<double>(lim.position_min[a]) ||
-      target > static_cast<double>(lim.position_max[a])) {
-    return CommandResult::kRefusedOutOfRange;
+  // Every request is planned by firmware/kernel/references against this
+  // axis' ReferenceLimits; a refused plan leaves the axis as it was.
+  auto result = [](ReferenceError e) {
+    switch (e) {
+      case ReferenceError::kOk: return CommandResult::kAccepted;
+      case ReferenceError::kOutsideTravel:
+      case ReferenceError::kStepTooLarge: return CommandResult::kRefusedOutOfRange;
+      default: return CommandResult::kRefusedBadProfile;
+    }
+  };
+  const double fs = static_cast<double>(config_.servo_rate_Hz);
+  const AxisReferenceLimits lim = axis_limits(a);
+  const std::int64_t start = reference_pm_[a] + pending_step_pm_[a];
+  switch (cmd.type) {
+    case MotionType::kStep: {
+      StepReference step;
+      const ReferenceError e = step.plan(start, numeric::si_to_pico(cmd.target), lim);
+      if (e != ReferenceError::kOk) return result(e);
+      cancel_profile(a);
+      // Applied on the next tick and handed to the loop as an explicit step, so
+      // its setpoint weighting b acts on it (pid2dof.hpp).
+      pending_step_pm_[a] += step.sample(0).step_pico;
+      return CommandResult::kAccepted;
+    }
+    case MotionType::kMoveTo:
+    case MotionType::kMoveJerkLimited: {
+      if (!std::isfinite(cmd.target)) return CommandResult::kRefusedOutOfRange;
+      const std::int64_t target = numeric::si_to_pico(cmd.target);
+      MoveReference m;
+      const ReferenceError e =
+          cmd.type == MotionType::kMoveTo
+              ? m.plan_trapezoid(start, target, cmd.velocity, cmd.acceleration, fs, lim)  // paper 000 Fig. 10
+              : m.plan_scurve(start, target, cmd.velocity, cmd.acceleration, cmd.jerk, fs, lim);
+      if (e != ReferenceError::kOk) return result(e);
+      cancel_profile(a);
+      move_[a] = m;
+      profile_[a] = Profile{ProfileKind::kMove, 0};
+      return CommandResult::kAccepted;
+    }
+    case MotionType::kSinusoid: {  // paper 002: p0 + A (1 - cos w t), w0 = 1.5 pi
+      SinusoidReference sref;
+      const ReferenceError e = sref.plan(start, cmd.amplitude, cmd.frequency_Hz, cmd.turns, fs, lim);
+      if (e != ReferenceError::kOk) return result(e);
+      cancel_profile(a);
+      sinusoid_[a] = sref;
+      profile_[a] = Profile{ProfileKind::kSinusoid, 0};
+      return CommandResult::kAccepted;
+    }
+    case MotionType::kCircle: {  // paper 000 Fig. 8: x, y; starts on the circle, centre at -r in x
+      const int ix = axis_index(Axis::kX), iy = axis_index(Axis::kY);
+      const AxisReferenceLimits lx = axis_limits(ix), ly = axis_limits(iy);
+      if (!(cmd.diameter_m > 0.0) || !(cmd.period_s > 0.0)) return CommandResult::kRefusedBadProfile;
+      const double r = 0.5 * cmd.diameter_m;
+      const double speed = 3.14159265358979323846 * cmd.diameter_m / cmd.period_s;
+      const double alim = std::fmin(lx.max_acceleration, ly.max_acceleration);
+      const double jlim = std::fmin(lx.max_jerk, ly.max_jerk);
+      const double centripetal = speed * speed / r;
+      // Unless given, the arc-length S-curve uses half of what the limits leave
+      // after the centripetal part (references.cpp checks the worst case).
+      const double at = cmd.acceleration > 0.0
+                            ? cmd.acceleration
+                            : 0.5 * std::sqrt(std::fmax(alim * alim - centripetal * centripetal, 0.0));
+      const double jerk = cmd.jerk > 0.0 ? cmd.jerk
+                                         : 0.5 * (jlim - 3.0 * speed * at / r - speed * centripetal / r);
+      CircleReference c;
+      const ReferenceError e = c.plan(reference_pm_[ix] + pending_step_pm_[ix], reference_pm_[iy] + pending_step_pm_[iy],
+                                      cmd.diameter_m, speed, cmd.turns, at, jerk, fs, lx, ly);
+      if (e != ReferenceError::kOk) return result(e);
+      cancel_profile(ix);
+      cancel_profile(iy);
+      circle_ = c;
+      profile_[ix] = Profile{ProfileKind::kCircle, 0};
+      profile_[iy] = Profile{ProfileKind::kCircle, 0};
+      return CommandResult::kAccepted;
+    }
+    default: break;
   }
-  Profile& p = profile_[a];
-  if (cmd.type == MotionType::kStep) {
-    if (!(std::fabs(cmd.target) <= static_cast<double>(lim.max_step[a]))) return CommandResult::kRefusedOutOfRange;
-    p.active = false;
-    // Applied on the next tick and handed to the loop as an explicit step, so
-    // its setpoint weighting b acts on it (pid2dof.hpp).
-    pending_step_pm_[a] += numeric::si_to_pico(cmd.target);
-    return CommandResult::kAccepted;
+  return CommandResult::kUnsupported;
+}
+
+template <typename Scalar>
+AxisReferenceLimits Controller<Scalar>::axis_limits(int a) const {
+  const ReferenceLimits& r = config_.references;
+  AxisReferenceLimits l;
+  l.max_velocity = static_cast<double>(r.max_velocity[a]);
+  l.max_acceleration = static_cast<double>(r.max_acceleration[a]);
+  l.max_jerk = static_cast<double>(r.max_jerk[a]);
+  l.max_step_pico = numeric::si_to_pico(static_cast<double>(r.max_step[a]));
+  l.travel_min_pico = numeric::si_to_pico(static_cast<double>(r.position_min[a]));
+  l.travel_max_pico = numeric::si_to_pico(static_cast<double>(r.position_max[a]));
+  return l;
+}
+
+template <typename Scalar>
+void Controller<Scalar>::cancel_profile(int a) {
+  // A circle drives x and y together: cancelling either cancels both.
+  if (profile_[a].kind == ProfileKind::kCircle) {
+    profile_[axis_index(Axis::kX)].kind = ProfileKind::kNone;
+    profile_[axis_index(Axis::kY)].kind = ProfileKind::kNone;
   }
-  // kMoveTo: trapezoidal velocity (paper 000 Fig. 10).
-  const double v = cmd.velocity, acc = cmd.acceleration;
-  if (!(v > 0.0) || !(acc > 0.0) || v > static_cast<double>(lim.max_velocity[a]) ||
-      acc > static_cast<double>(lim.max_acceleration[a])) {
-    return CommandResult::kRefusedBadProfile;
-  }
-  const double d = target - now_si;
-  const double dist = std::fabs(d);
-  double t_acc = v / acc;
-  double v_peak = v;
-  if (acc * t_acc * t_acc > dist) {  // triangle: never reaches v
-    t_acc = std::sqrt(dist / acc);
-    v_peak = acc * t_acc;
-  }
-  const double flat = dist - acc * t_acc * t_acc;
-  p.start_pm = reference_pm_[a];
-  p.distance = d;
-  p.v = v_peak;
-  p.a = acc;
-  p.t_acc = t_acc;
-  p.t_flat = v_peak > 0.0 ? flat / v_peak : 0.0;
-  p.t_total = 2.0 * t_acc + p.t_flat;
-  p.tick = 0;
-  p.active = true;
-  return CommandResult::kAccepted;
+  profile_[a].kind = ProfileKind::kNone;
 }
 
 template <typename Scalar>
@@ -371,7 +440,6 @@ void Controller<Scalar>::loop_reset(int a, Scalar e_um) {
 template <typename Scalar>
 io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, bool tick_overrun) {
   const Applied& ap = applied_[active_];
-  const double dt = 1.0 / static_cast<double>(config_.servo_rate_Hz);
   ++status_.tick;
 
   // --- 1. sensors -> pose (integer, constant work) ---------------------------------
@@ -439,28 +507,46 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
     const bool closed = (so.closed_axes & (1u << a)) != 0;
     Profile& p = profile_[a];
     double acc_now = 0.0;
-    if (p.active && so.motion_allowed) {
-      ++p.tick;
-      const double t = static_cast<double>(p.tick) * dt;
-      const double sgn = p.distance < 0.0 ? -1.0 : 1.0;
-      double s = 0.0;
-      if (t < p.t_acc) {
-        s = 0.5 * p.a * t * t;
-        acc_now = p.a;
-      } else if (t < p.t_acc + p.t_flat) {
-        s = 0.5 * p.a * p.t_acc * p.t_acc + p.v * (t - p.t_acc);
-      } else if (t < p.t_total) {
-        const double tr = p.t_total - t;
-        s = std::fabs(p.distance) - 0.5 * p.a * tr * tr;
-        acc_now = -p.a;
-      } else {
-        s = std::fabs(p.distance);
-        p.active = false;
-      }
-      reference_pm_[a] = p.start_pm + numeric::si_to_pico(sgn * s);
-      acc_now *= sgn;
-    } else if (!so.motion_allowed) {
-      p.active = false;
+    if (!so.motion_allowed) p.kind = ProfileKind::kNone;
+    AxisReference r{};
+    bool sampled = false;
+    switch (p.kind) {
+      case ProfileKind::kMove:
+        r = move_[a].sample(++p.tick);
+        sampled = true;
+        if (move_[a].done(p.tick)) p.kind = ProfileKind::kNone;  // this sample is the target
+        break;
+      case ProfileKind::kSinusoid:
+        r = sinusoid_[a].sample(++p.tick);
+        sampled = true;
+        if (sinusoid_[a].done(p.tick)) p.kind = ProfileKind::kNone;
+        break;
+      case ProfileKind::kCircle:
+        if (a == axis_index(Axis::kX)) {
+          ++p.tick;
+          circle_.sample(p.tick, &r, &circle_y_);
+          sampled = true;
+          circle_y_valid_ = true;
+          if (circle_.done(p.tick)) {
+            p.kind = ProfileKind::kNone;
+            circle_y_last_ = true;
+          }
+        } else if (circle_y_valid_) {
+          r = circle_y_;
+          sampled = true;
+          circle_y_valid_ = false;
+          if (circle_y_last_) {
+            p.kind = ProfileKind::kNone;
+            circle_y_last_ = false;
+          }
+        }
+        break;
+      case ProfileKind::kNone:
+        break;
+    }
+    if (sampled) {
+      reference_pm_[a] = r.position_pico;
+      acc_now = static_cast<double>(r.acceleration);
     }
     step_pm[a] = closed ? pending_step_pm_[a] : 0;
     reference_pm_[a] += step_pm[a];
@@ -485,7 +571,7 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   }
   Scalar d_sum = Traits::zero();
   for (int k = 0; k < kMaxExcitationHarmonics; ++k) {
-    d_sum += ex.amplitude[k] * Traits::sin_cos(ex.phase[k]).sin;
+    d_sum += ex.amplitude[k] * table_sin<Scalar>(ex.phase[k]);
     ex.phase[k] += ex.increment[k];  // uint32 wrap = one turn
   }
   Scalar excitation[kAxisCount];

@@ -107,7 +107,7 @@ struct AmplifierConfig {
   // Current noise: std interpolated in paper 003 Table 1 (std vs |commanded|),
   // times this scale; a new sample per servo tick (zero-order hold), then
   // filtered by the current loop. See docs/PLANT.md for why the default is 0.25.
-  double current_noise_scale = 0.25;
+  double current_noise_scale = 0.08;  // bench: docs/BENCH.md "Amplifier current noise"
   double monitor_gain_V_per_A = io::stage::kCurrentMonitorGain_V_per_A;
   double monitor_noise_A = 0.5e-3;  // (ours) monitor/ADC front-end noise, rms
 };

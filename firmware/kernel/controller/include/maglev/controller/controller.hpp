@@ -19,6 +19,7 @@
 #include "maglev/io/actuator_command.hpp"
 #include "maglev/io/sensor_sample.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
+#include "maglev/references/references.hpp"
 #include "maglev/sensors_to_pose/sensors_to_pose.hpp"
 #include "maglev/sequencer/sequencer.hpp"
 #include "maglev/supervisor/supervisor.hpp"
@@ -184,13 +185,12 @@ class Controller {
   const KernelConfig& config() const { return config_; }
 
  private:
-  // A one-axis trapezoidal profile, evaluated in double from its start (pm).
+  // The generator driving an axis (firmware/kernel/references), sampled at
+  // its own tick counter from the reference it started on.
+  enum class ProfileKind : std::uint8_t { kNone = 0, kMove, kSinusoid, kCircle };
   struct Profile {
-    bool active = false;
-    std::int64_t start_pm = 0;
-    double distance = 0.0;  // m (rad), signed
-    double v = 0.0, a = 0.0, t_acc = 0.0, t_flat = 0.0, t_total = 0.0;
-    std::uint32_t tick = 0;
+    ProfileKind kind = ProfileKind::kNone;
+    std::int64_t tick = 0;
   };
   struct Applied {
     LoopType type[kAxisCount];
@@ -217,6 +217,8 @@ class Controller {
   void loop_reset(int a, Scalar e_um);
 
   bool levitated_or_busy() const;
+  AxisReferenceLimits axis_limits(int a) const;
+  void cancel_profile(int a);
   CommandResult start_excitation(const MotionCommand& cmd);
 
   KernelConfig config_{};
@@ -231,6 +233,12 @@ class Controller {
   Excitation excitation_{};
   BiquadState<Scalar> filter_state_[kAxisCount][kMaxBiquadStages]{};
   Profile profile_[kAxisCount]{};
+  MoveReference move_[kAxisCount]{};
+  SinusoidReference sinusoid_[kAxisCount]{};
+  CircleReference circle_{};  // drives x (its Profile) and y (kind kCircle, tick unused)
+  AxisReference circle_y_{};  // y's sample, produced with x's in the same tick
+  bool circle_y_valid_ = false;
+  bool circle_y_last_ = false;
   std::int64_t reference_pm_[kAxisCount] = {};
   std::int64_t pending_step_pm_[kAxisCount] = {};  // step() applies and reports it
   std::int64_t measured_pm_[kAxisCount] = {};

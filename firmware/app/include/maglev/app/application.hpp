@@ -1,0 +1,343 @@
+// app::Application<Scalar>: everything below the servo interrupt, the same on
+// the amplifier board, the HIL board and the host controller node.
+//
+//   boot (constructor)  load the configuration from the two flash banks
+//                       (persistence::ConfigStore), apply it to the kernel
+//                       (modbus::ControllerDevice::boot); persist_status()
+//                       and Modbus persist.flags/reason show what happened
+//                       (bank corrupt, defaults, refused, migrated).
+//   on_uart_byte()      one received RS-485 byte + its microsecond timestamp
+//                       into the Modbus RTU server (t3.5 framing).
+//   service(now_us, servo_ticks)   the communications loop body:
+//     1. Modbus: a complete request (t3.5 of silence) is processed and the
+//        reply handed to the ByteSink; config.save writes flash (the
+//        long_operation hook brackets it: the board lengthens the IWDG);
+//     2. CAN RX (when Config::drain_can_rx): frames checked by a LinkReceiver
+//        and counted (the HIL board's CanSensorSource owns RX instead);
+//     3. CAN telemetry by servo ticks: controller_status every
+//        status_period_ticks (catalog: 10 = 250 Hz) from kernel status(),
+//        heartbeat_controller every heartbeat_period_ticks (250 = 10 Hz);
+//        a loop that fell behind sends one frame, not a burst;
+//     4. recorder drain (oldest first; a reader more than N behind skips
+//        ahead and counts the loss);
+//     5. watchdog: comms_ran() on the FeedGate, then FeedGate::service(dog):
+//        the IWDG is fed only when the servo loop ALSO checked in since the
+//        last feed (ServoHooks::servo_ran -> FeedGate::servo_ran).
+//
+// Concurrency: the kernel and (on the HIL board) the CAN port are shared with
+// the servo interrupt. Every kernel access (status snapshot, Modbus
+// read_status/command/apply_config) and every CAN send runs between
+// hooks.critical_enter/critical_exit (the board masks the tick interrupt;
+// the host passes a mutex pair or nothing). Flash writes run outside it.
+//
+// Heap-free, exception-free; host + Cortex-M7. Header-only template
+// (Scalar = float on the board; numeric::Q7_24 also works).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "maglev/app/recorder.hpp"
+#include "maglev/app/telemetry.hpp"
+#include "maglev/can_link/catalog.hpp"
+#include "maglev/can_link/codec.hpp"
+#include "maglev/can_link/receiver.hpp"
+#include "maglev/can_port/can_port.hpp"
+#include "maglev/controller/controller.hpp"
+#include "maglev/drivers/iwdg.hpp"
+#include "maglev/modbus/controller_binding.hpp"
+#include "maglev/modbus/register_server.hpp"
+#include "maglev/modbus/rtu_server.hpp"
+#include "maglev/persistence/config_store.hpp"
+
+namespace maglev::app {
+
+// Where Modbus replies go (USART2/RS-485 on the board, a pty/socket on the host).
+class ByteSink {
+ public:
+  virtual bool transmit(const std::uint8_t* data, std::size_t len) = 0;
+
+ protected:
+  ByteSink() = default;
+  ByteSink(const ByteSink&) = default;
+  ByteSink& operator=(const ByteSink&) = default;
+  ~ByteSink() = default;
+};
+
+// The hardware watchdog (IWDG on the board).
+class WatchdogFeeder {
+ public:
+  virtual void feed() = 0;
+
+ protected:
+  WatchdogFeeder() = default;
+  WatchdogFeeder(const WatchdogFeeder&) = default;
+  WatchdogFeeder& operator=(const WatchdogFeeder&) = default;
+  ~WatchdogFeeder() = default;
+};
+
+struct ApplicationConfig {
+  std::uint8_t modbus_unit = 1;
+  std::uint32_t modbus_baud = 115'200;
+  bool drain_can_rx = true;  // false when a CanSensorSource reads the same port (HIL)
+  std::uint16_t status_period_ticks = can::kControllerStatusPeriodTicks;
+  std::uint16_t heartbeat_period_ticks = can::kHeartbeatPeriodTicks;
+  std::uint8_t max_can_rx_per_service = 16;
+};
+
+struct ApplicationHooks {
+  void (*critical_enter)() = nullptr;       // mask the servo tick
+  void (*critical_exit)() = nullptr;
+  void (*long_operation)(bool begin) = nullptr;  // around flash saves
+  // Rejections reported in the heartbeat; null: the Application's own receiver.
+  const can::LinkReceiver* rx_stats = nullptr;
+};
+
+struct ApplicationStats {
+  std::uint32_t services = 0;
+  std::uint32_t modbus_replies = 0;
+  std::uint32_t uart_tx_errors = 0;
+  std::uint32_t status_frames = 0;
+  std::uint32_t heartbeat_frames = 0;
+  std::uint32_t can_tx_errors = 0;
+  std::uint32_t can_rx_frames = 0;
+  std::uint32_t recorder_drained = 0;
+  std::uint32_t recorder_lost = 0;
+  std::uint32_t saves = 0;
+};
+
+namespace application_detail {
+
+// The Modbus Device the RegisterServer sees: the kernel binding with every
+// kernel access inside the critical section and flash writes bracketed by
+// long_operation (and outside the critical section).
+class GuardedDevice final : public modbus::Device {
+ public:
+  GuardedDevice(modbus::Device& inner, const ApplicationHooks& hooks) : inner_(inner), hooks_(hooks) {}
+  modbus::Activity activity() const override {
+    enter();
+    const modbus::Activity a = inner_.activity();
+    exit();
+    return a;
+  }
+  double read_status(modbus::RegId id) const override {
+    enter();
+    const double v = inner_.read_status(id);
+    exit();
+    return v;
+  }
+  ApplyResult apply_config(const modbus::ConfigImage& config, bool live_tuning) override {
+    enter();
+    const ApplyResult r = inner_.apply_config(config, live_tuning);
+    exit();
+    return r;
+  }
+  std::uint16_t command(modbus::CommandCode code, std::uint16_t axis, float value) override {
+    enter();
+    const std::uint16_t r = inner_.command(code, axis, value);
+    exit();
+    return r;
+  }
+  bool save_config(const modbus::ConfigImage& config) override {
+    if (hooks_.long_operation != nullptr) hooks_.long_operation(true);
+    const bool ok = inner_.save_config(config);
+    if (hooks_.long_operation != nullptr) hooks_.long_operation(false);
+    ++saves;
+    return ok;
+  }
+  modbus::PersistStatus persist_status() const override { return inner_.persist_status(); }
+
+  std::uint32_t saves = 0;
+
+ private:
+  void enter() const {
+    if (hooks_.critical_enter != nullptr) hooks_.critical_enter();
+  }
+  void exit() const {
+    if (hooks_.critical_exit != nullptr) hooks_.critical_exit();
+  }
+  modbus::Device& inner_;
+  const ApplicationHooks& hooks_;
+};
+
+template <typename T>
+T saturate16(std::uint32_t v) {
+  return v > 0xFFFFu ? T{0xFFFF} : static_cast<T>(v);
+}
+
+}  // namespace application_detail
+
+template <typename Scalar, std::size_t kRecorderCapacity = 2048>
+class Application {
+ public:
+  using Config = ApplicationConfig;
+  using Hooks = ApplicationHooks;
+  using RecorderType = Recorder<kRecorderCapacity>;
+
+  // Boots: loads and applies the stored configuration (store may be null:
+  // kernel defaults). can, uart, recorder may be null (not serviced).
+  Application(kernel::Controller<Scalar>& kernel, persistence::ConfigStore* store, can::CanPort* can,
+              ByteSink* uart, const RecorderType* recorder, drivers::iwdg::FeedGate& gate, WatchdogFeeder& dog,
+              const Config& config, const Hooks& hooks)
+      : kernel_(kernel),
+        config_(config),
+        hooks_(hooks),
+        device_(kernel, store),
+        guarded_(device_, hooks_),
+        registers_(guarded_, device_.boot()),
+        rtu_(registers_, config.modbus_unit, config.modbus_baud),
+        can_(can),
+        uart_(uart),
+        recorder_(recorder),
+        gate_(gate),
+        dog_(dog) {
+    const modbus::PersistStatus p = device_.persist_status();
+    if ((p.flags & (modbus::kLoadedBankA | modbus::kLoadedBankB)) != 0) registers_.mark_saved();
+  }
+
+  // RS-485 receive path (thread mode or the USART RX interrupt).
+  void on_uart_byte(std::uint8_t byte, std::uint32_t timestamp_us) { rtu_.receive(byte, timestamp_us); }
+
+  // The communications loop body; servo_ticks = ServoLoop::state().ticks.
+  void service(std::uint32_t now_us, std::uint32_t servo_ticks) {
+    service_modbus(now_us);
+    service_can_rx();
+    service_telemetry(now_us, servo_ticks);
+    service_recorder();
+    ++stats_.services;
+    gate_.comms_ran();
+    (void)gate_.service(dog_);
+  }
+
+  modbus::PersistStatus persist_status() const { return device_.persist_status(); }
+  const modbus::RegisterServer& registers() const { return registers_; }
+  const modbus::RtuServer& rtu() const { return rtu_; }
+  const can::LinkReceiver& receiver() const { return receiver_; }
+  const ApplicationStats& stats() const { return stats_; }
+  // The newest drained recorder entry (valid once stats().recorder_drained > 0).
+  const RecordEntry& last_record() const { return last_record_; }
+
+ private:
+  void enter() const {
+    if (hooks_.critical_enter != nullptr) hooks_.critical_enter();
+  }
+  void exit() const {
+    if (hooks_.critical_exit != nullptr) hooks_.critical_exit();
+  }
+
+  void service_modbus(std::uint32_t now_us) {
+    const std::size_t n = rtu_.poll(now_us, tx_);
+    stats_.saves = guarded_.saves;
+    if (n == 0) return;
+    ++stats_.modbus_replies;
+    if (uart_ == nullptr || !uart_->transmit(tx_, n)) ++stats_.uart_tx_errors;
+  }
+
+  void service_can_rx() {
+    if (can_ == nullptr || !config_.drain_can_rx) return;
+    can::CanFrame f{};
+    for (std::uint8_t i = 0; i < config_.max_can_rx_per_service; ++i) {
+      if (can_->receive(f, 0) != can::PortStatus::kOk) break;
+      ++stats_.can_rx_frames;
+      (void)receiver_.accept(f);
+    }
+  }
+
+  void send(const can::CanFrame& f) {
+    enter();
+    const can::PortStatus s = can_->send(f);
+    exit();
+    if (s != can::PortStatus::kOk) ++stats_.can_tx_errors;
+  }
+
+  // True once per `period` ticks; a loop that fell behind re-aligns instead of bursting.
+  static bool due(std::uint32_t ticks, std::uint32_t& last, std::uint16_t period, bool& started) {
+    if (period == 0) return false;
+    if (!started) {
+      started = true;
+      last = ticks;
+      return true;
+    }
+    const std::uint32_t since = ticks - last;
+    if (since < period) return false;
+    last = since >= 2u * period ? ticks : last + period;
+    return true;
+  }
+
+  void service_telemetry(std::uint32_t now_us, std::uint32_t servo_ticks) {
+    // Uptime from the wrapping microsecond clock.
+    if (clock_started_) {
+      uptime_us_ += static_cast<std::uint64_t>(now_us - last_now_us_);
+    }
+    clock_started_ = true;
+    last_now_us_ = now_us;
+    if (can_ == nullptr) return;
+    if (due(servo_ticks, last_status_tick_, config_.status_period_ticks, status_started_)) {
+      enter();
+      const can::ControllerStatusFrame frame = to_status_frame(kernel_.status());
+      exit();
+      can::CanFrame f{};
+      can::encode_controller_status(frame, status_counter_++, f);
+      send(f);
+      ++stats_.status_frames;
+    }
+    if (due(servo_ticks, last_heartbeat_tick_, config_.heartbeat_period_ticks, heartbeat_started_)) {
+      enter();
+      const bool fault = kernel_.status().fault != kernel::FaultCode::kNone ||
+                         kernel_.status().state == kernel::SequencerState::kFault;
+      exit();
+      const can::LinkReceiver& rx = hooks_.rx_stats != nullptr ? *hooks_.rx_stats : receiver_;
+      can::HeartbeatFrame hb{};
+      hb.node_state = fault ? can::NodeState::kFault : can::NodeState::kOperational;
+      hb.uptime_ms = static_cast<std::uint32_t>(uptime_us_ / 1000u);
+      hb.rx_rejected = application_detail::saturate16<std::uint16_t>(rx.stats().rejected_total());
+      hb.bus_errors = application_detail::saturate16<std::uint16_t>(can_->counters().error_frames);
+      can::CanFrame f{};
+      can::encode_heartbeat(can::MessageKind::kHeartbeatController, hb, heartbeat_counter_++, f);
+      send(f);
+      ++stats_.heartbeat_frames;
+    }
+  }
+
+  void service_recorder() {
+    if (recorder_ == nullptr) return;
+    const std::uint32_t head = recorder_->head();
+    if (head - recorder_cursor_ > kRecorderCapacity) {
+      stats_.recorder_lost += head - recorder_cursor_ - static_cast<std::uint32_t>(kRecorderCapacity);
+      recorder_cursor_ = head - static_cast<std::uint32_t>(kRecorderCapacity);
+    }
+    while (recorder_->read(recorder_cursor_, last_record_)) {
+      ++recorder_cursor_;
+      ++stats_.recorder_drained;
+    }
+  }
+
+  kernel::Controller<Scalar>& kernel_;
+  Config config_;
+  Hooks hooks_;
+  modbus::ControllerDevice<Scalar> device_;
+  application_detail::GuardedDevice guarded_;
+  modbus::RegisterServer registers_;
+  modbus::RtuServer rtu_;
+  can::CanPort* can_;
+  ByteSink* uart_;
+  const RecorderType* recorder_;
+  drivers::iwdg::FeedGate& gate_;
+  WatchdogFeeder& dog_;
+  can::LinkReceiver receiver_{};
+  ApplicationStats stats_{};
+  RecordEntry last_record_{};
+  std::uint8_t tx_[modbus::kMaxRtuFrame] = {};
+  std::uint32_t recorder_cursor_ = 0;
+  std::uint32_t last_status_tick_ = 0;
+  std::uint32_t last_heartbeat_tick_ = 0;
+  bool status_started_ = false;
+  bool heartbeat_started_ = false;
+  std::uint8_t status_counter_ = 0;
+  std::uint8_t heartbeat_counter_ = 0;
+  bool clock_started_ = false;
+  std::uint32_t last_now_us_ = 0;
+  std::uint64_t uptime_us_ = 0;
+};
+
+}  // namespace maglev::app

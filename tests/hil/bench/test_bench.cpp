@@ -1,0 +1,121 @@
+// HIL bench runner: lockstep determinism, both kernels levitate through the
+// CAN link, the 8 um step meets the paper's figure, scenario errors carry lines.
+#include <cmath>
+#include <string>
+
+#include "maglev/bench/runner.hpp"
+#include "maglev/bench/units.hpp"
+#include "maglev/scenario/scenario.hpp"
+
+// CppUTest last: its new/delete macros must not meet the STL headers.
+#include <CppUTest/TestHarness.h>
+
+namespace {
+
+maglev::scenario::Scenario parse(const std::string& text) {
+  auto r = maglev::scenario::parse_scenario(text, "test.scenario");
+  CHECK_TRUE(r.ok());
+  return *r.scenario;
+}
+
+const char* kStartup = R"(
+[scenario]
+name = t
+duration_s = 3.3
+seed = 11
+[timeline]
+0.0 levitate
+3.0 step x 8um
+[metrics]
+levitation
+noise x 2.8 3.0 x_rest
+)";
+
+maglev::bench::RunResult run_sc(const maglev::scenario::Scenario& sc, maglev::hil::KernelKind k) {
+  maglev::bench::RunOptions o;
+  o.kernel = k;
+  o.verbose = false;
+  std::vector<maglev::bench::ScenarioError> errs;
+  auto r = maglev::bench::run(sc, o, &errs);
+  CHECK_TRUE(errs.empty());
+  CHECK_TRUE(r.has_value());
+  return *r;
+}
+
+}  // namespace
+
+TEST_GROUP(Bench){};
+
+TEST(Bench, LockstepIsDeterministic) {
+  const auto sc = parse(kStartup);
+  const auto a = run_sc(sc, maglev::hil::KernelKind::kFloat32);
+  const auto b = run_sc(sc, maglev::hil::KernelKind::kFloat32);
+  CHECK_EQUAL(8250u, a.trace.size());
+  CHECK_EQUAL(a.trace.size(), b.trace.size());
+  for (int i = 0; i < 6; ++i) CHECK_TRUE(a.trace.pose[i] == b.trace.pose[i]);
+  for (int j = 0; j < 8; ++j) CHECK_TRUE(a.trace.current_A[j] == b.trace.current_A[j]);
+  CHECK_TRUE(a.trace.state == b.trace.state);
+  DOUBLES_EQUAL(a.metrics.at("x_rest_rms_noise_m"), b.metrics.at("x_rest_rms_noise_m"), 0.0);
+  // A different seed gives a different noise record (the seed reaches the plant).
+  maglev::bench::RunOptions o;
+  o.verbose = false;
+  o.seed = 12;
+  const auto c = maglev::bench::run(sc, o, nullptr);
+  CHECK_TRUE(c.has_value());
+  CHECK_FALSE(c->trace.pose[0] == a.trace.pose[0]);
+}
+
+TEST(Bench, BothKernelsLevitateOverCan) {
+  const auto sc = parse(kStartup);
+  for (auto k : {maglev::hil::KernelKind::kFloat32, maglev::hil::KernelKind::kQ7_24}) {
+    const auto r = run_sc(sc, k);
+    DOUBLES_EQUAL(1.0, r.metrics.at("levitated"), 0.0);
+    STRCMP_EQUAL("Ready", r.final_state.c_str());
+    // Nominal height 30 um, inside the paper's 40 um envelope.
+    DOUBLES_EQUAL(30e-6, r.metrics.at("z_final_height_m"), 1e-6);
+    CHECK_TRUE(r.metrics.at("levitation_time_s") > 0.5 && r.metrics.at("levitation_time_s") < 3.0);
+    DOUBLES_EQUAL(0.0, r.metrics.at("missed_actuator_frames"), 0.0);
+    DOUBLES_EQUAL(0.0, r.metrics.at("controller_rx_rejected_frames"), 0.0);
+    // Sensor + actuator + monitor + status + heartbeats: ~55 % of 1/5 Mbit/s.
+    CHECK_TRUE(r.bus_load_percent > 40.0 && r.bus_load_percent < 70.0);
+    // The 8 um step at 3.0 s is on its way: x moved by more than 7 um at 3.3 s.
+    const auto& x = r.trace.pose[0];
+    CHECK_TRUE(x.back() - x[7499] > 7e-6);
+  }
+}
+
+TEST(Bench, ScenarioErrorsCarryLineNumbers) {
+  const auto sc = parse(R"([scenario]
+name = e
+duration_s = 2
+[timeline]
+0.0 levitate
+1.0 step q 1um
+1.5 step x 2urad
+1.6 warp 9
+[metrics]
+noise x 0 3 late
+[plant]
+payload_kg = lots
+)");
+  const auto errs = maglev::bench::validate(sc);
+  CHECK_EQUAL(5u, errs.size());
+  STRCMP_CONTAINS("test.scenario:6: unknown axis 'q'", errs[0].message.c_str());
+  STRCMP_CONTAINS("test.scenario:7: '2urad' has the wrong unit", errs[1].message.c_str());
+  STRCMP_CONTAINS("test.scenario:8: unknown command 'warp'", errs[2].message.c_str());
+  STRCMP_CONTAINS("test.scenario:10: metric window ends after duration_s", errs[3].message.c_str());
+  STRCMP_CONTAINS("[plant] payload_kg", errs[4].message.c_str());
+  CHECK_FALSE(maglev::bench::run(sc, {}, nullptr).has_value());
+}
+
+TEST(Bench, UnitsParse) {
+  using maglev::bench::Dim;
+  std::string e;
+  DOUBLES_EQUAL(10e-9, *maglev::bench::parse_quantity("10nm", Dim::kLength, &e), 1e-20);
+  DOUBLES_EQUAL(0.6, *maglev::bench::parse_quantity("0.6m/s^2", Dim::kAcceleration, &e), 1e-15);
+  DOUBLES_EQUAL(0.5396, *maglev::bench::parse_quantity("539.6g", Dim::kMass, &e), 1e-12);
+  DOUBLES_EQUAL(1e-7, *maglev::bench::parse_quantity("0.1urad", Dim::kAngle, &e), 1e-20);
+  DOUBLES_EQUAL(5e-3, *maglev::bench::parse_quantity("5e-3", Dim::kLength, &e), 1e-18);
+  CHECK_FALSE(maglev::bench::parse_quantity("8parsec", Dim::kLength, &e).has_value());
+  CHECK_FALSE(maglev::bench::parse_quantity("8um", Dim::kAngle, &e).has_value());
+}
