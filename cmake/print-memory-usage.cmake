@@ -1,9 +1,10 @@
 # cmake -DMAP=<image.map> -DELF=<image.elf> -DOBJDUMP=<objdump> -P print-memory-usage.cmake
 #
 # Prints the per-MEMORY-region use of a linked image, the same numbers GNU ld's
-# --print-memory-usage gives: every ALLOC section counts against the region
-# holding its VMA, and a loaded section whose LMA differs (.data's initial
-# values in flash) also counts against the region holding its LMA.
+# --print-memory-usage gives: a region's use is the end of the highest ALLOC
+# section placed in it minus the region origin (alignment gaps count, as in
+# ld); a loaded section whose LMA differs (.data's initial values in flash)
+# also extends the region holding its LMA.
 foreach(v MAP ELF OBJDUMP)
   if(NOT ${v})
     message(FATAL_ERROR "print-memory-usage.cmake: -D${v}=... is required")
@@ -61,12 +62,18 @@ foreach(_line IN LISTS _hdr_lines)
     if(_size GREATER 0)
       _region_of(${_vma} _rv)
       if(_rv)
-        math(EXPR _used_${_rv} "${_used_${_rv}} + ${_size}")
+        math(EXPR _end "${_vma} + ${_size} - ${_origin_${_rv}}")
+        if(_end GREATER _used_${_rv})
+          set(_used_${_rv} ${_end})
+        endif()
       endif()
       if(_line MATCHES "LOAD" AND NOT _lma EQUAL _vma)
         _region_of(${_lma} _rl)
         if(_rl AND NOT _rl STREQUAL _rv)
-          math(EXPR _used_${_rl} "${_used_${_rl}} + ${_size}")
+          math(EXPR _end "${_lma} + ${_size} - ${_origin_${_rl}}")
+          if(_end GREATER _used_${_rl})
+            set(_used_${_rl} ${_end})
+          endif()
         endif()
       endif()
     endif()

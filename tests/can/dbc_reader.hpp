@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <regex>
@@ -23,6 +24,7 @@ struct DbcSignal {
   double offset = 0.0;
   double min = 0.0;
   double max = 0.0;
+  bool is_float64 = false;  // SIG_VALTYPE_ ... : 2
 };
 struct DbcMessage {
   std::uint32_t id = 0;
@@ -37,6 +39,7 @@ inline std::map<std::uint32_t, DbcMessage> parse_dbc(const std::string& path) {
   const std::regex bo(R"(^BO_ (\d+) (\w+): (\d+) (\w+)\s*$)");
   const std::regex sg(
       R"(^ SG_ (\w+) : (\d+)\|(\d+)@([01])([+-]) \(([^,]+),([^)]+)\) \[([^|]+)\|([^\]]+)\] \"[^\"]*\" .*$)");
+  const std::regex vt(R"(^SIG_VALTYPE_ (\d+) (\w+) : 2;$)");
   std::string line;
   DbcMessage* cur = nullptr;
   while (std::getline(in, line)) {
@@ -59,6 +62,13 @@ inline std::map<std::uint32_t, DbcMessage> parse_dbc(const std::string& path) {
       s.min = std::stod(m[8]);
       s.max = std::stod(m[9]);
       cur->signals.push_back(s);
+    } else if (std::regex_match(line, m, vt)) {
+      auto it = out.find(static_cast<std::uint32_t>(std::stoul(m[1])));
+      if (it != out.end()) {
+        for (auto& sig : it->second.signals) {
+          if (sig.name == m[2]) sig.is_float64 = true;
+        }
+      }
     } else if (line.empty()) {
       cur = nullptr;
     }
@@ -72,6 +82,11 @@ inline double dbc_decode(const DbcSignal& s, const std::uint8_t* data) {
   for (int i = 0; i < s.length; ++i) {
     const int bit = s.start + i;
     v |= static_cast<std::uint64_t>((data[bit / 8] >> (bit % 8)) & 1) << i;
+  }
+  if (s.is_float64) {
+    double d = 0.0;
+    std::memcpy(&d, &v, sizeof d);
+    return d;
   }
   double raw = static_cast<double>(v);
   if (s.is_signed && ((v >> (s.length - 1)) & 1) != 0) raw -= std::ldexp(1.0, s.length);

@@ -1,5 +1,6 @@
 // Codec, E2E and receiver tests: round trips, every rejection path, counter wrap.
 #include <cstring>
+#include <limits>
 #include <random>
 
 #include "maglev/can_link/codec.hpp"
@@ -239,4 +240,92 @@ TEST(Rejection, OutOfRangeEnableIsNeverApplied) {
   CHECK(RxStatus::kOutOfRange == rx.accept(f));
   LONGS_EQUAL(1, rx.stats().count(RxStatus::kOutOfRange));
   CHECK(rx.last_message() == nullptr);
+}
+
+// ---- host_command / host_command_ack ------------------------------------------
+TEST_GROUP(HostCommand){};
+
+TEST(HostCommand, RoundTripIsBitExactForDoubles) {
+  HostCommandFrame c{HostCommandCode::kMoveJerkBy, 3, 4711, {8e-6, 1e-3, 0.0123456789012345, -1.0 / 3.0, 0.0}};
+  CanFrame f{};
+  encode_host_command(c, 9, f);
+  LONGS_EQUAL(0x040, f.id);
+  LONGS_EQUAL(48, f.len);
+  LinkReceiver rx;
+  LONGS_EQUAL(static_cast<int>(RxStatus::kOk), static_cast<int>(rx.accept(f)));
+  CHECK_TRUE(rx.last_message() == &message(MessageKind::kHostCommand));
+  HostCommandFrame d{};
+  decode_host_command(f, d);
+  CHECK_TRUE(d.code == HostCommandCode::kMoveJerkBy);
+  LONGS_EQUAL(3, d.axis);
+  LONGS_EQUAL(4711, d.seq);
+  for (int i = 0; i < 5; ++i) CHECK_TRUE(std::memcmp(&c.arg[i], &d.arg[i], sizeof(double)) == 0);
+
+  HostCommandAckFrame a{4711, HostCommandCode::kStep, 9, 6, 123456u};
+  encode_host_command_ack(a, 200, f);
+  LONGS_EQUAL(0x041, f.id);
+  LONGS_EQUAL(12, f.len);
+  LONGS_EQUAL(static_cast<int>(RxStatus::kOk), static_cast<int>(rx.accept(f)));
+  HostCommandAckFrame b{};
+  decode_host_command_ack(f, b);
+  LONGS_EQUAL(4711, b.seq);
+  CHECK_TRUE(b.code == HostCommandCode::kStep);
+  LONGS_EQUAL(9, b.result);
+  LONGS_EQUAL(6, b.sequencer_state);
+  LONGS_EQUAL(123456u, b.tick);
+}
+
+TEST(HostCommand, RejectionsAreCountedAndNeverAccepted) {
+  LinkReceiver rx;
+  CanFrame f{};
+  const HostCommandFrame ok{HostCommandCode::kStep, 0, 1, {8e-6, 0, 0, 0, 0}};
+  encode_host_command(ok, 10, f);
+  LONGS_EQUAL(static_cast<int>(RxStatus::kOk), static_cast<int>(rx.accept(f)));
+  // Same counter again: repeated (a duplicated command is never applied twice).
+  LONGS_EQUAL(static_cast<int>(RxStatus::kRepeated), static_cast<int>(rx.accept(f)));
+  // Corrupted argument bit: bad CRC.
+  encode_host_command(ok, 11, f);
+  CanFrame bad = f;
+  bad.data[20] ^= 0x10;
+  LONGS_EQUAL(static_cast<int>(RxStatus::kBadCrc), static_cast<int>(rx.accept(bad)));
+  // Wrong length.
+  bad = f;
+  bad.len = 32;
+  LONGS_EQUAL(static_cast<int>(RxStatus::kWrongLength), static_cast<int>(rx.accept(bad)));
+  // NaN, infinity and |arg| > 1e9 are out of range even with a valid CRC.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  HostCommandFrame c = ok;
+  c.arg[0] = nan;
+  encode_host_command(c, 12, f);
+  LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
+  c.arg[0] = std::numeric_limits<double>::infinity();
+  encode_host_command(c, 12, f);
+  LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
+  c.arg[0] = 2e9;
+  encode_host_command(c, 12, f);
+  LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
+  // Command code 0 / 17 and axis 6: out of range.
+  c = ok;
+  c.code = static_cast<HostCommandCode>(0);
+  encode_host_command(c, 12, f);
+  LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
+  c.code = static_cast<HostCommandCode>(17);
+  encode_host_command(c, 12, f);
+  LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
+  c = ok;
+  c.axis = 6;
+  encode_host_command(c, 12, f);
+  LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
+  // The next good one (counter 12, delta 2 from 10) is accepted, 1 counted lost.
+  encode_host_command(ok, 12, f);
+  LONGS_EQUAL(static_cast<int>(RxStatus::kOk), static_cast<int>(rx.accept(f)));
+  LONGS_EQUAL(1u, rx.stats().count(RxStatus::kRepeated));
+  LONGS_EQUAL(1u, rx.stats().count(RxStatus::kBadCrc));
+  LONGS_EQUAL(1u, rx.stats().count(RxStatus::kWrongLength));
+  LONGS_EQUAL(6u, rx.stats().count(RxStatus::kOutOfRange));
+  LONGS_EQUAL(2u, rx.stats().accepted);
+  LONGS_EQUAL(1u, rx.stats().lost);
+  // Unknown ID next to it (0x042) is rejected as such.
+  f.id = 0x042;
+  LONGS_EQUAL(static_cast<int>(RxStatus::kUnknownId), static_cast<int>(rx.accept(f)));
 }

@@ -40,7 +40,7 @@ void check_frame_against_dbc(const CanFrame& f, const std::map<std::string, doub
     }
     const auto e = expected_raw.find(s.name);
     if (e == expected_raw.end()) FAIL(("signal not covered by the test: " + s.name).c_str());
-    const double want = e->second * s.factor + s.offset;
+    const double want = s.is_float64 ? e->second : e->second * s.factor + s.offset;
     const double got = dbc_decode(s, f.data);
     // The DBC prints factors with 15 significant digits.
     DOUBLES_EQUAL(want, got, std::fabs(want) * 1e-12 + 1e-12);
@@ -76,11 +76,12 @@ TEST(Dbc, SameMessagesAndSignalLayoutAsCatalog) {
       LONGS_EQUAL(m.signals[i].length_bits, d.length);
       CHECK_TRUE(d.little_endian);
       CHECK_EQUAL(m.signals[i].is_signed, d.is_signed);
+      CHECK_EQUAL(m.signals[i].is_float64, d.is_float64);
     }
   }
 }
 
-TEST(Dbc, SensorActuatorCurrentStatusHeartbeatSyncDecodeLikeTheCodec) {
+TEST(Dbc, EveryMessageDecodesLikeTheCodec) {
   std::mt19937 rng(2024);
   for (int round = 0; round < 200; ++round) {
     const auto counter = static_cast<std::uint8_t>(rng());
@@ -143,6 +144,22 @@ TEST(Dbc, SensorActuatorCurrentStatusHeartbeatSyncDecodeLikeTheCodec) {
     const SyncFrame sy{static_cast<std::uint32_t>(rng()), static_cast<std::uint32_t>(rng())};
     encode_sync(sy, counter, f);
     check_frame_against_dbc(f, {{"e2e_counter", counter}, {"tick", sy.tick}, {"time_us", sy.time_us}});
+
+    std::uniform_real_distribution<double> arg(-1.0, 1.0);
+    HostCommandFrame hc{static_cast<HostCommandCode>(1 + rng() % kHostCommandCodeMax),
+                        static_cast<std::uint8_t>(rng() % 6), static_cast<std::uint16_t>(rng()),
+                        {arg(rng) * 1e-5, arg(rng), arg(rng) * 100.0, arg(rng) * 1e3, 0.0}};
+    encode_host_command(hc, counter, f);
+    check_frame_against_dbc(f, {{"e2e_counter", counter}, {"command_code", static_cast<double>(hc.code)},
+                                {"axis", hc.axis}, {"command_seq", hc.seq}, {"arg0", hc.arg[0]},
+                                {"arg1", hc.arg[1]}, {"arg2", hc.arg[2]}, {"arg3", hc.arg[3]}, {"arg4", hc.arg[4]}});
+    const HostCommandAckFrame ack{static_cast<std::uint16_t>(rng()), static_cast<HostCommandCode>(1 + rng() % 16),
+                                  static_cast<std::uint8_t>(rng() % 16), static_cast<std::uint8_t>(rng() % 16),
+                                  static_cast<std::uint32_t>(rng())};
+    encode_host_command_ack(ack, counter, f);
+    check_frame_against_dbc(f, {{"e2e_counter", counter}, {"command_seq", ack.seq},
+                                {"command_code", static_cast<double>(ack.code)}, {"result", ack.result},
+                                {"sequencer_state", ack.sequencer_state}, {"tick", ack.tick}});
   }
 }
 

@@ -1,5 +1,8 @@
 #include "maglev/can_link/codec.hpp"
 
+#include <bit>
+#include <cmath>
+
 #include "maglev/can_link/e2e.hpp"
 
 namespace maglev::can {
@@ -75,6 +78,10 @@ namespace {
 // Raw bounds from the physical [min, max]; compared in raw units so no
 // floating point is needed at run time on the target for full-range signals.
 bool raw_in_range(const Signal& s, std::int64_t raw) {
+  if (s.is_float64) {
+    const double v = std::bit_cast<double>(raw);
+    return std::isfinite(v) && v >= s.min && v <= s.max;  // NaN fails both comparisons
+  }
   const double phys = static_cast<double>(raw) * s.factor + s.offset;
   // Half an LSB of slack against rounding of factor * raw.
   const double slack = 0.5 * (s.factor < 0 ? -s.factor : s.factor);
@@ -196,6 +203,57 @@ void decode_heartbeat(const CanFrame& f, HeartbeatFrame& out) {
   out.uptime_ms = static_cast<std::uint32_t>(raw[kHdr + 1]);
   out.rx_rejected = static_cast<std::uint16_t>(raw[kHdr + 2]);
   out.bus_errors = static_cast<std::uint16_t>(raw[kHdr + 3]);
+}
+
+const char* to_string(HostCommandCode c) {
+  switch (c) {
+    case HostCommandCode::kHome: return "home";
+    case HostCommandCode::kLevitate: return "levitate";
+    case HostCommandCode::kLand: return "land";
+    case HostCommandCode::kStop: return "stop";
+    case HostCommandCode::kClearFault: return "clear_fault";
+    case HostCommandCode::kHold: return "hold";
+    case HostCommandCode::kStep: return "step";
+    case HostCommandCode::kMoveTo: return "move_to";
+    case HostCommandCode::kMoveBy: return "move_by";
+    case HostCommandCode::kMoveJerkTo: return "move_jerk_to";
+    case HostCommandCode::kMoveJerkBy: return "move_jerk_by";
+    case HostCommandCode::kCircle: return "circle";
+    case HostCommandCode::kSinusoid: return "sinusoid";
+    case HostCommandCode::kExcite: return "excite";
+    case HostCommandCode::kStopExcitation: return "stop_excitation";
+    case HostCommandCode::kShutdown: return "shutdown";
+  }
+  return "?";
+}
+
+void encode_host_command(const HostCommandFrame& v, std::uint8_t counter, CanFrame& f) {
+  std::int64_t raw[kHostCommandSignals.size()] = {0, counter, static_cast<std::uint8_t>(v.code), v.axis, v.seq};
+  for (std::size_t i = 0; i < 5; ++i) raw[kHdr + 3 + i] = std::bit_cast<std::int64_t>(v.arg[i]);
+  encode_raw(message(MessageKind::kHostCommand), raw, counter, f);
+}
+void decode_host_command(const CanFrame& f, HostCommandFrame& out) {
+  std::int64_t raw[kHostCommandSignals.size()];
+  unpack_raw(message(MessageKind::kHostCommand), f.data, raw);
+  out.code = static_cast<HostCommandCode>(raw[kHdr + 0]);
+  out.axis = static_cast<std::uint8_t>(raw[kHdr + 1]);
+  out.seq = static_cast<std::uint16_t>(raw[kHdr + 2]);
+  for (std::size_t i = 0; i < 5; ++i) out.arg[i] = std::bit_cast<double>(raw[kHdr + 3 + i]);
+}
+
+void encode_host_command_ack(const HostCommandAckFrame& v, std::uint8_t counter, CanFrame& f) {
+  std::int64_t raw[kHostCommandAckSignals.size()] = {
+      0, counter, v.seq, static_cast<std::uint8_t>(v.code), v.result, v.sequencer_state, v.tick};
+  encode_raw(message(MessageKind::kHostCommandAck), raw, counter, f);
+}
+void decode_host_command_ack(const CanFrame& f, HostCommandAckFrame& out) {
+  std::int64_t raw[kHostCommandAckSignals.size()];
+  unpack_raw(message(MessageKind::kHostCommandAck), f.data, raw);
+  out.seq = static_cast<std::uint16_t>(raw[kHdr + 0]);
+  out.code = static_cast<HostCommandCode>(raw[kHdr + 1]);
+  out.result = static_cast<std::uint8_t>(raw[kHdr + 2]);
+  out.sequencer_state = static_cast<std::uint8_t>(raw[kHdr + 3]);
+  out.tick = static_cast<std::uint32_t>(raw[kHdr + 4]);
 }
 
 }  // namespace maglev::can

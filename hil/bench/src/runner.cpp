@@ -761,7 +761,10 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
 
     // --- plant endpoint: sensors -> CAN.
     const io::SensorSample s = plant.sample();
-    const hil::PlantState truth_before = plant.truth();
+    // Coil currents at the sample instant (the amplifiers' state, cheap: no
+    // wrench evaluation).
+    double current_before_A[8];
+    for (int j = 0; j < 8; ++j) current_before_A[j] = plant.amplifiers().current_A(j);
     can::CanFrame f{};
     if (n % can::kCurrentMonitorPeriodTicks == 0) {
       can::CurrentMonitorFrame cm{};
@@ -835,7 +838,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     }
     for (int j = 0; j < 8; ++j) {
       tr.current_cmd_A[j].push_back(static_cast<double>(st.coil_current_A[j]));
-      tr.current_A[j].push_back(truth_before.coil_current_A[j]);
+      tr.current_A[j].push_back(current_before_A[j]);
     }
     tr.state.push_back(static_cast<int>(st.state));
     if (ready_t < 0 && st.state == kernel::SequencerState::kReady) ready_t = t;

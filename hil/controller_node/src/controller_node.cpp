@@ -51,6 +51,16 @@ bool CanServoIo::read_sensors(io::SensorSample& sample, std::uint32_t timeout_us
       std::copy(std::begin(cm.coil_current_adc), std::end(cm.coil_current_adc), coil_current_adc_);
       continue;
     }
+    if (m == &can::message(can::MessageKind::kHostCommand)) {
+      can::HostCommandFrame hc{};
+      can::decode_host_command(in, hc);
+      commands_.push_back(hc);
+      if (hc.code == can::HostCommandCode::kShutdown) {
+        stop_requested_ = true;
+        return false;
+      }
+      continue;
+    }
     if (m == &can::message(can::MessageKind::kSensor)) {
       can::decode_sensor(in, sample);
       std::copy(std::begin(coil_current_adc_), std::end(coil_current_adc_), sample.coil_current_adc);
@@ -59,6 +69,19 @@ bool CanServoIo::read_sensors(io::SensorSample& sample, std::uint32_t timeout_us
     }
     // Plant heartbeats and anything else the controller does not consume.
   }
+}
+
+bool CanServoIo::next_host_command(can::HostCommandFrame& out) {
+  if (commands_.empty()) return false;
+  out = commands_.front();
+  commands_.pop_front();
+  return true;
+}
+
+void CanServoIo::acknowledge(const can::HostCommandAckFrame& ack) {
+  can::CanFrame f{};
+  can::encode_host_command_ack(ack, ack_counter_++, f);
+  send(f);
 }
 
 void CanServoIo::write_actuators(const io::ActuatorCommand& command) {
@@ -134,14 +157,106 @@ ControllerNode::ControllerNode(KernelKind kind, ServoIo& io) : kind_(kind), io_(
 
 ControllerNode::~ControllerNode() = default;
 
-bool ControllerNode::run_once(std::uint32_t timeout_us) {
+bool ControllerNode::run_once(std::uint32_t timeout_us, bool stale_if_missing) {
   io::SensorSample sample{};
-  if (!io_.read_sensors(sample, timeout_us)) return false;
-  const io::ActuatorCommand cmd = kernel_->step(sample);
-  io_.write_actuators(cmd);
+  const bool fresh = io_.read_sensors(sample, timeout_us);
+  execute_pending();
+  const auto period_us = static_cast<std::uint32_t>(1e6 / io::stage::kServoRate_Hz);
+  const auto now_us = static_cast<std::uint32_t>(ticks_ * period_us);
+  if (ticks_ == 0) watchdog_.arm(now_us);
+  if (fresh) {
+    last_sample_ = sample;
+    have_sample_ = true;
+    watchdog_.feed(now_us);
+    ++link_.fresh_ticks;
+  } else {
+    if (!stale_if_missing || !have_sample_ || io_.stop_requested()) return false;
+    sample = last_sample_;
+    sample.status_flags = static_cast<std::uint16_t>(sample.status_flags | io::kStaleFrame);
+    if (link_.stale_ticks == 0) link_.first_stale_tick = static_cast<std::uint32_t>(ticks_);
+    ++link_.stale_ticks;
+  }
+  io::ActuatorCommand cmd = kernel_->step(sample);
+  if (watchdog_.check(now_us)) {
+    if (link_.link_lost_ticks == 0) link_.first_link_lost_tick = static_cast<std::uint32_t>(ticks_);
+    ++link_.link_lost_ticks;
+    cmd = io::kSafeActuatorCommand;  // defence in depth below the supervisor
+  }
+  last_output_ = cmd;
+  if (fresh) io_.write_actuators(cmd);  // a stale tick answers no sensor frame
   io_.publish_status(kernel_->status());
   ++ticks_;
   return true;
+}
+
+void ControllerNode::execute_pending() {
+  can::HostCommandFrame h{};
+  while (io_.next_host_command(h)) {
+    can::HostCommandAckFrame ack{};
+    ack.seq = h.seq;
+    ack.code = h.code;
+    ack.result = execute(h);
+    ack.sequencer_state = static_cast<std::uint8_t>(kernel_->status().state);
+    ack.tick = static_cast<std::uint32_t>(ticks_);
+    io_.acknowledge(ack);
+    ++link_.host_commands;
+  }
+}
+
+double reference_si(const kernel::Pose64& r, int a) {
+  // kernel::Axis order: x, y, theta_z, z, theta_x, theta_y.
+  const std::int64_t v[6] = {r.x_pm, r.y_pm, r.theta_z_prad, r.z_pm, r.theta_x_prad, r.theta_y_prad};
+  return static_cast<double>(v[a < 0 || a > 5 ? 0 : a]) * 1e-12;
+}
+
+bool to_motion_command(const can::HostCommandFrame& h, const kernel::Pose64& reference, kernel::MotionCommand* out) {
+  using C = can::HostCommandCode;
+  using kernel::MotionType;
+  kernel::MotionCommand c;
+  c.axis = static_cast<kernel::Axis>(h.axis);
+  const double* a = h.arg;
+  switch (h.code) {
+    case C::kHome: c.type = MotionType::kHome; break;
+    case C::kLevitate: c.type = MotionType::kLevitate; break;
+    case C::kLand: c.type = MotionType::kLand; break;
+    case C::kStop: c.type = MotionType::kStop; break;
+    case C::kClearFault: c.type = MotionType::kClearFault; break;
+    case C::kHold: c.type = MotionType::kHold; break;
+    case C::kStep: c.type = MotionType::kStep; c.target = a[0]; break;
+    case C::kMoveTo:
+    case C::kMoveBy:
+      c.type = MotionType::kMoveTo;
+      c.target = h.code == C::kMoveBy ? reference_si(reference, h.axis) + a[0] : a[0];
+      c.velocity = a[1];
+      c.acceleration = a[2];
+      break;
+    case C::kMoveJerkTo:
+    case C::kMoveJerkBy:
+      c.type = MotionType::kMoveJerkLimited;
+      c.target = h.code == C::kMoveJerkBy ? reference_si(reference, h.axis) + a[0] : a[0];
+      c.velocity = a[1];
+      c.acceleration = a[2];
+      c.jerk = a[3];
+      break;
+    case C::kCircle: c.type = MotionType::kCircle; c.diameter_m = a[0]; c.period_s = a[1]; c.turns = a[2]; break;
+    case C::kSinusoid:
+      c.type = MotionType::kSinusoid; c.amplitude = a[0]; c.frequency_Hz = a[1]; c.period_s = a[2]; c.turns = a[3];
+      break;
+    case C::kExcite:
+      c.type = MotionType::kExcite; c.amplitude = a[0]; c.frequency_Hz = a[1]; c.duration_s = a[2];
+      c.harmonics = static_cast<std::uint8_t>(std::clamp(a[3], 1.0, 255.0));
+      break;
+    case C::kStopExcitation: c.type = MotionType::kStopExcitation; break;
+    case C::kShutdown: return false;
+  }
+  *out = c;
+  return true;
+}
+
+std::uint8_t ControllerNode::execute(const can::HostCommandFrame& h) {
+  kernel::MotionCommand c;
+  if (!to_motion_command(h, kernel_->status().reference, &c)) return can::kHostResultNotExecuted;
+  return static_cast<std::uint8_t>(kernel_->command(c));
 }
 
 kernel::CommandResult ControllerNode::command(const kernel::MotionCommand& cmd) { return kernel_->command(cmd); }

@@ -269,16 +269,25 @@ inline double SmallExp(double x) {
 }  // namespace
 
 void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* acc) const {
+  // Evaluated in the PLATEN frame (the cheap frame: every side's r_body and
+  // in-plane u_body are constants): a side's world field (B_s along its array
+  // axis, B_z) is rotated into the platen frame with two rows of R, the
+  // Lorentz force u x B and its torque r x F are formed there, and the sums
+  // are rotated back once. Identical physics to the world-frame form
+  // (R a x R b = R (a x b)); only the round-off differs.
   const double gamma1 = field_.gamma1_per_m();
   const double rest_gap = config_.field.rest_gap_m;
+  const double(&r)[3][3] = k.r;
+  double fb[3] = {0.0, 0.0, 0.0};  // platen-frame force sum
+  double tb[3] = {0.0, 0.0, 0.0};  // platen-frame torque sum (about the CoM)
   double ref_s = 0.0, ref_gap = 0.0, ref_sin = 0.0, ref_cos = 1.0, ref_exp = 1.0;
   for (std::size_t idx = 0; idx < sides_.size(); ++idx) {
     const CoilSide& cs = sides_[idx];
-    double rw[3];
-    Rotate(k.r, cs.r_body_m, rw);
+    const double* rb = cs.r_body_m.data();
     const int ax = cs.array_axis;
-    const double s = k.p[ax] + rw[ax];
-    const double gap = rest_gap + k.p[2] + rw[2] - cs.r_body_m.z();
+    // World coordinate along the array axis and air gap of the side midpoint.
+    const double s = k.p[ax] + (r[ax][0] * rb[0] + r[ax][1] * rb[1] + r[ax][2] * rb[2]);
+    const double gap = rest_gap + k.p[2] + (r[2][0] * rb[0] + r[2][1] * rb[1] + r[2][2] * rb[2]) - rb[2];
     double sin1, cos1, exp1;
     if (idx % 4 == 0) {  // the forcer's reference side: the only full sincos/exp
       ref_s = s;
@@ -306,27 +315,31 @@ void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* ac
       exp1 = ref_exp * SmallExp(-gamma1 * (gap - ref_gap));
     }
     const FieldSZ b = field_.SideAverageFieldFrom(sin1, cos1, exp1);
-    double bw[3] = {0.0, 0.0, b.b_z_T};
-    bw[ax] = b.b_s_T;
-    double uw[3];
-    Rotate(k.r, cs.u_body, uw);
-    double f[3];
-    Cross(uw, bw, f);
+    // Field in the platen frame: R^T (B_s e_ax + B_z e_z).
+    const double bb0 = b.b_s_T * r[ax][0] + b.b_z_T * r[2][0];
+    const double bb1 = b.b_s_T * r[ax][1] + b.b_z_T * r[2][1];
+    const double bb2 = b.b_s_T * r[ax][2] + b.b_z_T * r[2][2];
+    // F = N p I (u x B); u lies in the platen plane (u_z = 0).
     const double scale = side_force_per_A_ * currents_A[cs.coil];
-    for (double& fa : f) fa *= scale;
+    const double ux = cs.u_body.x();
+    const double uy = cs.u_body.y();
+    double f[3] = {scale * (uy * bb2), scale * (-ux * bb2), scale * (ux * bb1 - uy * bb0)};
     if (forcer_errors_active_) {
       // Paper 003: F_t -> F_t (1 + eps_t), dF_z = eps_z F_t (platen frame).
-      const double ft = k.r[0][ax] * f[0] + k.r[1][ax] * f[1] + k.r[2][ax] * f[2];
-      const double et = config_.forcer_errors.epsilon_tangential[cs.forcer] * ft;
-      const double ez = config_.forcer_errors.epsilon_off_axis_z[cs.forcer] * ft;
-      for (int a = 0; a < 3; ++a) f[a] += et * k.r[a][ax] + ez * k.r[a][2];
+      const double ft = f[ax];
+      f[ax] += config_.forcer_errors.epsilon_tangential[cs.forcer] * ft;
+      f[2] += config_.forcer_errors.epsilon_off_axis_z[cs.forcer] * ft;
     }
-    double tq[3];
-    Cross(rw, f, tq);
-    for (int a = 0; a < 3; ++a) {
-      acc->f[a] += f[a];
-      acc->t[a] += tq[a];
-    }
+    fb[0] += f[0];
+    fb[1] += f[1];
+    fb[2] += f[2];
+    tb[0] += rb[1] * f[2] - rb[2] * f[1];
+    tb[1] += rb[2] * f[0] - rb[0] * f[2];
+    tb[2] += rb[0] * f[1] - rb[1] * f[0];
+  }
+  for (int a = 0; a < 3; ++a) {
+    acc->f[a] += r[a][0] * fb[0] + r[a][1] * fb[1] + r[a][2] * fb[2];
+    acc->t[a] += r[a][0] * tb[0] + r[a][1] * tb[1] + r[a][2] * tb[2];
   }
 }
 
@@ -472,7 +485,7 @@ BodyState Step(const BodyState& s, const BodyDerivative& d, double h) {
 
 void Plant::apply(const io::ActuatorCommand& command) {
   amplifiers_.Apply(command, &rng_, config_.amplifier.current_noise_scale > 0.0);
-  UpdateTruth();
+  UpdateTruthCurrents();  // the body did not move
 }
 
 void Plant::advance(double dt_s) {
@@ -522,13 +535,23 @@ void Plant::UpdateTruth() {
     truth_.velocity_m_per_s[a] = body_.velocity_m_per_s[a];
     truth_.omega_body_rad_per_s[a] = body_.omega_body_rad_per_s[a];
   }
-  double currents[kCoils];
+  UpdateTruthCurrents();
+}
+
+void Plant::UpdateTruthCurrents() {
   for (int j = 0; j < kCoils; ++j) {
-    currents[j] = amplifiers_.current_A(j);
-    truth_.coil_current_A[j] = currents[j];
+    truth_.coil_current_A[j] = amplifiers_.current_A(j);
     truth_.coil_commanded_A[j] = amplifiers_.commanded_A(j);
   }
   truth_.amplifier_enable = amplifiers_.enabled();
+  truth_wrench_stale_ = true;
+}
+
+void Plant::RefreshTruthWrench() const {
+  double currents[kCoils];
+  for (int j = 0; j < kCoils; ++j) {
+    currents[j] = amplifiers_.current_A(j);
+  }
   const Wrench m = MagneticWrench(body_, currents);
   for (int a = 0; a < 3; ++a) {
     truth_.magnetic_force_world_N[a] = m.force_world_N[a];
@@ -537,6 +560,7 @@ void Plant::UpdateTruth() {
   const ContactResult c = ContactWrench(body_);
   truth_.contact_force_N = c.normal_N;
   truth_.in_contact = c.touching;
+  truth_wrench_stale_ = false;
 }
 
 // ---------------------------------------------------------------------------

@@ -1,5 +1,6 @@
 #include "maglev/report/report.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -62,27 +63,30 @@ bool write_trace_csv(const bench::Trace& t, const std::string& path, std::string
   for (int j = 0; j < 8; ++j) f << ",i" << (j + 1) << "_cmd_A";
   for (int j = 0; j < 8; ++j) f << ",i" << (j + 1) << "_A";
   f << ",state\n";
+  // std::to_chars (general, fixed precision) prints exactly what printf's
+  // %.Ng does, at a fraction of the cost; one row is built in a buffer and
+  // written at once (the CSV writer was ~40 % of a run's time with snprintf).
+  std::string row;
+  row.reserve(1024);
   char buf[64];
+  auto put = [&](double v, int precision) {
+    row += ',';
+    const auto res = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, precision);
+    row.append(buf, res.ptr);
+  };
   for (std::size_t n = 0; n < t.size(); ++n) {
-    std::snprintf(buf, sizeof buf, "%.4f", t.t_s[n]);
-    f << buf;
-    for (int i = 0; i < 6; ++i) {
-      std::snprintf(buf, sizeof buf, ",%.12g", t.pose[i][n]);
-      f << buf;
-    }
-    for (int i = 0; i < 6; ++i) {
-      std::snprintf(buf, sizeof buf, ",%.12g", t.reference[i][n]);
-      f << buf;
-    }
-    for (int j = 0; j < 8; ++j) {
-      std::snprintf(buf, sizeof buf, ",%.6g", t.current_cmd_A[j][n]);
-      f << buf;
-    }
-    for (int j = 0; j < 8; ++j) {
-      std::snprintf(buf, sizeof buf, ",%.6g", t.current_A[j][n]);
-      f << buf;
-    }
-    f << ',' << t.state[n] << '\n';
+    row.clear();
+    const auto res = std::to_chars(buf, buf + sizeof buf, t.t_s[n], std::chars_format::fixed, 4);
+    row.append(buf, res.ptr);
+    for (int i = 0; i < 6; ++i) put(t.pose[i][n], 12);
+    for (int i = 0; i < 6; ++i) put(t.reference[i][n], 12);
+    for (int j = 0; j < 8; ++j) put(t.current_cmd_A[j][n], 6);
+    for (int j = 0; j < 8; ++j) put(t.current_A[j][n], 6);
+    row += ',';
+    const auto rs = std::to_chars(buf, buf + sizeof buf, t.state[n]);
+    row.append(buf, rs.ptr);
+    row += '\n';
+    f.write(row.data(), static_cast<std::streamsize>(row.size()));
   }
   return static_cast<bool>(f);
 }

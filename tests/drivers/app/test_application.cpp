@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "maglev/app/application.hpp"
+#include "maglev/app/can_io.hpp"
 #include "maglev/app/servo_loop.hpp"
 #include "maglev/app/telemetry.hpp"
 #include "maglev/can_link/codec.hpp"
@@ -332,4 +333,54 @@ TEST(Application, SaveOverModbusWritesFlashOutsideTheCriticalSection) {
   persistence::ConfigStore probe(fx.flash, 0, 1);
   const persistence::LoadResult loaded = probe.load();
   CHECK((loaded.status.flags & (modbus::kLoadedBankA | modbus::kLoadedBankB)) != 0);
+}
+
+// The HIL node as the board's HIL image wires it: CanSensorSource owns RX on
+// the shared port, Application only transmits (drain_can_rx = false) and
+// reports the source's rejections in its heartbeat.
+TEST(Application, HilWiringSharesOnePortAndReportsSourceRejections) {
+  Fixture fx;
+  app::CanSensorSource sensors(*fx.node, app::CanSensorConfig{});
+  app::CanActuatorSink actuators(*fx.node, sensors);
+  app::ApplicationConfig cfg{};
+  cfg.drain_can_rx = false;
+  cfg.heartbeat_period_ticks = 20;
+  cfg.sync_period_ticks = can::kSyncPeriodTicks;  // 25
+  app::ApplicationHooks hooks = fx.hooks;
+  hooks.rx_stats = &sensors.receiver();
+  App application(fx.kernel, &fx.store, fx.node.get(), &fx.uart, &fx.recorder, fx.gate, fx.dog, cfg, hooks);
+  g_gate = &fx.gate;
+  app::ServoLoop<kernel::Controller<float>> loop(sensors, actuators, fx.kernel, app::ServoConfig{},
+                                                 app::ServoHooks{nullptr, nullptr, &servo_ran, nullptr});
+  io::SensorSample s{};
+  int actuator_frames = 0;
+  int status_frames = 0;
+  int sync_frames = 0;
+  can::SyncFrame last_sync{};
+  can::HeartbeatFrame last_hb{};
+  for (std::uint32_t tick = 1; tick <= 40; ++tick) {
+    can::CanFrame f{};
+    can::encode_sensor(s, static_cast<std::uint8_t>(tick), f);
+    if (tick == 5) f.data[10] ^= 0x04;  // one corrupted frame on the wire
+    CHECK(fx.plant->send(f) == can::PortStatus::kOk);
+    loop.on_tick();
+    application.service(tick * 400u, loop.state().ticks);
+    while (fx.plant->receive(f, 0) == can::PortStatus::kOk) {
+      if (f.id == can::message(can::MessageKind::kActuator).can_id) ++actuator_frames;
+      if (f.id == can::message(can::MessageKind::kControllerStatus).can_id) ++status_frames;
+      if (f.id == can::message(can::MessageKind::kHeartbeatController).can_id) can::decode_heartbeat(f, last_hb);
+      if (f.id == can::message(can::MessageKind::kSync).can_id) {
+        can::decode_sync(f, last_sync);
+        ++sync_frames;
+      }
+    }
+  }
+  LONGS_EQUAL(39, actuator_frames);  // every tick but the corrupted one
+  LONGS_EQUAL(4, status_frames);     // ticks 1, 11, 21, 31
+  LONGS_EQUAL(1, last_hb.rx_rejected);
+  LONGS_EQUAL(2, sync_frames);  // ticks 1 and 26
+  LONGS_EQUAL(26, last_sync.tick);
+  LONGS_EQUAL(26 * 400, last_sync.time_us);
+  LONGS_EQUAL(0, application.stats().can_rx_frames);  // the application never stole a sensor frame
+  LONGS_EQUAL(40, fx.dog.feeds);
 }

@@ -106,7 +106,32 @@ TEST(Controller, InvalidConfigRefusedWholeRunningOneUnchanged) {
   bad = default_kernel_config();
   bad.payload_mass_kg = -1.0f;
   CHECK(c.apply_config(bad) == ConfigError::kPayload);
+  bad = default_kernel_config();
+  bad.payload_inertia_kgm2[1] = -1e-4f;
+  CHECK(c.apply_config(bad) == ConfigError::kPayload);
+  bad = default_kernel_config();
+  bad.axis[2].type = static_cast<LoopType>(7);
+  CHECK(c.apply_config(bad) == ConfigError::kUnsupportedLoopType);
+  LONGS_EQUAL(2, c.status().config_axis);
+  bad = default_kernel_config();
+  bad.axis[4].type = LoopType::kInternalModel;
+  bad.axis[4].imr.bandwidth_Hz = 0.0f;  // the internal-model design is validated
+  CHECK(c.apply_config(bad) == ConfigError::kAxisLoop);
+  LONGS_EQUAL(4, c.status().config_axis);
+  bad = default_kernel_config();
+  bad.excitation.max_amplitude_A = 5.0f;  // beyond the 4 A coil peak
+  CHECK(c.apply_config(bad) == ConfigError::kReferenceLimits);
+  bad = default_kernel_config();
+  bad.excitation.max_frequency_Hz = 1250.0f;  // fs / 2
+  CHECK(c.apply_config(bad) == ConfigError::kReferenceLimits);
+  bad = default_kernel_config();
+  bad.references.max_jerk[0] = 0.0f;
+  CHECK(c.apply_config(bad) == ConfigError::kReferenceLimits);
   MEMCMP_EQUAL(before, &c.config(), sizeof(KernelConfig));
+  // Every axis on the internal-model regulator is a valid config.
+  KernelConfig imr = default_kernel_config();
+  for (auto& a : imr.axis) a.type = LoopType::kInternalModel;
+  CHECK(c.apply_config(imr) == ConfigError::kOk);
 }
 
 TEST(Controller, LockedFieldsWhileLevitated) {

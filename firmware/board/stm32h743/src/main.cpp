@@ -83,22 +83,25 @@ struct FaultLog {
 constexpr std::uint32_t kFaultMagic = 0x4D41474Cu;  // "MAGL"
 [[gnu::section(".backup_sram")]] FaultLog g_fault_log;
 
-// --- DMA buffers in D2 SRAM (MPU: non-cacheable): the AD7606 raw words. The
-// polled SPI read fills it today; the SPI3 RX DMA stream fills it unchanged. ---
-[[gnu::section(".dma_bss")]] alignas(32) std::uint32_t g_adc_dma_rx[2][4];
-
 // --- recorder in AXI SRAM ---
-[[gnu::section(".axi_bss")]] maglev::app::Recorder<2048> g_recorder;
+constexpr std::size_t kRecorderEntries = 2048;
+[[gnu::section(".axi_bss")]] maglev::app::Recorder<kRecorderEntries> g_recorder;
 
 Bus g_bus;
 
 // GPIO
+d::Stm32OutputPin<Bus> g_amp_enable_pin{g_bus, pins::kAmpEnable};
+d::Stm32OutputPin<Bus> g_led{g_bus, pins::kLed};
+
+#if !MAGLEV_BOARD_HIL
+// --- DMA buffers in D2 SRAM (MPU: non-cacheable): the AD7606 raw words. The
+// polled SPI read fills it today; the SPI3 RX DMA stream fills it unchanged. ---
+[[gnu::section(".dma_bss")]] alignas(32) std::uint32_t g_adc_dma_rx[2][4];
+
 d::Stm32OutputPin<Bus> g_dac_sync{g_bus, pins::kDacSync};
 d::Stm32OutputPin<Bus> g_dac_ldac{g_bus, pins::kDacLdac};
 d::Stm32OutputPin<Bus> g_adc0_cs{g_bus, pins::kAdc0Cs};
 d::Stm32OutputPin<Bus> g_adc1_cs{g_bus, pins::kAdc1Cs};
-d::Stm32OutputPin<Bus> g_amp_enable_pin{g_bus, pins::kAmpEnable};
-d::Stm32OutputPin<Bus> g_led{g_bus, pins::kLed};
 d::Stm32InputPin<Bus> g_adc_busy{g_bus, pins::kAdcBusy};
 d::Stm32InputPin<Bus> g_loss0{g_bus, pins::kLoss0};
 d::Stm32InputPin<Bus> g_loss1{g_bus, pins::kLoss1};
@@ -119,22 +122,87 @@ using Encoder = d::QuadratureEncoder<Bus>;
 Encoder g_enc0{g_bus, {r::tim::kTim2, true, 1, false}, g_loss0};
 Encoder g_enc1{g_bus, {r::tim::kTim5, true, 1, false}, g_loss1};
 Encoder g_enc2{g_bus, {r::tim::kTim3, false, 1, false}, g_loss2};
+b::AmplifierBoardSensors<Encoder> g_sensors{g_adc, g_enc0, g_enc1, g_enc2};
+#endif
+
 d::AmplifierEnable* g_amp = nullptr;  // constructed in main() after the GPIO is configured
 d::fdcan::Fdcan<Bus> g_can{g_bus, d::fdcan::Config{}};
 d::rs485::UsartRs485<Bus> g_rs485{g_bus, d::rs485::Config{r::usart::kUsart2, b::kApb_Hz, 115'200, 1'000, 1'000}};
 d::iwdg::Watchdog<Bus> g_watchdog{g_bus};
 d::iwdg::FeedGate g_feed_gate;
+d::flash::Flash<Bus> g_flash{g_bus};
+
+#if MAGLEV_BOARD_HIL
+// HIL: the sensor frame replaces the ADC/encoders, the actuator frame the DAC.
+// The tick clock (read count x 400 us) times the sensor-frame watchdog.
+maglev::app::CanSensorSource g_sensors{g_can, maglev::app::CanSensorConfig{}};
+maglev::app::CanActuatorSink g_can_actuators{g_can, g_sensors};
+#endif
 
 // Kernel + servo loop
 b::ServoKernel g_kernel;
-b::AmplifierBoardSensors<Encoder> g_sensors{g_adc, g_enc0, g_enc1, g_enc2};
-b::AmplifierBoardActuators* g_actuators = nullptr;
 maglev::app::ServoLoop<b::ServoKernel>* g_servo = nullptr;
 
+constexpr std::uint32_t kIwdgTimeout_ms = 50;
+// A 128 KB sector erase takes up to ~4 s (DS12110 t_ERASE128KB): the IWDG is
+// stretched for the duration of a configuration save only.
+constexpr std::uint32_t kIwdgSaveTimeout_ms = 8000;
+
 std::uint32_t cycle_counter() { return g_bus.read32(r::dwt::kCyccnt); }
-bool busy_irq_pending_again() { return (g_bus.read32(r::exti::kBase + r::exti::kCpupr1) & r::bit(11)) != 0; }
+#if MAGLEV_BOARD_HIL
+bool tick_irq_pending_again() { return (g_bus.read32(r::tim::kTim2 + r::tim::kSr) & 1u) != 0; }  // UIF
+#else
+bool tick_irq_pending_again() { return (g_bus.read32(r::exti::kBase + r::exti::kCpupr1) & r::bit(11)) != 0; }
+#endif
 void servo_ran() { g_feed_gate.servo_ran(); }
 void record(const maglev::io::SensorSample& s, const maglev::io::ActuatorCommand& c) { g_recorder.record(s, c); }
+
+// Microsecond clock for thread mode: DWT CYCCNT deltas accumulated (the loop
+// runs far more often than CYCCNT's 8.9 s wrap), so it wraps at 2^32 us as
+// the Modbus RTU timestamps and the heartbeat uptime expect.
+std::uint32_t g_last_cycles = 0;
+std::uint32_t g_cycle_remainder = 0;
+std::uint32_t g_now_us = 0;
+std::uint32_t now_us() {
+  const std::uint32_t c = cycle_counter();
+  const std::uint32_t elapsed = c - g_last_cycles + g_cycle_remainder;
+  g_last_cycles = c;
+  constexpr std::uint32_t kCyclesPerUs = b::kCpu_Hz / 1'000'000u;
+  g_now_us += elapsed / kCyclesPerUs;
+  g_cycle_remainder = elapsed % kCyclesPerUs;
+  return g_now_us;
+}
+
+// Thread-mode critical section: PRIMASK, nesting-safe. Held only for kernel
+// accesses (status snapshot, Modbus status/command/config) and CAN sends.
+std::uint32_t g_critical_nesting = 0;
+void critical_enter() {
+  __asm volatile("cpsid i" ::: "memory");
+  ++g_critical_nesting;
+}
+void critical_exit() {
+  if (--g_critical_nesting == 0) __asm volatile("cpsie i" ::: "memory");
+}
+void long_operation(bool begin) {
+  (void)g_watchdog.start(begin ? kIwdgSaveTimeout_ms : kIwdgTimeout_ms);
+}
+
+// D-cache maintenance by address (DCIMVAC), 32-byte lines: after flash erase/program.
+void invalidate_dcache(r::Addr start, std::size_t bytes) {
+  constexpr r::Addr kDcimvac = 0xE000EF5C;
+  r::barrier(g_bus);
+  for (r::Addr a = start & ~r::Addr{31}; a < start + bytes; a += 32) g_bus.write32(kDcimvac, static_cast<std::uint32_t>(a));
+  r::barrier(g_bus);
+}
+
+struct Rs485Replies final : maglev::app::ByteSink {
+  bool transmit(const std::uint8_t* data, std::size_t len) override { return g_rs485.transmit(data, len); }
+};
+struct IwdgFeeder final : maglev::app::WatchdogFeeder {
+  void feed() override { g_watchdog.feed(); }
+};
+Rs485Replies g_replies;
+IwdgFeeder g_iwdg_feeder;
 
 void nvic_enable(int irq, std::uint32_t priority) {
   const auto n = static_cast<std::uint32_t>(irq);
@@ -154,6 +222,14 @@ void enable_peripheral_clocks() {
 }
 
 void configure_pins() {
+  g_amp_enable_pin.configure(false);  // OFF before anything else can run
+  d::configure_alternate_pin(g_bus, pins::kCanRx, pins::kAfFdcan1);
+  d::configure_alternate_pin(g_bus, pins::kCanTx, pins::kAfFdcan1);
+  d::configure_alternate_pin(g_bus, pins::kRs485Tx, pins::kAfUsart2);
+  d::configure_alternate_pin(g_bus, pins::kRs485Rx, pins::kAfUsart2, 3, 1);  // pull-up: idle mark
+  d::configure_alternate_pin(g_bus, pins::kRs485De, pins::kAfUsart2);
+  g_led.configure(false);
+#if !MAGLEV_BOARD_HIL
   d::configure_alternate_pin(g_bus, pins::kDacSck, pins::kAfSpi1);
   d::configure_alternate_pin(g_bus, pins::kDacMiso, pins::kAfSpi1);
   d::configure_alternate_pin(g_bus, pins::kDacMosi, pins::kAfSpi1);
@@ -167,23 +243,30 @@ void configure_pins() {
   d::configure_alternate_pin(g_bus, pins::kEnc1B, pins::kAfTim5, 2);
   d::configure_alternate_pin(g_bus, pins::kEnc2A, pins::kAfTim3, 2);
   d::configure_alternate_pin(g_bus, pins::kEnc2B, pins::kAfTim3, 2);
-  d::configure_alternate_pin(g_bus, pins::kCanRx, pins::kAfFdcan1);
-  d::configure_alternate_pin(g_bus, pins::kCanTx, pins::kAfFdcan1);
-  d::configure_alternate_pin(g_bus, pins::kRs485Tx, pins::kAfUsart2);
-  d::configure_alternate_pin(g_bus, pins::kRs485Rx, pins::kAfUsart2, 3, 1);  // pull-up: idle mark
-  d::configure_alternate_pin(g_bus, pins::kRs485De, pins::kAfUsart2);
-  g_amp_enable_pin.configure(false);  // OFF before anything else can run
   g_dac_sync.configure(true);
   g_dac_ldac.configure(true);
   g_adc0_cs.configure(true);
   g_adc1_cs.configure(true);
-  g_led.configure(false);
   g_adc_busy.configure();
   g_loss0.configure(1);
   g_loss1.configure(1);
   g_loss2.configure(1);
+#endif
 }
 
+#if MAGLEV_BOARD_HIL
+// TIM2 (APB1 timer clock 240 MHz, 32-bit): update event every servo period.
+void start_tick_timer() {
+  const r::Addr t = r::tim::kTim2;
+  g_bus.write32(t + r::tim::kCr1, 0u);
+  g_bus.write32(t + r::tim::kPsc, 0u);
+  g_bus.write32(t + r::tim::kArr, b::kApbTimer_Hz / kServoRate_Hz - 1u);  // 95999
+  g_bus.write32(t + r::tim::kEgr, 1u);  // UG: load PSC/ARR
+  g_bus.write32(t + r::tim::kSr, 0u);   // drop the UIF the UG just set
+  g_bus.write32(t + r::tim::kDier, 1u); // UIE
+  g_bus.write32(t + r::tim::kCr1, r::tim::kCr1Arpe | r::tim::kCr1Urs | r::tim::kCr1Cen);
+}
+#else
 void configure_busy_exti() {
   // PE11 -> EXTI11 (SYSCFG_EXTICR3 bits 15:12 = 4: port E), falling edge, unmasked for CPU1.
   r::modify32(g_bus, r::syscfg::kBase + r::syscfg::kExticr1 + 8u, 0xFu << 12, 4u << 12);
@@ -191,6 +274,7 @@ void configure_busy_exti() {
   g_bus.write32(r::exti::kBase + r::exti::kCpupr1, r::bit(11));
   r::modify32(g_bus, r::exti::kBase + r::exti::kCpuimr1, 0u, r::bit(11));
 }
+#endif
 
 void enable_cycle_counter() {
   r::modify32(g_bus, r::dwt::kDemcr, 0u, r::bit(24));  // TRCENA
@@ -207,7 +291,9 @@ void send_diagnostics(const maglev::app::ServoState& s) {
   f.flags = maglev::can::kFlagFd | maglev::can::kFlagBrs;
   const std::uint32_t words[4] = {s.ticks, s.overruns, s.max_cycles, s.sensor_faults};
   for (unsigned i = 0; i < 16; ++i) f.data[i] = static_cast<std::uint8_t>(words[i / 4] >> (8 * (i % 4)));
+  critical_enter();  // HIL: the tick ISR sends on the same FDCAN TX FIFO
   (void)g_can.send(f);
+  critical_exit();
 }
 
 }  // namespace
@@ -227,10 +313,13 @@ extern "C" void board_main() {
   configure_pins();
   static d::AmplifierEnable amp(g_amp_enable_pin);
   g_amp = &amp;
-  static b::AmplifierBoardActuators actuators(g_dac, amp);
-  g_actuators = &actuators;
   enable_cycle_counter();
 
+#if MAGLEV_BOARD_HIL
+  maglev::app::ActuatorSink& actuators = g_can_actuators;
+#else
+  static b::AmplifierBoardActuators board_actuators(g_dac, amp);
+  maglev::app::ActuatorSink& actuators = board_actuators;
   g_spi_dac.init();
   g_spi_adc.init();
   g_dac.init();
@@ -238,56 +327,74 @@ extern "C" void board_main() {
   g_enc0.init();
   g_enc1.init();
   g_enc2.init();
+#endif
   (void)g_can.init();
   g_rs485.init();
 
-  static const maglev::app::ServoHooks hooks{&cycle_counter, &busy_irq_pending_again, &servo_ran, &record};
+  // Persistence boot: the configuration sectors through the flash driver;
+  // Application's constructor loads the newest valid bank and applies it to
+  // the kernel before the first tick (persist.flags shows what happened).
+  static b::BoardFlash<Bus> config_flash(g_bus, g_flash, reinterpret_cast<r::Addr>(&__config_bank_a_start),
+                                         reinterpret_cast<r::Addr>(&__config_bank_b_start), &invalidate_dcache);
+  static maglev::persistence::ConfigStore store(config_flash, 0, 1);
+  maglev::app::ApplicationConfig app_config{};
+  maglev::app::ApplicationHooks app_hooks{&critical_enter, &critical_exit, &long_operation, nullptr};
+#if MAGLEV_BOARD_HIL
+  app_config.drain_can_rx = false;  // CanSensorSource owns FDCAN RX
+  app_config.sync_period_ticks = maglev::can::kSyncPeriodTicks;  // the HIL board is the time master
+  app_hooks.rx_stats = &g_sensors.receiver();
+#endif
+  static maglev::app::Application<float, kRecorderEntries> application(
+      g_kernel, &store, &g_can, &g_replies, &g_recorder, g_feed_gate, g_iwdg_feeder, app_config, app_hooks);
+
+  static const maglev::app::ServoHooks hooks{&cycle_counter, &tick_irq_pending_again, &servo_ran, &record};
   static maglev::app::ServoLoop<b::ServoKernel> servo(g_sensors, actuators, g_kernel,
                                                       maglev::app::ServoConfig{kCycleBudget, kPeriodCycles, 3}, hooks);
   g_servo = &servo;
 
-  configure_busy_exti();
-  nvic_enable(r::irq::kExti15_10, 0);
-  nvic_enable(r::irq::kTim3, 0);
   g_bus.write32(r::scb::kBase + r::scb::kShpr3, 1u << 28);  // SysTick priority 1
   g_bus.write32(r::systick::kRvr, b::kCpu_Hz / 1000u - 1u);
   g_bus.write32(r::systick::kCvr, 0u);
   g_bus.write32(r::systick::kCsr, 0x7u);  // CPU clock, interrupt, enable
-
+#if MAGLEV_BOARD_HIL
+  nvic_enable(r::irq::kTim2, 0);
+  start_tick_timer();
+#else
+  configure_busy_exti();
+  nvic_enable(r::irq::kExti15_10, 0);
+  nvic_enable(r::irq::kTim3, 0);
   // The servo clock: TIM1 CH1 PWM on CONVST (APB2 timer clock 240 MHz).
   d::start_convst_timer(g_bus, r::tim::kTim1, d::convst_timing(b::kApbTimer_Hz, kServoRate_Hz, 1000));
-  (void)g_watchdog.start(50);
+#endif
+  (void)g_watchdog.start(kIwdgTimeout_ms);
 
   std::uint32_t last_diag_tick = 0;
-  std::uint32_t recorder_cursor = 0;
   for (;;) {
-    // Modbus RTU: bytes into the frame buffer; a t3.5 gap ends the frame.
-    // (firmware/modbus's RTU server takes the frame here.)
+    // Modbus RTU bytes with their arrival time (t3.5 framing in RtuServer).
     std::uint8_t byte = 0;
-    while (g_rs485.receive_byte(byte)) {
-    }
-    (void)g_rs485.frame_gap_elapsed();
-    // CAN FD: drain received frames (firmware/can_link decodes them here).
-    maglev::can::CanFrame rx{};
-    while (g_can.receive(rx, 0) == maglev::can::PortStatus::kOk) {
-    }
+    while (g_rs485.receive_byte(byte)) application.on_uart_byte(byte, now_us());
+    (void)g_rs485.frame_gap_elapsed();  // RtuServer times t3.5 itself; just clear RTOF
     const maglev::app::ServoState& s = servo.state();
-    if (s.ticks - last_diag_tick >= kServoRate_Hz / 100u) {
-      last_diag_tick = s.ticks;
+    const std::uint32_t ticks = s.ticks;
+    // Modbus reply, CAN telemetry, recorder drain, watchdog feed policy.
+    application.service(now_us(), ticks);
+    if (ticks - last_diag_tick >= kServoRate_Hz / 100u) {
+      last_diag_tick = ticks;
       send_diagnostics(s);
-      g_led.write(((s.ticks / kServoRate_Hz) & 1u) != 0u);
+      g_led.write(((ticks / kServoRate_Hz) & 1u) != 0u);
     }
-    // Recorder drain: keep up with the ring (a reader falling behind skips ahead).
-    maglev::app::RecordEntry entry{};
-    while (g_recorder.read(recorder_cursor, entry)) ++recorder_cursor;
-    if (g_recorder.head() - recorder_cursor > 2048u) recorder_cursor = g_recorder.head();
-    g_feed_gate.comms_ran();
-    (void)g_feed_gate.service(g_watchdog);
   }
 }
 
 extern "C" {
 
+#if MAGLEV_BOARD_HIL
+// Servo tick: TIM2 update (the HIL board is the time master). ITCM-resident.
+[[gnu::section(".itcm_text")]] void TIM2_IRQHandler() {
+  g_bus.write32(r::tim::kTim2 + r::tim::kSr, 0u);  // clear UIF (rc_w0)
+  if (g_servo != nullptr) g_servo->on_tick();
+}
+#else
 // Servo tick: AD7606 BUSY fell -> both ADCs hold fresh results. ITCM-resident.
 [[gnu::section(".itcm_text")]] void EXTI15_10_IRQHandler() {
   g_bus.write32(r::exti::kBase + r::exti::kCpupr1, r::bit(11));
@@ -296,6 +403,7 @@ extern "C" {
 
 // 16-bit encoder extension points (wrap, 0x4000, 0xC000). Same priority as the tick.
 [[gnu::section(".itcm_text")]] void TIM3_IRQHandler() { g_enc2.on_timer_irq(); }
+#endif
 
 void SysTick_Handler() {
   if (g_servo != nullptr) (void)g_servo->check_deadline(cycle_counter());

@@ -27,8 +27,11 @@ void board_early_init();
 void Default_Handler();
 void HardFault_Handler();
 void SysTick_Handler();
-void EXTI15_10_IRQHandler();
-void TIM3_IRQHandler();
+// Servo/encoder interrupts: each image defines the ones it enables
+// (production: EXTI15_10 + TIM3, HIL: TIM2); the others stay Default_Handler.
+void EXTI15_10_IRQHandler() __attribute__((weak, alias("Default_Handler")));
+void TIM3_IRQHandler() __attribute__((weak, alias("Default_Handler")));
+void TIM2_IRQHandler() __attribute__((weak, alias("Default_Handler")));
 }
 
 namespace {
@@ -61,6 +64,7 @@ constexpr VectorTable make_vector_table() {
   t.handlers[15 - 1] = SysTick_Handler;
   t.handlers[16 + maglev::stm32h7::irq::kExti15_10 - 1] = EXTI15_10_IRQHandler;
   t.handlers[16 + maglev::stm32h7::irq::kTim3 - 1] = TIM3_IRQHandler;
+  t.handlers[16 + maglev::stm32h7::irq::kTim2 - 1] = TIM2_IRQHandler;
   return t;
 }
 

@@ -165,7 +165,7 @@ ForceAllocationError ComputeForceAllocationTables(const ForceAllocationConfig& c
   if (!(c.lever_arm_m >= 0.0 && c.lever_arm_m < 10.0) || !(c.pitch_m > 1e-4 && c.pitch_m < 1.0)) {
     return ForceAllocationError::kBadGeometry;
   }
-  ForcerGeometry g[kForcers];
+  ForcerGeometry g[kForcers] = {};  // zero for a layout value outside the enum (gcc -O2 arm: maybe-uninitialized)
   LayoutGeometry(c, g);
   BuildA(g, t.a);
   for (int k = 0; k < kForcers; ++k) {

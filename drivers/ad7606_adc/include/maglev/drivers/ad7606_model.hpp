@@ -23,7 +23,7 @@ class DeviceModel final : public SpiPeripheralModel {
       const std::size_t ch = bit_ / 16;
       const std::size_t pos = 15 - bit_ % 16;
       const std::uint32_t v =
-          ch < kChannelsPerDevice ? (static_cast<std::uint16_t>(codes_[ch]) >> pos) & 1u : 0u;
+          ch < kChannelsPerDevice ? (static_cast<std::uint32_t>(static_cast<std::uint16_t>(codes_[ch])) >> pos) & 1u : 0u;
       miso = (miso << 1) | v;
       ++bit_;
     }

@@ -17,7 +17,8 @@
 //     3. CAN telemetry by servo ticks: controller_status every
 //        status_period_ticks (catalog: 10 = 250 Hz) from kernel status(),
 //        heartbeat_controller every heartbeat_period_ticks (250 = 10 Hz);
-//        a loop that fell behind sends one frame, not a burst;
+//        a loop that fell behind sends one frame, not a burst; sync every
+//        sync_period_ticks when this node is the time master (HIL board);
 //     4. recorder drain (oldest first; a reader more than N behind skips
 //        ahead and counts the loss);
 //     5. watchdog: comms_ran() on the FeedGate, then FeedGate::service(dog):
@@ -82,6 +83,9 @@ struct ApplicationConfig {
   bool drain_can_rx = true;  // false when a CanSensorSource reads the same port (HIL)
   std::uint16_t status_period_ticks = can::kControllerStatusPeriodTicks;
   std::uint16_t heartbeat_period_ticks = can::kHeartbeatPeriodTicks;
+  // sync (time master's tick broadcast, catalog 25 ticks = 100 Hz): only the
+  // node that is the time master sends it (the HIL board); 0 = off.
+  std::uint16_t sync_period_ticks = 0;
   std::uint8_t max_can_rx_per_service = 16;
 };
 
@@ -99,6 +103,7 @@ struct ApplicationStats {
   std::uint32_t uart_tx_errors = 0;
   std::uint32_t status_frames = 0;
   std::uint32_t heartbeat_frames = 0;
+  std::uint32_t sync_frames = 0;
   std::uint32_t can_tx_errors = 0;
   std::uint32_t can_rx_frames = 0;
   std::uint32_t recorder_drained = 0;
@@ -272,6 +277,12 @@ class Application {
     clock_started_ = true;
     last_now_us_ = now_us;
     if (can_ == nullptr) return;
+    if (due(servo_ticks, last_sync_tick_, config_.sync_period_ticks, sync_started_)) {
+      can::CanFrame f{};
+      can::encode_sync(can::SyncFrame{servo_ticks, now_us}, sync_counter_++, f);
+      send(f);
+      ++stats_.sync_frames;
+    }
     if (due(servo_ticks, last_status_tick_, config_.status_period_ticks, status_started_)) {
       enter();
       const can::ControllerStatusFrame frame = to_status_frame(kernel_.status());
@@ -331,6 +342,9 @@ class Application {
   std::uint32_t recorder_cursor_ = 0;
   std::uint32_t last_status_tick_ = 0;
   std::uint32_t last_heartbeat_tick_ = 0;
+  std::uint32_t last_sync_tick_ = 0;
+  bool sync_started_ = false;
+  std::uint8_t sync_counter_ = 0;
   bool status_started_ = false;
   bool heartbeat_started_ = false;
   std::uint8_t status_counter_ = 0;

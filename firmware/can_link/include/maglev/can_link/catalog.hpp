@@ -27,6 +27,9 @@ struct Signal {
   double max;
   const char* unit;
   const char* comment;
+  // true: the 64 bits are an IEEE-754 binary64 value (DBC SIG_VALTYPE_ 2),
+  // factor 1, offset 0; [min, max] bound the value, NaN/inf are rejected.
+  bool is_float64;
 };
 
 struct Message {
@@ -58,12 +61,17 @@ constexpr Signal sig(const char* name, std::uint8_t bits, bool is_signed, double
                      const char* unit, const char* comment, double offset = 0.0) {
   return Signal{name, 0, bits, is_signed, factor, offset,
                 raw_min(bits, is_signed) * factor + offset, raw_max(bits, is_signed) * factor + offset,
-                unit, comment};
+                unit, comment, false};
 }
 // Limited-range signal (enums, booleans): raw outside [min,max] is rejected.
 constexpr Signal sig_range(const char* name, std::uint8_t bits, double min, double max,
                            const char* unit, const char* comment) {
-  return Signal{name, 0, bits, false, 1.0, 0.0, min, max, unit, comment};
+  return Signal{name, 0, bits, false, 1.0, 0.0, min, max, unit, comment, false};
+}
+// IEEE-754 binary64 argument: exact for any double the host computes, so a
+// command sent over CAN is bit-identical to the one applied in process.
+constexpr Signal sig_f64(const char* name, double min, double max, const char* unit, const char* comment) {
+  return Signal{name, 0, 64, true, 1.0, 0.0, min, max, unit, comment, true};
 }
 // Prepends the E2E header and assigns start bits back to back.
 template <std::size_t N>
@@ -169,6 +177,30 @@ inline constexpr auto kHeartbeatSignals = cd::layout(std::array<Signal, 4>{
     cd::sig("bus_errors", 16, false, 1.0, "", "error frames the sender observed, saturating"),
 });
 
+// Host command (host/bench -> controller node), sporadic. command_code is
+// can::HostCommandCode (codec.hpp); the meaning of arg0..arg4 depends on it
+// (SI units: m, rad, m/s, rad/s, m/s^2, Hz, s, A; table in docs/CAN.md).
+inline constexpr std::uint8_t kHostCommandCodeMax = 16;
+inline constexpr double kHostCommandArgLimit = 1e9;  // any sane SI argument; NaN/inf rejected
+inline constexpr auto kHostCommandSignals = cd::layout(std::array<Signal, 8>{
+    cd::sig_range("command_code", 8, 1, kHostCommandCodeMax, "", "can::HostCommandCode (home, levitate, ..., shutdown)"),
+    cd::sig_range("axis", 8, 0, 5, "", "kernel::Axis: 0 x, 1 y, 2 theta_z, 3 z, 4 theta_x, 5 theta_y"),
+    cd::sig("command_seq", 16, false, 1.0, "", "sender's command number, echoed by host_command_ack"),
+    cd::sig_f64("arg0", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "target / delta / distance / diameter / amplitude"),
+    cd::sig_f64("arg1", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "velocity / period / frequency"),
+    cd::sig_f64("arg2", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "acceleration / turns / period or duration"),
+    cd::sig_f64("arg3", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "jerk / sinusoid turns / harmonics"),
+    cd::sig_f64("arg4", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "reserved (0)"),
+});
+
+inline constexpr auto kHostCommandAckSignals = cd::layout(std::array<Signal, 5>{
+    cd::sig("command_seq", 16, false, 1.0, "", "command_seq of the host_command answered"),
+    cd::sig_range("command_code", 8, 1, kHostCommandCodeMax, "", "its command_code"),
+    cd::sig_range("result", 8, 0, 15, "", "kernel::CommandResult (0 accepted); 15 = not executed by the node"),
+    cd::sig_range("sequencer_state", 8, 0, 15, "", "kernel sequencer state after the command"),
+    cd::sig("tick", 32, false, 1.0, "tick", "controller ticks run before the command took effect"),
+});
+
 // ---- messages -----------------------------------------------------------------
 enum class MessageKind : std::uint8_t {
   kSync = 0,
@@ -178,6 +210,8 @@ enum class MessageKind : std::uint8_t {
   kControllerStatus,
   kHeartbeatController,
   kHeartbeatPlant,
+  kHostCommand,
+  kHostCommandAck,
   kCount,
 };
 inline constexpr std::size_t kMessageCount = static_cast<std::size_t>(MessageKind::kCount);
@@ -208,6 +242,14 @@ inline constexpr std::array<Message, kMessageCount> kCatalog{{
      kHeartbeatSignals.data(), kHeartbeatSignals.size(), "controller node liveness"},
     {"heartbeat_plant", 0x702, 12, 0x0A07, 1, kHeartbeatPeriodTicks, "plant", "controller",
      kHeartbeatSignals.data(), kHeartbeatSignals.size(), "plant node liveness"},
+    // Sporadic; below the servo pair in priority (a command never delays a
+    // sensor or actuator frame), above the decimated telemetry.
+    {"host_command", 0x040, 48, 0x0A08, 3, 0, "plant", "controller",
+     kHostCommandSignals.data(), kHostCommandSignals.size(),
+     "host/bench command to the controller node (sporadic); applied before the next servo tick"},
+    {"host_command_ack", 0x041, 12, 0x0A09, 3, 0, "controller", "plant",
+     kHostCommandAckSignals.data(), kHostCommandAckSignals.size(),
+     "controller node's answer to one host_command (sporadic)"},
 }};
 
 constexpr const Message& message(MessageKind k) { return kCatalog[static_cast<std::size_t>(k)]; }
@@ -247,6 +289,8 @@ static_assert(catalog_is_consistent(), "CAN catalog: overlapping ID/data ID or s
 static_assert(cd::used_bits(kSensorSignals) <= 32 * 8);
 static_assert(cd::used_bits(kActuatorSignals) == 20 * 8);
 static_assert(cd::used_bits(kControllerStatusSignals) <= 64 * 8);
+static_assert(cd::used_bits(kHostCommandSignals) <= 48 * 8);
+static_assert(cd::used_bits(kHostCommandAckSignals) == 12 * 8);
 
 // Payload signal counts (without the E2E header), for the typed codec.
 inline constexpr std::size_t kMaxSignals = 21;

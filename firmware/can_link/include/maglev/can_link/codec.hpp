@@ -78,6 +78,56 @@ struct HeartbeatFrame {
   std::uint16_t bus_errors;
 };
 
+// Host commands (host/bench -> controller node). Codes are stable wire values.
+// Arguments (SI; unused ones 0):
+//   kStep        axis, arg0 delta
+//   kMoveTo      axis, arg0 target, arg1 velocity, arg2 acceleration   (trapezoid)
+//   kMoveBy      axis, arg0 distance from the present reference, arg1 v, arg2 a
+//   kMoveJerkTo  axis, arg0 target, arg1 v, arg2 a, arg3 jerk          (S-curve)
+//   kMoveJerkBy  axis, arg0 distance from the present reference, arg1 v, arg2 a, arg3 jerk
+//   kCircle      arg0 diameter, arg1 period, arg2 turns                (x, y)
+//   kSinusoid    axis, arg0 amplitude, arg1 frequency, arg2 period_s, arg3 turns
+//   kExcite      axis, arg0 amplitude [A], arg1 frequency, arg2 duration, arg3 harmonics
+//   kShutdown    the controller node acknowledges and stops (bench only)
+enum class HostCommandCode : std::uint8_t {
+  kHome = 1,
+  kLevitate = 2,
+  kLand = 3,
+  kStop = 4,
+  kClearFault = 5,
+  kHold = 6,
+  kStep = 7,
+  kMoveTo = 8,
+  kMoveBy = 9,
+  kMoveJerkTo = 10,
+  kMoveJerkBy = 11,
+  kCircle = 12,
+  kSinusoid = 13,
+  kExcite = 14,
+  kStopExcitation = 15,
+  kShutdown = 16,
+};
+static_assert(static_cast<std::uint8_t>(HostCommandCode::kShutdown) == kHostCommandCodeMax);
+const char* to_string(HostCommandCode c);
+
+struct HostCommandFrame {
+  HostCommandCode code;
+  std::uint8_t axis;        // kernel::Axis index (0 x, 1 y, 2 theta_z, 3 z, 4 theta_x, 5 theta_y)
+  std::uint16_t seq;        // echoed by the ack
+  double arg[5];
+};
+
+// Ack result: kernel::CommandResult value, or this when the node did not
+// execute the command (e.g. shutdown, or a code it does not implement).
+inline constexpr std::uint8_t kHostResultNotExecuted = 15;
+struct HostCommandAckFrame {
+  std::uint16_t seq;
+  HostCommandCode code;
+  std::uint8_t result;
+  std::uint8_t sequencer_state;
+  std::uint32_t tick;
+};
+
 // Encoders: build a complete, protected frame.
 void encode_sync(const SyncFrame& v, std::uint8_t counter, CanFrame& f);
 void encode_actuator(const io::ActuatorCommand& v, std::uint8_t counter, CanFrame& f);
@@ -86,6 +136,8 @@ void encode_sensor(const io::SensorSample& v, std::uint8_t counter, CanFrame& f)
 void encode_current_monitor(const CurrentMonitorFrame& v, std::uint8_t counter, CanFrame& f);
 void encode_controller_status(const ControllerStatusFrame& v, std::uint8_t counter, CanFrame& f);
 void encode_heartbeat(MessageKind which, const HeartbeatFrame& v, std::uint8_t counter, CanFrame& f);
+void encode_host_command(const HostCommandFrame& v, std::uint8_t counter, CanFrame& f);
+void encode_host_command_ack(const HostCommandAckFrame& v, std::uint8_t counter, CanFrame& f);
 
 // Decoders: unpack WITHOUT checks; only call on a frame a LinkReceiver (or
 // check_frame) accepted. decode_sensor leaves out.coil_current_adc untouched.
@@ -95,6 +147,8 @@ void decode_sensor(const CanFrame& f, io::SensorSample& out);
 void decode_current_monitor(const CanFrame& f, CurrentMonitorFrame& out);
 void decode_controller_status(const CanFrame& f, ControllerStatusFrame& out);
 void decode_heartbeat(const CanFrame& f, HeartbeatFrame& out);
+void decode_host_command(const CanFrame& f, HostCommandFrame& out);
+void decode_host_command_ack(const CanFrame& f, HostCommandAckFrame& out);
 
 inline std::uint8_t frame_counter(const CanFrame& f) { return f.data[2]; }
 

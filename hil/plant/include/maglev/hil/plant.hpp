@@ -100,7 +100,12 @@ class Plant {
   void apply(const io::ActuatorCommand& command);
   void advance(double dt_s);
   void advance_tick() { advance(tick_s_); }
-  const PlantState& truth() const { return truth_; }
+  // Ground truth. The magnetic/contact wrench fields are derived lazily (the
+  // bench's per-tick path never needs them).
+  const PlantState& truth() const {
+    if (truth_wrench_stale_) RefreshTruthWrench();
+    return truth_;
+  }
 
   // --- model access (tests, bench diagnostics) ----------------------------
   const PlantConfig& config() const { return config_; }
@@ -149,6 +154,8 @@ class Plant {
   static Wrench ToWrench(const Kinematics& k, const Accum& acc);
   ContactResult ContactWrench(const BodyState& state) const;
   void UpdateTruth();
+  void UpdateTruthCurrents();
+  void RefreshTruthWrench() const;
   double InterferometerDisplacement(int axis) const;
 
   PlantConfig config_;
@@ -156,7 +163,8 @@ class Plant {
   Amplifiers amplifiers_;
   Rng rng_;
   BodyState body_;
-  PlantState truth_;
+  mutable PlantState truth_;
+  mutable bool truth_wrench_stale_ = true;
   std::array<CoilSide, 2 * kCoils> sides_{};
   bool forcer_errors_active_ = false;
 

@@ -28,8 +28,8 @@ class BoardFlash final : public persistence::Flash {
   using InvalidateFn = void (*)(stm32h7::Addr start, std::size_t bytes);
 
   BoardFlash(Bus& bus, drivers::flash::Flash<Bus>& flash, stm32h7::Addr bank_a, stm32h7::Addr bank_b,
-             InvalidateFn invalidate = nullptr)
-      : bus_(bus), flash_(flash), sector_{bank_a, bank_b}, invalidate_(invalidate) {}
+             InvalidateFn invalidate_fn = nullptr)
+      : bus_(bus), flash_(flash), sector_{bank_a, bank_b}, invalidate_(invalidate_fn) {}
 
   std::size_t sector_size() const override { return stm32h7::memory::kFlashSectorBytes; }
   std::size_t sector_count() const override { return 2; }
