@@ -5,8 +5,9 @@
 //                  [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet]
 //   maglev-hil suite --out DIR [same options]
 //   maglev-hil check NAME|FILE...             parse + validate only
-//   maglev-hil controller --can IFACE [--kernel K] [--levitate] [--max-time S]
-//   maglev-hil plant NAME|FILE --can IFACE [--mode lockstep|realtime] [--seed N]
+//   maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S] [--levitate]
+//   maglev-hil plant NAME|FILE --can IFACE --out DIR [--controller-record FILE] [--mode lockstep|realtime]
+//                  [--seed N] [--no-plots] [--quiet]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -36,6 +37,8 @@ struct Args {
   bool plots = true;
   bool levitate = false;
   double max_time_s = 0.0;
+  std::string config;             // controller: scenario whose [controller]/kernel to apply
+  std::string controller_record;  // plant: the controller's record file
   std::string error;
 };
 
@@ -47,8 +50,10 @@ void usage() {
       "                 [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet] [--scenarios DIR]\n"
       "  maglev-hil suite --out DIR [run options]\n"
       "  maglev-hil check NAME|FILE...\n"
-      "  maglev-hil controller --can IFACE [--kernel K] [--levitate] [--max-time S]\n"
-      "  maglev-hil plant NAME|FILE --can IFACE [--mode lockstep|realtime] [--seed N]\n"
+      "  maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S]\n"
+      "                 [--levitate]       (runs until a shutdown host command, SIGTERM/SIGINT or --duration)\n"
+      "  maglev-hil plant NAME|FILE --can IFACE --out DIR [--controller-record FILE]\n"
+      "                 [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet]\n"
       "see docs/BENCH.md\n",
       stderr);
 }
@@ -96,8 +101,12 @@ Args parse_args(int argc, char** argv) {
         if (end == v.c_str() || *end != '\0') a.error = "--seed: not an integer: '" + v + "'";
         a.run.seed = n;
       }
-    } else if (s == "--max-time") {
+    } else if (s == "--max-time" || s == "--duration") {
       if (value(&v)) a.max_time_s = std::atof(v.c_str());
+    } else if (s == "--config") {
+      value(&a.config);
+    } else if (s == "--controller-record") {
+      value(&a.controller_record);
     } else if (s == "--no-plots") {
       a.plots = false;
     } else if (s == "--quiet") {
@@ -155,6 +164,21 @@ std::string primary_of(const maglev::scenario::Scenario& sc) {
        : it->second == "thz" ? "theta_z" : it->second;
 }
 
+// Writes a run's results into dir and prints its summary; 0 when it completed.
+int report_run(const maglev::scenario::Scenario& sc, const maglev::bench::RunResult& r, const Args& a,
+               const std::string& dir) {
+  std::string err;
+  const bool wrote = maglev::report::write_run(r, dir, primary_of(sc), a.plots, &err);
+  if (!wrote) std::fprintf(stderr, "maglev-hil: %s\n", err.c_str());
+  std::fputs(maglev::report::format_table(r).c_str(), stdout);
+  for (const auto& w : r.warnings) std::printf("  warning: %s\n", w.c_str());
+  std::printf("  final state %s, fault %s; %llu ticks in %.2f s wall: real-time factor %.1f, bus load %.1f %%\n",
+              r.final_state.c_str(), r.fault.c_str(), static_cast<unsigned long long>(r.ticks), r.wall_s,
+              r.real_time_factor, r.bus_load_percent);
+  std::printf("  results in %s\n", dir.c_str());
+  return r.completed && wrote ? 0 : 1;
+}
+
 // Runs one scenario into dir; returns 0 when it completed.
 int run_one(const maglev::scenario::Scenario& sc, const Args& a, const std::string& dir,
             maglev::bench::RunResult* keep) {
@@ -169,16 +193,7 @@ int run_one(const maglev::scenario::Scenario& sc, const Args& a, const std::stri
     for (const auto& e : errs) std::fprintf(stderr, "%s\n", e.message.c_str());
     return 2;
   }
-  std::string err;
-  const bool wrote = maglev::report::write_run(*r, dir, primary_of(sc), a.plots, &err);
-  if (!wrote) std::fprintf(stderr, "maglev-hil: %s\n", err.c_str());
-  std::fputs(maglev::report::format_table(*r).c_str(), stdout);
-  for (const auto& w : r->warnings) std::printf("  warning: %s\n", w.c_str());
-  std::printf("  final state %s, fault %s; %llu ticks in %.2f s wall: real-time factor %.1f, bus load %.1f %%\n",
-              r->final_state.c_str(), r->fault.c_str(), static_cast<unsigned long long>(r->ticks), r->wall_s,
-              r->real_time_factor, r->bus_load_percent);
-  std::printf("  results in %s\n", dir.c_str());
-  const int rc = r->completed && wrote ? 0 : 1;
+  const int rc = report_run(sc, *r, a, dir);
   if (keep != nullptr) *keep = std::move(*r);
   return rc;
 }
@@ -266,17 +281,41 @@ int main(int argc, char** argv) {
     return failed == 0 ? 0 : 1;
   }
   if (a.cmd == "controller") {
-    maglev::hil::KernelKind k = a.run.kernel.value_or(maglev::hil::KernelKind::kFloat32);
-    return maglev::bench::run_controller_process(a.run.can, k, a.levitate, a.max_time_s);
+    maglev::bench::ControllerProcessOptions o;
+    o.can = a.run.can;
+    o.duration_s = a.max_time_s;
+    o.out_dir = a.out;
+    o.levitate = a.levitate;
+    if (!a.config.empty()) {
+      maglev::scenario::Scenario sc;
+      if (!load(a.config, a.scenarios, &sc)) return 2;
+      std::vector<maglev::bench::ScenarioError> errs;
+      if (!maglev::bench::controller_config_of(sc, &o.config, &o.kernel, &errs)) {
+        for (const auto& e : errs) std::fprintf(stderr, "%s\n", e.message.c_str());
+        return 2;
+      }
+    }
+    if (a.run.kernel) o.kernel = *a.run.kernel;
+    return maglev::bench::run_controller_process(o);
   }
   if (a.cmd == "plant") {
-    if (a.positional.size() != 1) {
-      std::fprintf(stderr, "maglev-hil plant: needs one scenario NAME|FILE\n");
+    if (a.positional.size() != 1 || a.out.empty()) {
+      std::fprintf(stderr, "maglev-hil plant: needs one scenario NAME|FILE and --out DIR\n");
       return 2;
     }
     maglev::scenario::Scenario sc;
     if (!load(a.positional[0], a.scenarios, &sc)) return 2;
-    return maglev::bench::run_plant_process(sc, a.run, a.out);
+    maglev::bench::PlantProcessOptions po;
+    po.controller_record = a.controller_record.empty() ? a.out + "/controller_record.bin" : a.controller_record;
+    std::printf("== %s: plant process over CAN %s (%s)\n", sc.name().c_str(), a.run.can.c_str(),
+                a.run.mode == maglev::bench::Mode::kLockstep ? "lockstep" : "realtime");
+    std::vector<maglev::bench::ScenarioError> errs;
+    auto r = maglev::bench::run_plant_process(sc, a.run, po, &errs);
+    if (!r) {
+      for (const auto& e : errs) std::fprintf(stderr, "%s\n", e.message.c_str());
+      return 2;
+    }
+    return report_run(sc, *r, a, a.out);
   }
   std::fprintf(stderr, "maglev-hil: unknown command '%s'\n", a.cmd.c_str());
   usage();

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <thread>
+#include <filesystem>
+#include <csignal>
 #include <memory>
 
 #include "maglev/bench/units.hpp"
@@ -875,99 +878,412 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
 }
 
 // ------------------------------------------------------- two-process mode
-int run_plant_process(const scenario::Scenario& sc, const RunOptions& opt, const std::string& out_dir) {
-  (void)out_dir;
+// The plant process runs the plant endpoint of run() tick for tick and sends
+// the timeline as host_command frames; the controller process runs
+// ControllerNode over CanServoIo. Command N goes out before sensor frame N,
+// the controller drains it before it steps on that frame (one socket, FIFO),
+// so it is applied at the same tick as run() applies it in process, and its
+// arguments are IEEE binary64 on the wire: the same MotionCommand bits.
+// The kernel-side trace columns come from the controller's own per-tick
+// record (written at shutdown, like the board's Recorder dump), the plant
+// columns from the plant: trace.csv equals run()'s byte for byte.
+namespace {
+
+constexpr std::uint32_t kRecordMagic = 0x4D4C5231;  // "MLR1"
+constexpr int kRecordDoubles = 6 + 6 + 6 + 8;       // pose, reference, effort, coil current cmd
+
+struct RecordHeader {
+  std::uint32_t magic = kRecordMagic;
+  std::uint32_t rx_rejected = 0;
+  std::uint64_t rows = 0;
+  std::uint32_t final_state = 0;
+  std::uint32_t fault = 0;
+  std::uint32_t host_commands = 0;
+  std::uint32_t tx_frames = 0;
+};
+
+volatile std::sig_atomic_t g_stop_signal = 0;
+extern "C" void on_stop_signal(int) { g_stop_signal = 1; }
+
+bool host_command_for(const Action& a, std::uint16_t seq, can::HostCommandFrame* out, std::string* why) {
+  can::HostCommandFrame h{};
+  h.seq = seq;
+  h.axis = static_cast<std::uint8_t>(kPoseToKernel[a.axis]);
+  using C = can::HostCommandCode;
+  switch (a.verb) {
+    case Verb::kLevitate: h.code = C::kLevitate; break;
+    case Verb::kLand: h.code = C::kLand; break;
+    case Verb::kStop: h.code = C::kStop; break;
+    case Verb::kHome: h.code = C::kHome; break;
+    case Verb::kClearFault: h.code = C::kClearFault; break;
+    case Verb::kHold: h.code = C::kHold; break;
+    case Verb::kStep: h.code = C::kStep; h.arg[0] = a.a0; break;
+    case Verb::kMove: h.code = C::kMoveBy; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
+    case Verb::kMoveTo: h.code = C::kMoveTo; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
+    case Verb::kMoveJerk:
+      h.code = C::kMoveJerkBy; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; h.arg[3] = a.a3; break;
+    case Verb::kCircle: h.code = C::kCircle; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
+    case Verb::kSinusoid: h.code = C::kSinusoid; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
+    case Verb::kExcite:
+      *why = "'excite' is a bench disturbance computed from the controller's pose every tick: in-process only";
+      return false;
+  }
+  *out = h;
+  return true;
+}
+
+bool write_record(const std::string& path, const RecordHeader& h, const std::vector<double>& rows,
+                  const std::vector<std::int32_t>& states) {
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (f == nullptr) return false;
+  bool ok = std::fwrite(&h, sizeof h, 1, f) == 1;
+  ok = ok && (rows.empty() || std::fwrite(rows.data(), sizeof(double), rows.size(), f) == rows.size());
+  ok = ok && (states.empty() || std::fwrite(states.data(), sizeof(std::int32_t), states.size(), f) == states.size());
+  ok = std::fclose(f) == 0 && ok;
+  return ok && std::rename(tmp.c_str(), path.c_str()) == 0;  // atomic: the plant never sees half a file
+}
+
+bool read_record(const std::string& path, RecordHeader* h, std::vector<double>* rows, std::vector<std::int32_t>* states) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return false;
+  bool ok = std::fread(h, sizeof *h, 1, f) == 1 && h->magic == kRecordMagic;
+  if (ok) {
+    rows->resize(h->rows * kRecordDoubles);
+    states->resize(h->rows);
+    ok = (rows->empty() || std::fread(rows->data(), sizeof(double), rows->size(), f) == rows->size()) &&
+         (states->empty() || std::fread(states->data(), sizeof(std::int32_t), states->size(), f) == states->size());
+  }
+  std::fclose(f);
+  return ok;
+}
+
+}  // namespace
+
+std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const RunOptions& opt,
+                                           const PlantProcessOptions& po, std::vector<ScenarioError>* errors) {
+  auto fail = [&](const std::string& m) -> std::optional<RunResult> {
+    if (errors != nullptr) errors->push_back({m});
+    return std::nullopt;
+  };
   std::vector<ScenarioError> errs = validate(sc);
   Overrides ov;
   ov.plant = hil::PlantConfig::Default();
   ov.controller = kernel::default_kernel_config();
   if (errs.empty()) apply_overrides(sc, &ov, &errs);
-  for (const auto& e : errs) std::fprintf(stderr, "%s\n", e.message.c_str());
-  if (!errs.empty()) return 2;
-  if (opt.seed) ov.seed = *opt.seed;
-  Link link = open_link(opt.can, false);
-  if (!link.plant_port) {
-    std::fprintf(stderr, "cannot open CAN '%s': %s\n", opt.can.c_str(), link.error.c_str());
-    return 1;
+  if (!errs.empty()) {
+    if (errors != nullptr) *errors = errs;
+    return std::nullopt;
   }
+  if (opt.kernel) ov.kernel = *opt.kernel;
+  if (opt.seed) ov.seed = *opt.seed;
+  std::vector<Action> actions;
+  for (const auto& e : sc.timeline) {
+    Action a;
+    std::string err;
+    parse_action(e, &a, &err);
+    can::HostCommandFrame h{};
+    if (!host_command_for(a, 0, &h, &err)) return fail(sc.source + ":" + std::to_string(e.line) + ": " + err);
+    actions.push_back(a);
+  }
+  Link link = open_link(opt.can, false);
+  if (!link.plant_port) return fail("cannot open CAN '" + opt.can + "': " + link.error);
+
+  RunResult R;
+  R.name = sc.name();
+  R.title = sc.scenario.count("title") ? sc.scenario.at("title") : R.name;
+  R.kernel = hil::to_string(ov.kernel);
+  R.seed = ov.seed;
+  R.paper = sc.paper;
+
   hil::Plant plant(ov.plant, ov.seed);
   can::LinkReceiver prx;
+  can::BusLoadMeter meter;  // every frame on the bus: sent here + received from the controller
   can::PeriodicTimer timer(400000);
   const bool paced = opt.mode == Mode::kRealtime && timer.ok() && timer.start();
   const double dt = 1.0 / io::stage::kServoRate_Hz;
   const auto n_ticks = static_cast<std::uint64_t>(std::llround(sc.duration_s() / dt));
+  Trace& tr = R.trace;
+  std::vector<double> current_A[8];
   io::ActuatorCommand held = io::kSafeActuatorCommand;
   std::uint64_t missed = 0;
-  std::uint8_t cm_counter = 0;
-  double max_z = 0.0;
+  std::uint8_t cm_counter = 0, hb_counter = 0, cmd_counter = 0;
+  std::uint16_t seq = 0;
+  std::map<std::uint16_t, std::size_t> pending;  // command seq -> R.commands index
+  std::size_t next_action = 0;
+  double levitate_t = -1.0;
+  bool shutdown_acked = false;
+
+  auto handle = [&](const can::CanFrame& in, std::uint8_t want_counter, bool* got) {
+    if (prx.accept(in) != can::RxStatus::kOk) return;
+    meter.on_frame(in);
+    const can::Message* m = prx.last_message();
+    if (m == &can::message(can::MessageKind::kActuator) && can::frame_counter(in) == want_counter && got != nullptr) {
+      can::decode_actuator(in, held);
+      *got = true;
+    } else if (m == &can::message(can::MessageKind::kHostCommandAck)) {
+      can::HostCommandAckFrame ack{};
+      can::decode_host_command_ack(in, ack);
+      if (ack.code == can::HostCommandCode::kShutdown) shutdown_acked = true;
+      const auto it = pending.find(ack.seq);
+      if (it != pending.end()) {
+        CommandLog& log = R.commands[it->second];
+        const auto r = static_cast<kernel::CommandResult>(ack.result);
+        log.result = ack.result == can::kHostResultNotExecuted ? "not executed" : hil::to_string(r);
+        log.accepted = r == kernel::CommandResult::kAccepted;
+        if (opt.verbose) std::printf("  t=%7.3f s  %-40s -> %s\n", log.t_s, log.text.c_str(), log.result.c_str());
+        pending.erase(it);
+      }
+    }
+  };
+  auto send = [&](const can::CanFrame& f) {
+    link.plant_port->send(f);
+    meter.on_frame(f);
+  };
+
+  // The controller announces itself (heartbeat, node_state init) once its
+  // socket is open: tick 0 is not sent into the void.
+  {
+    bool up = false;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(po.controller_wait_s);
+    while (!up && std::chrono::steady_clock::now() < until) {
+      can::CanFrame in{};
+      if (link.plant_port->receive(in, 10000) != can::PortStatus::kOk) continue;
+      if (prx.accept(in) == can::RxStatus::kOk &&
+          prx.last_message() == &can::message(can::MessageKind::kHeartbeatController)) {
+        meter.on_frame(in);
+        up = true;
+      }
+    }
+    if (!up) return fail("no controller on CAN '" + opt.can + "' (no heartbeat_controller within " +
+                         std::to_string(po.controller_wait_s) + " s): start 'maglev-hil controller' first");
+  }
+  const auto wall0 = std::chrono::steady_clock::now();
   for (std::uint64_t n = 0; n < n_ticks; ++n) {
+    const double t = static_cast<double>(n) * dt;
+    while (next_action < actions.size() && actions[next_action].t_s <= t + 0.5 * dt) {
+      const Action& a = actions[next_action++];
+      can::HostCommandFrame h{};
+      std::string why;
+      host_command_for(a, ++seq, &h, &why);
+      can::CanFrame f{};
+      can::encode_host_command(h, cmd_counter++, f);
+      send(f);
+      if (a.verb == Verb::kLevitate && levitate_t < 0) levitate_t = t;
+      pending[h.seq] = R.commands.size();
+      R.commands.push_back(CommandLog{t, a.text, "no answer", false});
+    }
     if (paced) timer.wait();
     const io::SensorSample s = plant.sample();
+    const hil::PlantState truth_before = plant.truth();
     can::CanFrame f{};
     if (n % can::kCurrentMonitorPeriodTicks == 0) {
       can::CurrentMonitorFrame cm{};
       std::copy(std::begin(s.coil_current_adc), std::end(s.coil_current_adc), cm.coil_current_adc);
       can::encode_current_monitor(cm, cm_counter++, f);
-      link.plant_port->send(f);
+      send(f);
     }
     const auto counter = static_cast<std::uint8_t>(n & 0xFFu);
     can::encode_sensor(s, counter, f);
-    link.plant_port->send(f);
+    send(f);
+    if (n % can::kHeartbeatPeriodTicks == 0) {
+      can::HeartbeatFrame hb{can::NodeState::kOperational, static_cast<std::uint32_t>(t * 1000.0), 0, 0};
+      can::encode_heartbeat(can::MessageKind::kHeartbeatPlant, hb, hb_counter++, f);
+      send(f);
+    }
     bool got = false;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(paced ? 1 : 200);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::microseconds(paced ? 1000 : po.lockstep_timeout_us);
     while (!got && std::chrono::steady_clock::now() < deadline) {
       can::CanFrame in{};
       if (link.plant_port->receive(in, 1000) != can::PortStatus::kOk) continue;
-      if (prx.accept(in) != can::RxStatus::kOk) continue;
-      if (prx.last_message() == &can::message(can::MessageKind::kActuator) && can::frame_counter(in) == counter) {
-        can::decode_actuator(in, held);
-        got = true;
-      }
+      handle(in, counter, &got);
     }
     if (!got) {
       ++missed;
-      held = io::kSafeActuatorCommand;
+      held = io::kSafeActuatorCommand;  // actuator watchdog: amplifiers off
     }
     plant.apply(held);
     plant.advance_tick();
-    max_z = std::max(max_z, plant.truth().position_m[2]);
+    tr.t_s.push_back(t);
+    for (int j = 0; j < 8; ++j) current_A[j].push_back(truth_before.coil_current_A[j]);
   }
-  std::printf("plant: %llu ticks, %llu actuator frames missed, final z = %.3f um (max %.3f um), rejected rx %u\n",
-              static_cast<unsigned long long>(n_ticks), static_cast<unsigned long long>(missed),
-              plant.truth().position_m[2] * 1e6, max_z * 1e6, prx.stats().rejected_total());
-  return missed < n_ticks / 10 ? 0 : 1;
-}
+  const auto wall1 = std::chrono::steady_clock::now();
 
-int run_controller_process(const std::string& can_name, hil::KernelKind kind, bool levitate, double max_s) {
-  Link link = open_link(can_name, false);
-  if (!link.plant_port) {
-    std::fprintf(stderr, "cannot open CAN '%s': %s\n", can_name.c_str(), link.error.c_str());
-    return 1;
-  }
-  hil::CanServoIo cio(*link.plant_port);
-  hil::ControllerNode node(kind, cio);
-  bool levitate_sent = false;
-  const auto t0 = std::chrono::steady_clock::now();
-  std::uint64_t idle_polls = 0;
-  for (;;) {
-    const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (max_s > 0 && el > max_s) break;
-    if (node.run_once(100000)) {
-      idle_polls = 0;
-      if (levitate && !levitate_sent) {
-        MotionCommand c;
-        c.type = MotionType::kLevitate;
-        std::printf("controller: levitate -> %s\n", hil::to_string(node.command(c)));
-        levitate_sent = true;
-      }
-    } else if (node.ticks() > 0 && ++idle_polls > 20) {
-      break;  // the plant went quiet for 2 s: done
+  // Stop the controller and collect its record.
+  {
+    can::HostCommandFrame h{};
+    h.code = can::HostCommandCode::kShutdown;
+    h.seq = ++seq;
+    can::CanFrame f{};
+    can::encode_host_command(h, cmd_counter++, f);
+    link.plant_port->send(f);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+    while (!shutdown_acked && std::chrono::steady_clock::now() < until) {
+      can::CanFrame in{};
+      if (link.plant_port->receive(in, 10000) == can::PortStatus::kOk) handle(in, 0, nullptr);
     }
   }
+  RecordHeader rh{};
+  std::vector<double> rows;
+  std::vector<std::int32_t> states;
+  bool have_record = false;
+  if (!po.controller_record.empty()) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(po.record_wait_s);
+    while (!(have_record = read_record(po.controller_record, &rh, &rows, &states)) &&
+           std::chrono::steady_clock::now() < until) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  }
+  if (!have_record) {
+    R.warnings.push_back("no controller record at '" + po.controller_record +
+                         "': kernel-side trace columns are zero (give the controller --out)");
+  } else if (rh.rows != tr.size()) {
+    R.warnings.push_back("controller record has " + std::to_string(rh.rows) + " ticks, the plant ran " +
+                         std::to_string(tr.size()));
+  }
+  double ready_t = -1.0;
+  for (std::size_t n = 0; n < tr.size(); ++n) {
+    const bool have = have_record && n < rh.rows;
+    const double* row = have ? &rows[n * kRecordDoubles] : nullptr;
+    for (int i = 0; i < 6; ++i) {
+      tr.pose[i].push_back(have ? row[i] : 0.0);
+      tr.reference[i].push_back(have ? row[6 + i] : 0.0);
+      tr.effort_A[i].push_back(have ? row[12 + i] : 0.0);
+      tr.disturbance_A[i].push_back(0.0);
+    }
+    for (int j = 0; j < 8; ++j) {
+      tr.current_cmd_A[j].push_back(have ? row[18 + j] : 0.0);
+      tr.current_A[j].push_back(current_A[j][n]);
+    }
+    const int st = have ? states[n] : 0;
+    tr.state.push_back(st);
+    if (ready_t < 0 && st == static_cast<int>(kernel::SequencerState::kReady)) ready_t = tr.t_s[n];
+  }
+  R.wall_s = std::chrono::duration<double>(wall1 - wall0).count();
+  R.ticks = tr.size();
+  const double sim_s = static_cast<double>(R.ticks) * dt;
+  R.real_time_factor = R.wall_s > 0 ? sim_s / R.wall_s : 0.0;
+  R.bus_load_percent = sim_s > 0 ? 1e-4 * meter.load_ppm(static_cast<std::uint64_t>(sim_s * 1e9)) : 0.0;
+  const auto final_state = static_cast<kernel::SequencerState>(have_record ? rh.final_state : 0u);
+  R.final_state = have_record ? hil::to_string(final_state) : "unknown";
+  R.fault = std::to_string(have_record ? rh.fault : 0u);
+  R.completed = have_record && rh.rows == tr.size() && missed == 0;
+  auto& M = R.metrics;
+  M["real_time_factor"] = R.real_time_factor;
+  M["wall_time_per_tick_us"] = R.ticks > 0 ? 1e6 * R.wall_s / static_cast<double>(R.ticks) : 0.0;
+  M["bus_load_percent"] = R.bus_load_percent;
+  M["bus_frames"] = static_cast<double>(meter.frames());
+  M["ticks"] = static_cast<double>(R.ticks);
+  M["simulated_time_s"] = sim_s;
+  M["missed_actuator_frames"] = static_cast<double>(missed);
+  M["controller_rx_rejected_frames"] = static_cast<double>(rh.rx_rejected);
+  M["plant_rx_rejected_frames"] = static_cast<double>(prx.stats().rejected_total());
+  M["final_sequencer_state"] = static_cast<double>(rh.final_state);
+  M["fault_code"] = static_cast<double>(rh.fault);
+  M["completed"] = R.completed ? 1.0 : 0.0;
+  M["host_commands_acked"] = static_cast<double>(R.commands.size() - pending.size());
+  if (paced) {
+    M["realtime_deadline_misses"] = static_cast<double>(timer.deadline_misses());
+    M["realtime_max_lateness_us"] = static_cast<double>(timer.jitter().max_ns) * 1e-3;
+  }
+  compute_metrics(sc, actions, tr, {}, levitate_t, ready_t, &M, &R.warnings);
+  if (!pending.empty()) R.warnings.push_back(std::to_string(pending.size()) + " host command(s) never acknowledged");
+  return R;
+}
+
+bool controller_config_of(const scenario::Scenario& sc, kernel::KernelConfig* config, hil::KernelKind* kind,
+                          std::vector<ScenarioError>* errors) {
+  std::vector<ScenarioError> errs;
+  Overrides ov;
+  ov.plant = hil::PlantConfig::Default();
+  ov.controller = kernel::default_kernel_config();
+  apply_overrides(sc, &ov, &errs);
+  if (!errs.empty()) {
+    if (errors != nullptr) *errors = errs;
+    return false;
+  }
+  *config = ov.controller;
+  *kind = ov.kernel;
+  return true;
+}
+
+int run_controller_process(const ControllerProcessOptions& o) {
+  Link link = open_link(o.can, false);
+  if (!link.plant_port) {
+    std::fprintf(stderr, "cannot open CAN '%s': %s\n", o.can.c_str(), link.error.c_str());
+    return 1;
+  }
+  can::BusLoadMeter meter;
+  hil::CanServoIo cio(*link.plant_port, &meter);
+  hil::ControllerNode node(o.kernel, cio);
+  if (node.apply_config(o.config) != kernel::ConfigError::kOk) {
+    std::fprintf(stderr, "controller: configuration refused by the kernel\n");
+    return 2;
+  }
+  g_stop_signal = 0;
+  std::signal(SIGTERM, on_stop_signal);
+  std::signal(SIGINT, on_stop_signal);
+  cio.announce();
+  std::vector<double> rows;
+  std::vector<std::int32_t> states;
+  bool levitate_sent = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point first_tick{};
+  const char* why = "signal";
+  for (;;) {
+    if (g_stop_signal != 0) break;
+    const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (o.duration_s > 0 && el > o.duration_s) {
+      why = "duration";
+      break;
+    }
+    const bool ran = node.run_once(100000);
+    if (cio.stop_requested()) {
+      why = "shutdown command";
+      break;
+    }
+    if (!ran) continue;
+    if (node.ticks() == 1) first_tick = std::chrono::steady_clock::now();
+    if (o.levitate && !levitate_sent) {
+      MotionCommand c;
+      c.type = MotionType::kLevitate;
+      std::printf("controller: levitate -> %s\n", hil::to_string(node.command(c)));
+      levitate_sent = true;
+    }
+    if (!o.out_dir.empty()) {
+      const auto& st = node.status();
+      for (int i = 0; i < 6; ++i) rows.push_back(pose_si(st.pose, i));
+      for (int i = 0; i < 6; ++i) rows.push_back(pose_si(st.reference, i));
+      for (int i = 0; i < 6; ++i) rows.push_back(static_cast<double>(st.effort_A[i]));
+      for (int j = 0; j < 8; ++j) rows.push_back(static_cast<double>(st.coil_current_A[j]));
+      states.push_back(static_cast<std::int32_t>(st.state));
+    }
+  }
+  const double active_s =
+      node.ticks() > 0 ? std::chrono::duration<double>(std::chrono::steady_clock::now() - first_tick).count() : 0.0;
   const auto& st = node.status();
-  std::printf("controller: %llu ticks, state %s, z = %.3f um, fault %d, rx rejected %u\n",
-              static_cast<unsigned long long>(node.ticks()), hil::to_string(st.state),
-              static_cast<double>(st.pose.z_pm) * 1e-6, static_cast<int>(st.fault), cio.rx_stats().rejected_total());
+  std::printf("controller: stopped by %s; %llu ticks (%.0f ticks/s), state %s, z = %.3f um, fault %d, "
+              "rx rejected %u, host commands %u\n",
+              why, static_cast<unsigned long long>(node.ticks()),
+              active_s > 0 ? static_cast<double>(node.ticks()) / active_s : 0.0, hil::to_string(st.state),
+              static_cast<double>(st.pose.z_pm) * 1e-6, static_cast<int>(st.fault), cio.rx_stats().rejected_total(),
+              node.link_stats().host_commands);
+  if (!o.out_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(o.out_dir, ec);
+    RecordHeader h{};
+    h.rx_rejected = cio.rx_stats().rejected_total();
+    h.rows = states.size();
+    h.final_state = static_cast<std::uint32_t>(st.state);
+    h.fault = static_cast<std::uint32_t>(st.fault);
+    h.host_commands = node.link_stats().host_commands;
+    h.tx_frames = static_cast<std::uint32_t>(meter.frames());
+    const std::string path = o.out_dir + "/controller_record.bin";
+    if (!write_record(path, h, rows, states)) {
+      std::fprintf(stderr, "controller: cannot write %s\n", path.c_str());
+      return 1;
+    }
+  }
   return node.ticks() > 0 ? 0 : 1;
 }
 

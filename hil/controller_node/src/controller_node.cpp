@@ -71,6 +71,13 @@ bool CanServoIo::read_sensors(io::SensorSample& sample, std::uint32_t timeout_us
   }
 }
 
+void CanServoIo::announce() {
+  can::HeartbeatFrame hb{can::NodeState::kInit, 0, 0, 0};
+  can::CanFrame f{};
+  can::encode_heartbeat(can::MessageKind::kHeartbeatController, hb, heartbeat_counter_++, f);
+  send(f);
+}
+
 bool CanServoIo::next_host_command(can::HostCommandFrame& out) {
   if (commands_.empty()) return false;
   out = commands_.front();

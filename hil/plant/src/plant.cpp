@@ -251,9 +251,10 @@ inline void Cross(const double* a, const double* b, double* out) {
 // error < 1e-13; exact library calls otherwise.
 inline void SmallSinCos(double e, double* s, double* c) {
   if (std::fabs(e) < 0.02) {
+    // Multiplications by reciprocal constants (no divisions in the hot loop).
     const double e2 = e * e;
-    *s = e * (1.0 - e2 / 6.0 * (1.0 - e2 / 20.0));
-    *c = 1.0 - e2 / 2.0 * (1.0 - e2 / 12.0 * (1.0 - e2 / 30.0));
+    *s = e * (1.0 - e2 * (1.0 / 6.0) * (1.0 - e2 * (1.0 / 20.0)));
+    *c = 1.0 - e2 * 0.5 * (1.0 - e2 * (1.0 / 12.0) * (1.0 - e2 * (1.0 / 30.0)));
   } else {
     *s = std::sin(e);
     *c = std::cos(e);
@@ -261,7 +262,9 @@ inline void SmallSinCos(double e, double* s, double* c) {
 }
 inline double SmallExp(double x) {
   if (std::fabs(x) < 0.02) {
-    return 1.0 + x * (1.0 + x / 2.0 * (1.0 + x / 3.0 * (1.0 + x / 4.0 * (1.0 + x / 5.0 * (1.0 + x / 6.0)))));
+    return 1.0 + x * (1.0 + x * 0.5 *
+                                (1.0 + x * (1.0 / 3.0) *
+                                           (1.0 + x * 0.25 * (1.0 + x * 0.2 * (1.0 + x * (1.0 / 6.0))))));
   }
   return std::exp(x);
 }

@@ -86,9 +86,34 @@ std::vector<ScenarioError> validate(const scenario::Scenario& sc);
 std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt,
                              std::vector<ScenarioError>* errors);
 
-// The plant side alone over an external CAN interface (two-process mode).
-int run_plant_process(const scenario::Scenario& sc, const RunOptions& opt, const std::string& out_dir);
-// The controller node alone over an external CAN interface.
-int run_controller_process(const std::string& can, hil::KernelKind kind, bool levitate, double max_s);
+// ---- two-process mode (docs/BENCH.md) ----------------------------------------
+struct PlantProcessOptions {
+  // The controller process's record (its --out DIR + "/controller_record.bin"):
+  // the kernel-side trace columns. Read after the shutdown command is acked.
+  std::string controller_record;
+  double record_wait_s = 30.0;
+  double controller_wait_s = 60.0;  // for the controller's start-up heartbeat
+  std::uint32_t lockstep_timeout_us = 200000;  // wait for actuator frame N
+};
+// The plant side alone over a CAN interface: the scenario's plant, its
+// timeline sent as host_command frames, lockstep. Results as for run().
+std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const RunOptions& opt,
+                                           const PlantProcessOptions& po, std::vector<ScenarioError>* errors);
+
+struct ControllerProcessOptions {
+  std::string can;
+  hil::KernelKind kernel = hil::KernelKind::kFloat32;
+  kernel::KernelConfig config = kernel::default_kernel_config();
+  double duration_s = 0.0;  // 0: until a shutdown host command or SIGTERM/SIGINT
+  std::string out_dir;      // writes out_dir/controller_record.bin when it stops
+  bool levitate = false;    // levitate on the first tick (without a plant timeline)
+};
+// The controller node alone over a CAN interface, executing host commands.
+int run_controller_process(const ControllerProcessOptions& o);
+
+// The [controller] overrides and kernel kind of a scenario (for the controller
+// process, which gets its configuration from the scenario file, not over CAN).
+bool controller_config_of(const scenario::Scenario& sc, kernel::KernelConfig* config, hil::KernelKind* kind,
+                          std::vector<ScenarioError>* errors);
 
 }  // namespace maglev::bench

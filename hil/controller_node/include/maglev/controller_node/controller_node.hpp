@@ -68,6 +68,9 @@ class CanServoIo final : public ServoIo {
   bool next_host_command(can::HostCommandFrame& out) override;
   void acknowledge(const can::HostCommandAckFrame& ack) override;
   bool stop_requested() const override { return stop_requested_; }
+  // Two-process start-up: one heartbeat_controller (node_state init) so the
+  // plant knows the controller's socket is open before it sends tick 0.
+  void announce();
   const can::RxStats& rx_stats() const { return rx_.stats(); }
   std::uint32_t tx_errors() const { return tx_errors_; }
 

@@ -1,0 +1,18 @@
+#!/bin/sh
+# Runs INSIDE the test VM: the controller and the plant as two processes over
+# vcan0, lockstep; results into OUT (a 9p share, so they come back to the host).
+#   two_process_guest.sh MAGLEV_HIL SCENARIO OUT
+set -u
+HIL="$1"; SC="$2"; OUT="$3"
+rm -rf "$OUT"; mkdir -p "$OUT"
+"$HIL" controller --can vcan0 --config "$SC" --out "$OUT" --duration 170 > "$OUT/controller.log" 2>&1 &
+CPID=$!
+T0=$(date +%s)
+"$HIL" plant "$SC" --can vcan0 --out "$OUT" --no-plots --quiet > "$OUT/plant.log" 2>&1
+PRC=$?
+wait $CPID
+CRC=$?
+T1=$(date +%s)
+cat "$OUT/controller.log" "$OUT/plant.log"
+echo "two-process: plant rc $PRC, controller rc $CRC, $((T1 - T0)) s in the guest"
+[ $PRC -eq 0 ] && [ $CRC -eq 0 ]
