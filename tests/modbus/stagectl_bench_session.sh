@@ -1,34 +1,83 @@
 #!/usr/bin/env bash
-# stagectl session against the running HIL bench (kernel + plant):
-#   maglev-hil serve --modbus-tcp 127.0.0.1:PORT
-# levitate, move x by 1 mm, status, land -- each through stagectl, checked.
+# stagectl session against the running HIL bench (kernel + plant, real time):
+#   maglev-hil serve --modbus-tcp 127.0.0.1:PORT --flash WORK/flash.bin
+# Through stagectl only: slow the x profile down (landed-only write), levitate
+# (wait for Ready), move x to current + 1 mm, try `save` DURING the move (the
+# "not moving" rule: exception 06 -> stagectl exit 5), wait for the move to
+# end, check x moved 1 mm (+-1 um) and status says ready, `save` again (now
+# allowed: 0), land (wait for Idle), stop the server (SIGTERM, exit 0).
+# Any deviation fails the test and prints the server's log.
 # usage: stagectl_bench_session.sh STAGECTL MAGLEV_HIL WORKDIR
 set -u
 STAGECTL=$1; HIL=$2; WORK=$3
 rm -rf "$WORK"; mkdir -p "$WORK"
+T0=$(date +%s.%N)
 PORT=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
-"$HIL" serve --modbus-tcp "127.0.0.1:$PORT" >"$WORK/hil.log" 2>&1 &
+"$HIL" serve --modbus-tcp "127.0.0.1:$PORT" --flash "$WORK/flash.bin" >"$WORK/hil.log" 2>&1 &
 HIL_PID=$!
-trap 'kill $HIL_PID 2>/dev/null; wait $HIL_PID 2>/dev/null' EXIT
+cleanup() { kill "$HIL_PID" 2>/dev/null; wait "$HIL_PID" 2>/dev/null; }
+trap cleanup EXIT
 S() { "$STAGECTL" --tcp "127.0.0.1:$PORT" "$@"; }
+fails=0; passes=0
+fail() { fails=$((fails + 1)); echo "FAIL: $*"; }
+pass() { passes=$((passes + 1)); echo "ok:   $*"; }
+finish() {
+  echo "session wall time: $(python3 -c "print(f'{$(date +%s.%N) - $T0:.2f}')") s"
+  if [ "$fails" -ne 0 ]; then echo "---- maglev-hil serve log ----"; cat "$WORK/hil.log"; fi
+  echo "$passes passed, $fails failed"
+  [ "$fails" -eq 0 ]; exit $?
+}
+# expect RC TEXT CMD...: run a stagectl command, its exit code must be RC.
+expect() {
+  local want=$1 what=$2; shift 2
+  S "$@" >"$WORK/last.out" 2>&1; local rc=$?
+  if [ "$rc" -eq "$want" ]; then pass "$what (exit $rc)"; else fail "$what: exit $rc, expected $want: $(cat "$WORK/last.out")"; fi
+}
+val() { S get "$1" | sed -e 's/.* = //' -e 's/ *#.*//'; }
+# within A B TOL: |A - B| <= TOL
+within() { python3 -c "import sys; sys.exit(0 if abs(($1) - ($2)) <= $3 else 1)"; }
+
 for _ in $(seq 100); do S get id.magic >/dev/null 2>&1 && break; sleep 0.1; done
 if ! kill -0 "$HIL_PID" 2>/dev/null || ! S get id.magic >/dev/null 2>&1; then
-  echo "maglev-hil serve did not come up on 127.0.0.1:$PORT:"; cat "$WORK/hil.log"
-  echo "0 passed, 1 failed"; exit 1
+  fail "maglev-hil serve did not come up on 127.0.0.1:$PORT"; finish
 fi
-fails=0; passes=0
-check() { if eval "$2"; then passes=$((passes + 1)); else fails=$((fails + 1)); echo "FAIL: $1"; fi; }
-val() { S get "$1" | sed -e 's/.* = //' -e 's/ *#.*//'; }
+grep -q "listening on 127.0.0.1:$PORT" "$WORK/hil.log" && pass "server prints its address" || fail "no address line"
 
-S levitate --wait 20; check "levitate reaches ready" '[ $? -eq 0 ]'
-check "state ready" '[ "$(val status.state)" = 6 ]'
+# Landed: profile limits are writable; 2 mm/s makes the 1 mm move last ~0.5 s.
+expect 0 "max_velocity.x = 2 mm/s while landed" set max_velocity.x 2mm/s
+expect 0 "levitate, wait for ready" --wait 20 levitate
+[ "$(val status.state)" = 6 ] && pass "state ready" || fail "state $(val status.state), expected 6"
+# Levitated: a landed-only write is busy (06 -> 5).
+expect 5 "max_velocity.x while levitated is busy" set max_velocity.x 3mm/s
+
 x0=$(val status.x)
-S move-by x 1mm --wait 10; check "move x by 1 mm" '[ $? -eq 0 ]'
+target=$(python3 -c "print(repr($x0 + 1e-3))")
+expect 0 "move x to $target (x0 $x0 + 1 mm)" move x "$target"
+# During the move: status.moving = 1 and config.save (not moving) -> 06 -> 5.
+moving=$(val status.moving)
+[ "$moving" = 1 ] && pass "status.moving = 1 during the move" || fail "status.moving = $moving during the move"
+expect 5 "save during the move is refused busy (06)" --engineer save
+# Wait for the end of the move (status.moving back to 0), 10 s at most.
+ok=0
+for _ in $(seq 200); do
+  if [ "$(val status.moving)" = 0 ]; then ok=1; break; fi
+  sleep 0.05
+done
+[ "$ok" = 1 ] && pass "move finished (status.moving = 0)" || fail "still moving after 10 s"
+sleep 0.2  # settle (the loop's tracking error after the profile end)
 x1=$(val status.x)
-check "x moved 1 mm (+-1 um): $x0 -> $x1" "python3 -c 'import sys; sys.exit(0 if abs(($x1)-($x0)-1e-3) < 1e-6 else 1)'"
-S status >"$WORK/status.txt"; check "status" '[ $? -eq 0 ]'
-grep -q "state      = ready" "$WORK/status.txt"; check "status says ready" '[ $? -eq 0 ]'
-S land --wait 20; check "land" '[ $? -eq 0 ]'
-check "state idle" '[ "$(val status.state)" = 0 ]'
-echo "$passes passed, $fails failed"
-[ "$fails" -eq 0 ]
+within "$x1 - $x0" 1e-3 1e-6 && pass "x moved 1 mm +-1 um: $x0 -> $x1" || fail "x moved $x0 -> $x1, not 1 mm +-1 um"
+S status >"$WORK/status.txt"; rc=$?
+[ "$rc" = 0 ] && grep -q "state      = ready" "$WORK/status.txt" && pass "status says ready" ||
+  fail "status (exit $rc): $(cat "$WORK/status.txt")"
+# Not moving any more: the same save is allowed.
+expect 0 "save after the move" --engineer save
+expect 0 "land, wait for idle" --wait 20 land
+[ "$(val status.state)" = 0 ] && pass "state idle" || fail "state $(val status.state), expected 0"
+within "$(val status.z)" 0 5e-6 && pass "z back at rest" || fail "z = $(val status.z) after landing"
+
+kill -TERM "$HIL_PID"; wait "$HIL_PID"; rc=$?; trap - EXIT
+[ "$rc" = 0 ] && pass "server stops on SIGTERM (exit 0)" || fail "server exit $rc on SIGTERM"
+grep -q "maglev-hil serve: stopped after" "$WORK/hil.log" && pass "server summary printed" || fail "no summary line"
+grep "stopped after" "$WORK/hil.log"
+finish

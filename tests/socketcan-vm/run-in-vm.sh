@@ -147,7 +147,7 @@ done
 
 START=$(date +%s.%N)
 set +e
-timeout "$TIMEOUT" qemu-system-x86_64 -accel tcg -m "${MAGLEV_VM_MEM:-512M}" -smp 1 \
+timeout "$TIMEOUT" qemu-system-x86_64 -accel tcg -cpu "${MAGLEV_VM_CPU:-max}" -m "${MAGLEV_VM_MEM:-512M}" -smp 1 \
   -nodefaults -no-reboot -display none -monitor none -serial "file:$CTL/console.log" \
   -kernel "$KERNEL" -initrd "$INITRD" \
   -append "console=ttyS0 quiet loglevel=3 panic=-1 rdinit=/init" \

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "maglev/bench/runner.hpp"
+#include "maglev/bench/serve.hpp"
 #include "maglev/report/report.hpp"
 #include "maglev/scenario/scenario.hpp"
 
@@ -201,6 +202,7 @@ int run_one(const maglev::scenario::Scenario& sc, const Args& a, const std::stri
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 2 && std::string(argv[1]) == "serve") return maglev::bench::serve_main(argc - 1, argv + 1);
   const Args a = parse_args(argc, argv);
   if (!a.error.empty()) {
     std::fprintf(stderr, "maglev-hil: %s\n", a.error.c_str());

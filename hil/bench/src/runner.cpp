@@ -314,6 +314,8 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     if (k == "model") continue;
     if (k == "payload_kg") num("plant", k, v, Dim::kMass, &p.body.payload_kg);
     else if (k == "current_noise_scale") num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_scale);
+    else if (k == "current_noise_density_A_per_rtHz")
+      num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_density_A_per_rtHz);
     else if (k == "interferometer_noise_m") num("plant", k, v, Dim::kLength, &p.interferometer.noise_m);
     else if (k == "displacement_noise_m") num("plant", k, v, Dim::kLength, &p.displacement.noise_m);
     else if (k == "sensor_noise") flag("plant", k, v, &p.sensor_noise_enabled);
@@ -327,7 +329,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       }
     } else {
       fail("[plant] unknown key '" + k +
-           "' (model, payload_kg, current_noise_scale, interferometer_noise_m, displacement_noise_m, "
+           "' (model, payload_kg, current_noise_scale, current_noise_density_A_per_rtHz, interferometer_noise_m, displacement_noise_m, "
            "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick)");
     }
   }
@@ -491,6 +493,8 @@ void compute_metrics(const scenario::Scenario& sc, const std::vector<Action>& ac
   auto& M = *out;
   const std::span<const double> t(tr.t_s);
   const double fs = io::stage::kServoRate_Hz;
+  // In-band noise: a 10 ms boxcar (25 ticks) = 50 Hz equivalent noise bandwidth.
+  const auto kInBandAverageTicks = static_cast<std::size_t>(std::lround(0.010 * fs));
   for (const auto& req : sc.metrics) {
     MetricSpec s;
     std::string err;
@@ -506,6 +510,9 @@ void compute_metrics(const scenario::Scenario& sc, const std::vector<Action>& ac
       const auto y = metrics::slice(tr.pose[p], w);
       M[s.name + "_rms_noise_" + u] = metrics::rms_about_mean(y);
       M[s.name + "_pp_noise_" + u] = metrics::peak_to_peak(y);
+      // In-band noise: 10 ms moving average (50 Hz noise bandwidth).
+      const std::vector<double> ya = metrics::moving_average(y, kInBandAverageTicks);
+      if (ya.size() > 2) M[s.name + "_rms_noise_50Hz_" + u] = metrics::rms_about_mean(ya);
     } else if (s.kind == "step" || s.kind == "ccq") {
       // The step (or move) is the first command on this axis inside the window.
       double t_cmd = s.t0;
@@ -536,6 +543,11 @@ void compute_metrics(const scenario::Scenario& sc, const std::vector<Action>& ac
         const auto pre_noise = metrics::slice(tr.pose[p], metrics::window(t, t_cmd - 0.2, t_cmd));
         const double n = pre_noise.size() > 2 ? metrics::rms_about_mean(pre_noise) : 0.0;
         M[s.name + "_step_to_rms_noise_ratio"] = n > 0 ? std::fabs(sm.final_value - sm.initial_value) / n : 0.0;
+        // The same against the in-band (10 ms averaged, 50 Hz) noise.
+        const std::vector<double> pa = metrics::moving_average(pre_noise, kInBandAverageTicks);
+        const double na = pa.size() > 2 ? metrics::rms_about_mean(pa) : 0.0;
+        M[s.name + "_step_to_rms_noise_50Hz_ratio"] =
+            na > 0 ? std::fabs(sm.final_value - sm.initial_value) / na : 0.0;
       } else {
         const double tp = sm.peak_time_s > 0 ? sm.peak_time_s : s.t1 - t_cmd;
         M[s.name + "_peak_time_s"] = tp;

@@ -33,22 +33,28 @@ void CanServoIo::send(const can::CanFrame& f) {
 }
 
 bool CanServoIo::read_sensors(io::SensorSample& sample, std::uint32_t timeout_us) {
+  // Waits (up to timeout_us) for a sensor frame, then drains what is already
+  // queued without waiting: a late (delayed) frame is superseded by the
+  // newest one, as the board's CanSensorSource does. In lockstep nothing but
+  // this tick's frames is queued, so draining changes nothing there.
   using Clock = std::chrono::steady_clock;
   const auto deadline = Clock::now() + std::chrono::microseconds(timeout_us);
+  bool got = false;
   for (;;) {
     can::CanFrame in{};
     std::uint32_t left = 0;
-    if (timeout_us > 0) {
+    if (timeout_us > 0 && !got) {
       const auto us = std::chrono::duration_cast<std::chrono::microseconds>(deadline - Clock::now()).count();
       left = us > 0 ? static_cast<std::uint32_t>(us) : 0u;
     }
-    if (port_.receive(in, left) != can::PortStatus::kOk) return false;
+    if (port_.receive(in, left) != can::PortStatus::kOk) return got;
     if (rx_.accept(in) != can::RxStatus::kOk) continue;  // counted in rx_stats()
     const can::Message* m = rx_.last_message();
     if (m == &can::message(can::MessageKind::kCurrentMonitor)) {
       can::CurrentMonitorFrame cm{};
       can::decode_current_monitor(in, cm);
       std::copy(std::begin(cm.coil_current_adc), std::end(cm.coil_current_adc), coil_current_adc_);
+      if (got) std::copy(std::begin(coil_current_adc_), std::end(coil_current_adc_), sample.coil_current_adc);
       continue;
     }
     if (m == &can::message(can::MessageKind::kHostCommand)) {
@@ -57,15 +63,17 @@ bool CanServoIo::read_sensors(io::SensorSample& sample, std::uint32_t timeout_us
       commands_.push_back(hc);
       if (hc.code == can::HostCommandCode::kShutdown) {
         stop_requested_ = true;
-        return false;
+        return got;
       }
       continue;
     }
     if (m == &can::message(can::MessageKind::kSensor)) {
+      if (got) ++superseded_;
       can::decode_sensor(in, sample);
       std::copy(std::begin(coil_current_adc_), std::end(coil_current_adc_), sample.coil_current_adc);
       last_sensor_counter_ = can::frame_counter(in);
-      return true;
+      got = true;
+      continue;
     }
     // Plant heartbeats and anything else the controller does not consume.
   }

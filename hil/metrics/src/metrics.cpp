@@ -22,6 +22,20 @@ double rms_about(std::span<const double> v, double reference) {
 
 double rms_about_mean(std::span<const double> v) { return rms_about(v, mean(v)); }
 
+std::vector<double> moving_average(std::span<const double> v, std::size_t n) {
+  std::vector<double> out;
+  if (n == 0 || v.size() < n) return out;
+  out.reserve(v.size() - n + 1);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) sum += v[i];
+  out.push_back(sum / static_cast<double>(n));
+  for (std::size_t i = n; i < v.size(); ++i) {
+    sum += v[i] - v[i - n];
+    out.push_back(sum / static_cast<double>(n));
+  }
+  return out;
+}
+
 double peak_to_peak(std::span<const double> v) {
   if (v.empty()) return 0.0;
   const auto [lo, hi] = std::minmax_element(v.begin(), v.end());

@@ -29,6 +29,21 @@ double Table1CurrentNoiseStd_A(double commanded_abs_A) {
   return (kTableStd_mA[k] + t * (kTableStd_mA[k + 1] - kTableStd_mA[k])) * 1e-3;
 }
 
+double ForceNoiseStd_A(const AmplifierConfig& config) {
+  return config.current_noise_density_A_per_rtHz * std::sqrt(config.current_noise_bandwidth_Hz) *
+         config.current_noise_scale;
+}
+
+double MonitorNoiseStd_A(const AmplifierConfig& config, double commanded_abs_A) {
+  double var = config.monitor_noise_A * config.monitor_noise_A;
+  if (config.monitor_reproduces_table1) {
+    const double total = Table1CurrentNoiseStd_A(commanded_abs_A);
+    const double force = ForceNoiseStd_A(config);
+    var += std::max(0.0, total * total - force * force);
+  }
+  return std::sqrt(var);
+}
+
 double DacCodeToVolts(std::int16_t code, double full_scale_V) {
   return static_cast<double>(code) * (full_scale_V / 32768.0);
 }
@@ -36,7 +51,8 @@ double DacCodeToVolts(std::int16_t code, double full_scale_V) {
 Amplifiers::Amplifiers(const AmplifierConfig& config)
     : config_(config),
       omega_(config.loop_transresistance_V_per_A / config.coil_inductance_H),
-      v_max_(config.supply_voltage_V - config.output_dropout_V) {}
+      v_max_(config.supply_voltage_V - config.output_dropout_V),
+      force_noise_std_A_(ForceNoiseStd_A(config)) {}
 
 double Amplifiers::bandwidth_Hz() const { return omega_ / (2.0 * io::stage::kPi); }
 
@@ -53,7 +69,7 @@ void Amplifiers::Apply(const io::ActuatorCommand& command, Rng* rng, bool noise_
       continue;
     }
     double t = commanded_[j] * (1.0 + config_.gain_error[j]) + config_.offset_A[j];
-    t += n * config_.current_noise_scale * Table1CurrentNoiseStd_A(commanded_[j]);
+    t += n * force_noise_std_A_;
     target_[j] = std::clamp(t, -config_.current_limit_A, config_.current_limit_A);
   }
 }

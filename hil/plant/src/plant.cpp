@@ -30,6 +30,7 @@ PlantConfig PlantConfig::Ideal() {
   PlantConfig c;
   c.amplifier.current_noise_scale = 0.0;
   c.amplifier.monitor_noise_A = 0.0;
+  c.amplifier.monitor_reproduces_table1 = false;
   c.sensor_noise_enabled = false;
   return c;
 }
@@ -651,7 +652,8 @@ io::SensorSample Plant::sample() {
   // --- amplifier current monitors ------------------------------------------------
   const auto& ac = config_.amplifier;
   for (int j = 0; j < kCoils; ++j) {
-    const double noise = noisy ? ac.monitor_noise_A * rng_.Normal() : 0.0;
+    const double noise =
+        noisy ? MonitorNoiseStd_A(ac, std::fabs(amplifiers_.commanded_A(j))) * rng_.Normal() : 0.0;
     out.coil_current_adc[j] =
         QuantizeAdc(ac.monitor_gain_V_per_A * (amplifiers_.current_A(j) + noise), config_.adc.full_scale_V);
   }

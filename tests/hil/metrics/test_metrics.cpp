@@ -4,6 +4,7 @@
 #include <CppUTest/TestHarness.h>
 
 #include <cmath>
+#include <cstdint>
 #include <complex>
 #include <numbers>
 #include <vector>
@@ -21,6 +22,25 @@ TEST(Noise, RmsAndPeakToPeakOfASine) {
   DOUBLES_EQUAL(6.0, peak_to_peak(v), 1e-3);
   DOUBLES_EQUAL(5.0, mean(v), 1e-9);
   DOUBLES_EQUAL(8.0, max_abs(v), 1e-3);
+}
+
+TEST(Noise, MovingAverageOfWhiteNoiseDividesRmsBySqrtN) {
+  // Deterministic pseudo-white sequence (LCG, uniform +-1: rms 1/sqrt(3)).
+  std::vector<double> v;
+  std::uint32_t x = 12345u;
+  for (int i = 0; i < 200000; ++i) {
+    x = x * 1664525u + 1013904223u;
+    v.push_back(2.0 * (static_cast<double>(x >> 8) / 16777216.0) - 1.0);
+  }
+  const std::vector<double> a = moving_average(v, 25);
+  CHECK_EQUAL(v.size() - 24, a.size());
+  DOUBLES_EQUAL(1.0 / std::sqrt(3.0), rms_about_mean(v), 0.01);
+  DOUBLES_EQUAL(1.0 / std::sqrt(3.0) / 5.0, rms_about_mean(a), 0.01 / 5.0 * 2.0);
+  // A constant is unchanged.
+  const std::vector<double> c(100, 2.5);
+  const std::vector<double> ac = moving_average(c, 25);
+  DOUBLES_EQUAL(2.5, ac.front(), 1e-12);
+  DOUBLES_EQUAL(2.5, ac.back(), 1e-12);
 }
 
 TEST(Noise, WindowSelectsHalfOpenInterval) {

@@ -91,29 +91,76 @@ TEST(PlantAmplifier, GainAndOffsetErrors) {
   DOUBLES_EQUAL(nominal * 0.99 + 0.003, plant.truth().coil_current_A[1], 1e-9);
 }
 
-TEST(PlantAmplifier, NoiseFollowsPaper003Table1) {
-  // Interpolation points reproduce Table 1.
+TEST(PlantAmplifier, Table1Interpolation) {
+  // Interpolation points reproduce paper 003 Table 1.
   DOUBLES_EQUAL(4.79e-3, maglev::hil::Table1CurrentNoiseStd_A(0.0), 1e-12);
   DOUBLES_EQUAL(7.09e-3, maglev::hil::Table1CurrentNoiseStd_A(0.2134), 1e-12);
   DOUBLES_EQUAL((5.60 + 7.09) / 2 * 1e-3, maglev::hil::Table1CurrentNoiseStd_A((0.10774 + 0.2134) / 2), 1e-12);
-  // Measured through the plant, scale 1: per-tick ZOH noise settled by the loop.
-  PlantConfig c = Floating();
-  c.amplifier.current_noise_scale = 1.0;
+}
+
+namespace {
+struct NoiseStats {
+  double force_std_A;    // true coil current about the nominal
+  double force_mean_A;
+  double monitor_std_A;  // monitored current (ADC codes) about the nominal
+};
+NoiseStats MeasureNoise(const PlantConfig& c, std::int16_t code, int coil) {
   Plant plant(c, 42);
-  const auto cmd = AllCoils(1399, true);  // 213.5 mA
-  const double nominal = 0.5 * 1399 * 10.0 / 32768.0;
-  double sum = 0, sum2 = 0;
-  const int n = 20000;
+  const auto cmd = AllCoils(code, true);
+  const double nominal = 0.5 * code * 10.0 / 32768.0;
+  double sum = 0, sum2 = 0, msum = 0, msum2 = 0;
+  const int n = 8000;  // 0.8 % sampling error on a std
   for (int k = 0; k < n; ++k) {
+    const maglev::io::SensorSample s = plant.sample();
+    const double monitored = s.coil_current_adc[coil] * (10.0 / 32768.0) / c.amplifier.monitor_gain_V_per_A;
     plant.apply(cmd);
     plant.advance_tick();
-    const double e = plant.truth().coil_current_A[4] - nominal;
+    if (k < 10) continue;  // settle
+    const double e = plant.truth().coil_current_A[coil] - nominal;
     sum += e;
     sum2 += e * e;
+    msum += monitored - nominal;
+    msum2 += (monitored - nominal) * (monitored - nominal);
   }
-  const double mean = sum / n;
-  const double std = std::sqrt(sum2 / n - mean * mean);
-  std::printf("\n  current error at 213.4 mA: std %.3f mA (Table 1: 7.09), mean %.3f mA\n", std * 1e3, mean * 1e3);
-  DOUBLES_EQUAL(7.09e-3, std, 0.04 * 7.09e-3);
-  CHECK(std::fabs(mean) < 0.2e-3);
+  const double m = n - 10;
+  return {std::sqrt(sum2 / m - (sum / m) * (sum / m)), sum / m, std::sqrt(msum2 / m - (msum / m) * (msum / m))};
+}
+}  // namespace
+
+TEST(PlantAmplifier, ForceNoiseIsTheIdentifiedInBandDensity) {
+  // Default noise model: white additive force noise, 12 uA/sqrt(Hz) over the
+  // 1250 Hz band of per-tick samples = 0.424 mA per tick, at any current.
+  PlantConfig c = Floating();
+  const PlantConfig d = PlantConfig::Default();
+  c.amplifier.current_noise_density_A_per_rtHz = d.amplifier.current_noise_density_A_per_rtHz;
+  c.amplifier.current_noise_scale = 1.0;
+  DOUBLES_EQUAL(12e-6, d.amplifier.current_noise_density_A_per_rtHz, 1e-15);
+  const double expected = 12e-6 * std::sqrt(1250.0);
+  DOUBLES_EQUAL(expected, maglev::hil::ForceNoiseStd_A(c.amplifier), 1e-12);
+  for (const std::int16_t code : {std::int16_t{0}, std::int16_t{1399}, std::int16_t{14000}}) {  // 0, 213 mA, 2.14 A
+    const NoiseStats st = MeasureNoise(c, code, 4);
+    std::printf("\n  force noise at %.3f A: %.4f mA (expected %.4f), mean %.4f mA", 0.5 * code * 10.0 / 32768.0,
+                st.force_std_A * 1e3, expected * 1e3, st.force_mean_A * 1e3);
+    DOUBLES_EQUAL(expected, st.force_std_A, 0.04 * expected);
+    CHECK(std::fabs(st.force_mean_A) < 0.02e-3);
+  }
+}
+
+TEST(PlantAmplifier, MonitorChannelReproducesTable1) {
+  // The reported (monitored) current's std about the command is Table 1's
+  // measured std: force noise + the monitor chain's own noise.
+  PlantConfig c = Floating();
+  c.sensor_noise_enabled = true;
+  c.interferometer.noise_m = 0.0;
+  c.amplifier.current_noise_density_A_per_rtHz = 12e-6;
+  c.amplifier.current_noise_scale = 1.0;
+  c.amplifier.monitor_reproduces_table1 = true;
+  const double table_mA[3] = {4.82, 7.09, 10.93};
+  const std::int16_t codes[3] = {83, 1399, 2784};  // 12.7, 213.5, 424.8 mA
+  for (int k = 0; k < 3; ++k) {
+    const NoiseStats st = MeasureNoise(c, codes[k], 2);
+    std::printf("\n  monitored std at %.1f mA: %.3f mA (Table 1: %.2f)", 0.5 * codes[k] * 10.0 / 32768.0 * 1e3,
+                st.monitor_std_A * 1e3, table_mA[k]);
+    DOUBLES_EQUAL(table_mA[k] * 1e-3, st.monitor_std_A, 0.04 * table_mA[k] * 1e-3);
+  }
 }

@@ -654,7 +654,17 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   }
   status_.excitation_active = ex.active;
   status_.excitation_tick = ex.tick;
+  status_.motion_active = motion_active();
   return cmd;
+}
+
+template <typename Scalar>
+bool Controller<Scalar>::motion_active() const {
+  if (excitation_.active) return true;
+  for (int a = 0; a < kAxisCount; ++a) {
+    if (profile_[a].kind != ProfileKind::kNone || pending_step_pm_[a] != 0) return true;
+  }
+  return false;
 }
 
 template class Controller<float>;

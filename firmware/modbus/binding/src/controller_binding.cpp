@@ -73,7 +73,10 @@ Activity ControllerDevice<Scalar>::activity() const {
     case S::kFault:
       return Activity::kIdle;
     case S::kReady:
-      return Activity::kHolding;
+      // Levitated: moving while a reference profile / step / excitation runs
+      // (the kernel's live flag, so a write right after a move command is
+      // already refused), holding otherwise.
+      return controller_.motion_active() ? Activity::kMoving : Activity::kHolding;
     default:
       return Activity::kMoving;  // homing, locking, lifting, landing
   }

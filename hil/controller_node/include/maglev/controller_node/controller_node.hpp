@@ -73,6 +73,8 @@ class CanServoIo final : public ServoIo {
   void announce();
   const can::RxStats& rx_stats() const { return rx_.stats(); }
   std::uint32_t tx_errors() const { return tx_errors_; }
+  // Accepted sensor frames replaced by a newer one in the same read.
+  std::uint32_t superseded() const { return superseded_; }
 
  private:
   void send(const can::CanFrame& f);
@@ -86,6 +88,7 @@ class CanServoIo final : public ServoIo {
   std::uint8_t heartbeat_counter_ = 0;
   std::uint8_t ack_counter_ = 0;
   std::uint32_t tx_errors_ = 0;
+  std::uint32_t superseded_ = 0;
   std::deque<can::HostCommandFrame> commands_;
   bool stop_requested_ = false;
 };

@@ -24,6 +24,11 @@ double rms_about(std::span<const double> v, double reference);
 double peak_to_peak(std::span<const double> v);
 double max_abs(std::span<const double> v);
 double mean(std::span<const double> v);
+// Boxcar (moving) average over n samples, "valid" part only (size - n + 1
+// values). Used for the in-band noise: a 25-sample (10 ms at 2.5 kHz) average
+// has an equivalent noise bandwidth of 1/(2 * 10 ms) = 50 Hz, so it shows the
+// noise a ~25-50 Hz loop can resolve, without the sensors' white noise above.
+std::vector<double> moving_average(std::span<const double> v, std::size_t n);
 
 // Indices [first, last) of the samples with t in [t_begin, t_end).
 struct Window {

@@ -28,6 +28,15 @@ class Rng;
 // above the last.
 double Table1CurrentNoiseStd_A(double commanded_abs_A);
 
+// Std of the force-producing current noise per servo tick (A):
+// density * sqrt(bandwidth) * scale (AmplifierConfig).
+double ForceNoiseStd_A(const AmplifierConfig& config);
+
+// Std of the monitor chain's own noise at |commanded| (A): such that the
+// monitored current's total std equals Table 1 (when enabled), plus
+// monitor_noise_A in quadrature.
+double MonitorNoiseStd_A(const AmplifierConfig& config, double commanded_abs_A);
+
 // AD5764: code -> volts (two's complement, -32768 -> -FS, 32767 -> FS*(1-2^-15)).
 double DacCodeToVolts(std::int16_t code, double full_scale_V);
 
@@ -51,12 +60,14 @@ class Amplifiers {
   double target_A(int coil) const { return target_[coil]; }
   bool enabled() const { return enabled_; }
   double bandwidth_Hz() const;
+  double force_noise_std_A() const { return force_noise_std_A_; }
   void set_current(int coil, double current_A) { current_[coil] = current_A; }
 
  private:
   AmplifierConfig config_;
   double omega_;   // K / L
   double v_max_;   // supply - dropout
+  double force_noise_std_A_;  // per tick
   double current_[kCoils] = {};
   double commanded_[kCoils] = {};
   double target_[kCoils] = {};

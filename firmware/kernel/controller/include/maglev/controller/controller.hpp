@@ -168,6 +168,11 @@ struct ControllerStatus {
   float excitation_frequency_Hz = 0.0f;     // the fundamental actually generated (phase-increment quantised)
   std::uint32_t excitation_tick = 0;        // ticks since the excitation started
   double reference_acceleration[kAxisCount] = {};  // SI, of the active profile
+  // --- added in round 3 ---
+  // A reference profile (move, sinusoid, circle), a not yet applied step or
+  // the excitation is running: the stage is being moved on purpose. The
+  // Modbus map's "not moving" write rule and status.moving read it.
+  bool motion_active = false;
 };
 
 template <typename Scalar>
@@ -183,6 +188,9 @@ class Controller {
 
   const ControllerStatus& status() const { return status_; }
   const KernelConfig& config() const { return config_; }
+  // Live value of ControllerStatus::motion_active (also right between a
+  // command() that started a profile and the next step()).
+  bool motion_active() const;
 
  private:
   // The generator driving an axis (firmware/kernel/references), sampled at

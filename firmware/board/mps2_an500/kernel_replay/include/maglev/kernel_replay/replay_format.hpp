@@ -51,6 +51,10 @@ struct InputHeader {
 };
 
 // --- input record: one servo tick's inputs --------------------------------------
+// When MotionCommand or SensorSample grows a field, extend encode_input /
+// decode_input (and bump kFormatVersion); the recorder drives its own kernel
+// with the decoded record, so an uncarried field can never make the two sides
+// see different inputs -- it is only left untested.
 // SensorSample (44) + overrun, has_command, type, axis, harmonics, 3 pad (8)
 // + the 11 doubles of MotionCommand (88).
 inline constexpr std::size_t kSensorSampleBytes =

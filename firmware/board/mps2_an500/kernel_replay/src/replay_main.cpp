@@ -1,0 +1,268 @@
+// maglev-qemu-kernel-replay: replays recorded servo-tick inputs through
+// Controller<float> on the emulated Cortex-M7 and writes every tick's outputs,
+// so the host can compare them bit for bit with its own run of the same kernel
+// (tests/target/bitexact). Also measures instructions per step() (SysTick in
+// QEMU's virtual time; meaningful only under -icount, see docs/PERFORMANCE.md).
+//
+//   qemu-system-arm -M mps2-an500 -nographic -semihosting-config enable=on,target=native
+//                   -kernel maglev-qemu-kernel-replay.elf -append "<vectors.bin> <outputs.bin>"
+//   instructions per step(): add `-icount shift=6` and `--icount` after the paths.
+//
+// Exit status: 0 replayed all ticks; 2 bad command line; 3 cannot open/read the
+// vectors; 4 bad header; 5 cannot write the outputs; 6 apply_config refused.
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+
+#include "maglev/board/mps2_an500/semihosting.hpp"
+#include "maglev/controller/controller.hpp"
+#include "maglev/kernel_replay/replay_format.hpp"
+#include "maglev/kernel_replay/semihost_file.hpp"
+
+namespace {
+
+namespace hw = maglev::board::mps2_an500;
+namespace kr = maglev::kernel_replay;
+namespace kernel = maglev::kernel;
+
+enum ExitCode : int {
+  kOk = 0,
+  kBadCommandLine = 2,
+  kCannotRead = 3,
+  kBadHeader = 4,
+  kCannotWrite = 5,
+  kConfigRefused = 6,
+};
+
+// --- SysTick as an instruction counter ----------------------------------------
+// Under `-icount shift=N` QEMU's virtual clock advances exactly 2^N ns per guest
+// instruction and SysTick (processor clock source) counts that virtual time, so
+// SysTick counts are proportional to instructions executed. The ratio is
+// calibrated below on a block of exactly kCalibrationNops NOPs.
+struct SysTick {
+  volatile std::uint32_t csr;
+  volatile std::uint32_t rvr;
+  volatile std::uint32_t cvr;
+  volatile std::uint32_t calib;
+};
+SysTick& systick() { return *reinterpret_cast<SysTick*>(0xE000E010U); }
+constexpr std::uint32_t kSysTickMask = 0x00FFFFFFU;
+
+void systick_start() {
+  systick().csr = 0U;
+  systick().rvr = kSysTickMask;
+  systick().cvr = 0U;
+  systick().csr = 0x5U;  // CLKSOURCE = processor clock, ENABLE, no interrupt
+}
+
+inline std::uint32_t systick_now() {
+  __asm__ volatile("" ::: "memory");
+  const std::uint32_t v = systick().cvr;
+  __asm__ volatile("" ::: "memory");
+  return v;
+}
+// SysTick counts down and wraps at 24 bits.
+inline std::uint32_t systick_elapsed(std::uint32_t start, std::uint32_t end) {
+  return (start - end) & kSysTickMask;
+}
+
+constexpr std::uint32_t kCalibrationNops = 4096;
+__attribute__((noinline)) std::uint32_t measure_empty() {
+  const std::uint32_t t0 = systick_now();
+  const std::uint32_t t1 = systick_now();
+  return systick_elapsed(t0, t1);
+}
+__attribute__((noinline)) std::uint32_t measure_nops() {
+  const std::uint32_t t0 = systick_now();
+  __asm__ volatile(".rept 4096\n\tnop\n\t.endr" ::: "memory");
+  const std::uint32_t t1 = systick_now();
+  return systick_elapsed(t0, t1);
+}
+
+struct Stats {
+  std::uint64_t count = 0;
+  std::uint64_t sum = 0;
+  std::uint64_t min = ~std::uint64_t{0};
+  std::uint64_t max = 0;
+  std::uint32_t max_tick = 0;
+  void add(std::uint64_t v, std::uint32_t tick) {
+    ++count;
+    sum += v;
+    if (v < min) min = v;
+    if (v > max) {
+      max = v;
+      max_tick = tick;
+    }
+  }
+};
+
+// counts -> instructions: (counts - empty) * nops / (nop_counts - empty), rounded.
+struct Calibration {
+  std::uint64_t empty_counts = 0;
+  std::uint64_t nop_counts = 0;
+  bool valid() const { return nop_counts > empty_counts; }
+  std::uint64_t instructions(std::uint64_t counts) const {
+    if (!valid() || counts <= empty_counts) return 0;
+    const std::uint64_t span = nop_counts - empty_counts;
+    return ((counts - empty_counts) * kCalibrationNops + span / 2U) / span;
+  }
+};
+
+void print_stats(const char* label, const Stats& s, const Calibration& cal) {
+  hw::semihost_write("step_instructions ");
+  hw::semihost_write(label);
+  hw::semihost_write(": ticks=");
+  hw::semihost_write_unsigned(s.count);
+  if (s.count == 0U) {
+    hw::semihost_write("\n");
+    return;
+  }
+  hw::semihost_write(" min=");
+  hw::semihost_write_unsigned(cal.instructions(s.min));
+  hw::semihost_write(" mean=");
+  // mean with one decimal: instructions(sum) over count, computed in tenths.
+  const std::uint64_t span = cal.nop_counts - cal.empty_counts;
+  const std::uint64_t net = s.sum - s.count * cal.empty_counts;
+  const std::uint64_t tenths = cal.valid() ? (net * kCalibrationNops * 10U + span * s.count / 2U) / (span * s.count) : 0U;
+  hw::semihost_write_unsigned(tenths / 10U);
+  hw::semihost_write_char('.');
+  hw::semihost_write_unsigned(tenths % 10U);
+  hw::semihost_write(" max=");
+  hw::semihost_write_unsigned(cal.instructions(s.max));
+  hw::semihost_write(" (tick ");
+  hw::semihost_write_unsigned(s.max_tick);
+  hw::semihost_write(")\n");
+}
+
+// --- command line ------------------------------------------------------------------
+char g_command_line[1024];
+constexpr int kMaxWords = 4;
+const char* g_words[kMaxWords] = {};
+
+int split_words(char* text) {
+  int n = 0;
+  char* p = text;
+  while (*p != '\0' && n < kMaxWords) {
+    while (*p == ' ') ++p;
+    if (*p == '\0') break;
+    g_words[n++] = p;
+    while (*p != '\0' && *p != ' ') ++p;
+    if (*p == ' ') *p++ = '\0';
+  }
+  return n;
+}
+
+// --- buffers and the controller: all static (no heap) -------------------------
+constexpr std::size_t kChunkTicks = 64;
+std::uint8_t g_input[kChunkTicks * kr::kInputRecordBytes];
+std::uint8_t g_output[kChunkTicks * kr::kOutputRecordBytes];
+kernel::Controller<float> g_controller;
+
+int fail(const char* message, int code) {
+  hw::semihost_write("kernel-replay: ");
+  hw::semihost_write(message);
+  hw::semihost_write("\n");
+  return code;
+}
+
+}  // namespace
+
+int main() {
+  if (!hw::semihost_command_line(g_command_line, sizeof(g_command_line))) {
+    return fail("no semihosting command line", kBadCommandLine);
+  }
+  // "<kernel path> <vectors> <outputs>"
+  if (split_words(g_command_line) < 3) {
+    return fail("usage: -append \"<vectors.bin> <outputs.bin> [--icount]\"", kBadCommandLine);
+  }
+  // SysTick counts are instructions only if QEMU runs with -icount; the caller says so.
+  const bool icount = g_words[3] != nullptr && std::strcmp(g_words[3], "--icount") == 0;
+  const char* vectors_path = g_words[1];
+  const char* outputs_path = g_words[2];
+
+  const int in = kr::semihost_open(vectors_path, kr::OpenMode::kReadBinary);
+  if (in < 0) return fail("cannot open the vectors file", kCannotRead);
+  const long length = kr::semihost_file_length(in);
+  std::uint8_t header_bytes[kr::kHeaderBytes];
+  kr::InputHeader header{};
+  if (!kr::semihost_read(in, header_bytes, sizeof(header_bytes))) return fail("cannot read the header", kCannotRead);
+  if (!kr::decode_header(header_bytes, &header)) {
+    return fail("bad header (magic, version or record sizes differ from this image)", kBadHeader);
+  }
+  const auto expected_length =
+      static_cast<long>(kr::kHeaderBytes + static_cast<std::size_t>(header.tick_count) * kr::kInputRecordBytes);
+  if (length != expected_length) return fail("vectors file length does not match its header", kBadHeader);
+
+  const int out = kr::semihost_open(outputs_path, kr::OpenMode::kWriteBinary);
+  if (out < 0) return fail("cannot open the outputs file", kCannotWrite);
+
+  // The recorder runs default_kernel_config() too; apply it explicitly so a
+  // refused config is visible here as well.
+  if (g_controller.apply_config(kernel::default_kernel_config()) != kernel::ConfigError::kOk) {
+    return fail("apply_config(default_kernel_config()) refused", kConfigRefused);
+  }
+
+  systick_start();
+  Calibration cal;
+  for (int i = 0; i < 4; ++i) {  // first runs warm QEMU's translation cache
+    cal.empty_counts = measure_empty();
+    cal.nop_counts = measure_nops();
+  }
+
+  // Per sequencer state the tick STARTED in (homing's last tick, with its
+  // one-off Hall solve, counts as Homing).
+  constexpr int kStates = static_cast<int>(kernel::SequencerState::kFault) + 1;
+  Stats all, per_state[kStates];
+  std::uint32_t tick = 0;
+  while (tick < header.tick_count) {
+    const std::uint32_t left = header.tick_count - tick;
+    const std::size_t n = left < kChunkTicks ? left : kChunkTicks;
+    if (!kr::semihost_read(in, g_input, n * kr::kInputRecordBytes)) return fail("short read", kCannotRead);
+    for (std::size_t i = 0; i < n; ++i, ++tick) {
+      kr::InputRecord r;
+      kr::decode_input(&g_input[i * kr::kInputRecordBytes], &r);
+      kr::OutputRecord o;
+      o.tick = tick;
+      if (r.has_command) {
+        o.command_result = static_cast<std::uint8_t>(g_controller.command(r.command));
+      }
+      const auto state_before = static_cast<int>(g_controller.status().state);
+      const std::uint32_t t0 = systick_now();
+      o.actuator = g_controller.step(r.sample, r.tick_overrun);
+      const std::uint32_t t1 = systick_now();
+      const std::uint32_t counts = systick_elapsed(t0, t1);
+      o.status = &g_controller.status();
+      all.add(counts, tick);
+      if (state_before >= 0 && state_before < kStates) per_state[state_before].add(counts, tick);
+      kr::encode_output(o, &g_output[i * kr::kOutputRecordBytes]);
+    }
+    if (!kr::semihost_write_file(out, g_output, n * kr::kOutputRecordBytes)) {
+      return fail("cannot write the outputs", kCannotWrite);
+    }
+  }
+  kr::semihost_close(out);
+  kr::semihost_close(in);
+
+  hw::semihost_write("kernel-replay: replayed ");
+  hw::semihost_write_unsigned(tick);
+  hw::semihost_write(" ticks, wrote ");
+  hw::semihost_write_unsigned(static_cast<std::uint64_t>(tick) * kr::kOutputRecordBytes);
+  hw::semihost_write(" output bytes\n");
+  if (!icount) {
+    hw::semihost_write("step_instructions: not measured (run QEMU with -icount shift=6 and pass --icount)\n");
+    return kOk;
+  }
+  hw::semihost_write("systick calibration: empty=");
+  hw::semihost_write_unsigned(cal.empty_counts);
+  hw::semihost_write(" counts, 4096 nops=");
+  hw::semihost_write_unsigned(cal.nop_counts);
+  hw::semihost_write(" counts\n");
+  print_stats("all", all, cal);
+  static constexpr const char* kStateNames[kStates] = {"idle",     "homing", "in_plane_lock",
+                                                      "lift",     "z_lock", "tilt_lock",
+                                                      "ready",    "landing", "fault"};
+  for (int i = 0; i < kStates; ++i) {
+    if (per_state[i].count > 0U) print_stats(kStateNames[i], per_state[i], cal);
+  }
+  return kOk;
+}

@@ -1,0 +1,365 @@
+// maglev-hil serve --modbus-tcp HOST:PORT [--kernel float32|q7.24] [--flash FILE]
+//                  [--scenario NAME|FILE] [--seed N] [--duration S] [--scenarios DIR]
+//
+// The simulated stage running in REAL TIME, operated over Modbus TCP like the
+// real controller. One thread, one loop, per 400 us servo period:
+//
+//   plant endpoint   Plant::sample() -> sensor frame N (+ current_monitor every
+//                    5th tick, heartbeat_plant every 250th) on the virtual CAN bus
+//   controller       app::ServoLoop<kernel::Controller<Scalar>>::on_tick() with
+//                    app::CanSensorSource / app::CanActuatorSink: the firmware's
+//                    own servo application and CAN I/O (firmware/app)
+//   plant endpoint   actuator frame N (E2E + counter) -> Plant::apply(), advance
+//   Modbus           BenchServer::poll(0): requests already waiting go through
+//                    the firmware's RegisterServer + ControllerDevice<Scalar>
+//                    (the same objects the board's RTU server drives) -- BETWEEN
+//                    ticks, so no lock is needed and a request sees a whole tick
+//   sleep            clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME) to the next
+//                    absolute deadline t0 + (N+1) * 400 us
+//
+// A tick whose work (servo + plant + Modbus) ends after its deadline counts as
+// a deadline miss; the loop then runs the next tick at once (catching up, so
+// simulated time keeps pace with wall time). Behind by more than kResyncTicks
+// periods, it re-anchors the schedule (counted as a resync) instead of
+// bursting.
+//
+// Status line to stderr once per second; stops on SIGINT/SIGTERM or --duration.
+#include "maglev/bench/serve.hpp"
+
+#include <time.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <csignal>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "maglev/app/can_io.hpp"
+#include "maglev/app/servo_loop.hpp"
+#include "maglev/bench/units.hpp"
+#include "maglev/can_link/catalog.hpp"
+#include "maglev/can_link/codec.hpp"
+#include "maglev/can_link/receiver.hpp"
+#include "maglev/controller/controller.hpp"
+#include "maglev/controller_node/controller_node.hpp"
+#include "maglev/hil/plant.hpp"
+#include "maglev/io/stage_parameters.hpp"
+#include "maglev/modbus_tcp/bench_server.hpp"
+#include "maglev/scenario/scenario.hpp"
+#include "maglev/virtual_can/virtual_can.hpp"
+
+#ifndef MAGLEV_SCENARIO_DIR
+#define MAGLEV_SCENARIO_DIR "hil/scenarios"
+#endif
+
+namespace maglev::bench {
+namespace {
+
+namespace fs = std::filesystem;
+
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+constexpr std::int64_t kNsPerS = 1'000'000'000;
+// Behind by more than this many periods (40 ms): re-anchor, do not burst.
+constexpr std::int64_t kResyncTicks = 100;
+
+struct ServeOptions {
+  std::string host = "127.0.0.1";
+  int port = -1;
+  hil::KernelKind kernel = hil::KernelKind::kFloat32;
+  std::string flash = "maglev-stage-flash.bin";
+  std::string scenario;
+  std::string scenarios = MAGLEV_SCENARIO_DIR;
+  std::uint64_t seed = 1;
+  bool seed_given = false;
+  double duration_s = 0.0;  // 0: until SIGINT/SIGTERM
+};
+
+void usage() {
+  std::fputs(
+      "usage: maglev-hil serve --modbus-tcp HOST:PORT [--kernel float32|q7.24] [--flash FILE]\n"
+      "                        [--scenario NAME|FILE] [--seed N] [--duration S] [--scenarios DIR]\n"
+      "  runs the simulated stage in real time (2.5 kHz) and serves the register map over\n"
+      "  Modbus TCP (docs/REGISTERS.md) until SIGINT/SIGTERM or --duration; PORT 0 = any free port.\n"
+      "  --scenario: the scenario's [plant] overrides and seed (its timeline is not run).\n",
+      stderr);
+}
+
+std::int64_t now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * kNsPerS + ts.tv_nsec;
+}
+
+void sleep_until_ns(std::int64_t t) {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(t / kNsPerS);
+  ts.tv_nsec = static_cast<long>(t % kNsPerS);
+  // EINTR (a signal): return, the loop checks g_stop.
+  (void)clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+}
+
+// [plant] overrides of a scenario (the keys hil/bench's runner accepts).
+bool plant_overrides(const scenario::Scenario& sc, hil::PlantConfig* p, std::uint64_t* seed, std::string* err) {
+  auto num = [&](const std::string& k, const std::string& v, Dim d, double* dst) {
+    std::string e;
+    const auto q = parse_quantity(v, d, &e);
+    if (!q) {
+      *err = sc.source + ": [plant] " + k + ": " + e;
+      return false;
+    }
+    *dst = *q;
+    return true;
+  };
+  if (const auto it = sc.plant.find("model"); it != sc.plant.end()) {
+    if (it->second == "ideal") *p = hil::PlantConfig::Ideal();
+    else if (it->second != "default") return *err = sc.source + ": [plant] model: expected default or ideal", false;
+  }
+  for (const auto& [k, v] : sc.plant) {
+    bool ok = true;
+    if (k == "model") continue;
+    if (k == "payload_kg") ok = num(k, v, Dim::kMass, &p->body.payload_kg);
+    else if (k == "current_noise_scale") ok = num(k, v, Dim::kNumber, &p->amplifier.current_noise_scale);
+    else if (k == "interferometer_noise_m") ok = num(k, v, Dim::kLength, &p->interferometer.noise_m);
+    else if (k == "displacement_noise_m") ok = num(k, v, Dim::kLength, &p->displacement.noise_m);
+    else if (k == "sensor_noise") p->sensor_noise_enabled = v == "on" || v == "true" || v == "1" || v == "yes";
+    else if (k == "initial_x_m") ok = num(k, v, Dim::kLength, &p->initial.position_m[0]);
+    else if (k == "initial_y_m") ok = num(k, v, Dim::kLength, &p->initial.position_m[1]);
+    else if (k == "substeps_per_tick") {
+      double n = 0;
+      ok = num(k, v, Dim::kNumber, &n) && n >= 1 && n <= 64;
+      if (ok) p->integration.substeps_per_tick = static_cast<int>(n);
+      else if (err->empty()) *err = sc.source + ": [plant] substeps_per_tick must be an integer 1..64";
+    } else {
+      *err = sc.source + ": [plant] unknown key '" + k + "'";
+      return false;
+    }
+    if (!ok) return false;
+  }
+  if (const auto it = sc.scenario.find("seed"); it != sc.scenario.end()) {
+    *seed = static_cast<std::uint64_t>(std::strtoull(it->second.c_str(), nullptr, 10));
+  }
+  return true;
+}
+
+bool parse(int argc, char** argv, ServeOptions* o) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (i + 1 >= argc) {
+      std::fprintf(stderr, "maglev-hil serve: %s needs a value\n", a.c_str());
+      return false;
+    }
+    const std::string v = argv[++i];
+    if (a == "--modbus-tcp") {
+      const auto colon = v.rfind(':');
+      if (colon == std::string::npos) {
+        std::fprintf(stderr, "maglev-hil serve: --modbus-tcp HOST:PORT, got '%s'\n", v.c_str());
+        return false;
+      }
+      o->host = v.substr(0, colon);
+      char* end = nullptr;
+      const long port = std::strtol(v.c_str() + colon + 1, &end, 10);
+      if (end == v.c_str() + colon + 1 || *end != '\0' || port < 0 || port > 65535) {
+        std::fprintf(stderr, "maglev-hil serve: bad port in '%s'\n", v.c_str());
+        return false;
+      }
+      o->port = static_cast<int>(port);
+    } else if (a == "--kernel") {
+      if (!hil::parse_kernel_kind(v, &o->kernel)) {
+        std::fprintf(stderr, "maglev-hil serve: --kernel float32|q7.24, got '%s'\n", v.c_str());
+        return false;
+      }
+    } else if (a == "--flash") {
+      o->flash = v;
+    } else if (a == "--scenario") {
+      o->scenario = v;
+    } else if (a == "--scenarios") {
+      o->scenarios = v;
+    } else if (a == "--seed") {
+      o->seed = static_cast<std::uint64_t>(std::strtoull(v.c_str(), nullptr, 10));
+      o->seed_given = true;
+    } else if (a == "--duration") {
+      o->duration_s = std::atof(v.c_str());
+    } else {
+      std::fprintf(stderr, "maglev-hil serve: unknown option '%s'\n", a.c_str());
+      return false;
+    }
+  }
+  if (o->port < 0) {
+    std::fprintf(stderr, "maglev-hil serve: --modbus-tcp HOST:PORT is required\n");
+    return false;
+  }
+  return true;
+}
+
+struct ServeCounters {
+  std::uint64_t ticks = 0;
+  std::uint64_t deadline_misses = 0;
+  std::uint64_t resyncs = 0;
+  std::uint64_t missed_actuator = 0;
+  std::uint64_t modbus_requests = 0;
+  std::int64_t max_work_ns = 0;
+  std::int64_t max_late_ns = 0;
+};
+
+template <typename Scalar>
+int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint64_t seed) {
+  using Kernel = kernel::Controller<Scalar>;
+  const auto bus = std::make_shared<can::VirtualBus>("maglev-hil-serve");
+  auto plant_port = bus->open_endpoint();
+  auto ctrl_port = bus->open_endpoint();
+
+  hil::Plant plant(plant_config, seed);
+  auto controller = std::make_unique<Kernel>();  // large: not on the stack
+  // Boot as on the board: the configuration comes from the flash file.
+  auto modbus = std::make_unique<modbus_tcp::BenchServer<Scalar>>(*controller, o.host, o.port, o.flash);
+  if (!modbus->ok()) {
+    std::fprintf(stderr, "maglev-hil serve: cannot serve Modbus TCP on %s:%d (flash %s): %s\n", o.host.c_str(),
+                 o.port, o.flash.c_str(), modbus->error().c_str());
+    return 1;
+  }
+  app::CanSensorSource sensors(*ctrl_port, app::CanSensorConfig{});
+  app::CanActuatorSink actuators(*ctrl_port, sensors);
+  app::ServoLoop<Kernel> loop(sensors, actuators, *controller, app::ServoConfig{}, app::ServoHooks{});
+
+  std::printf("maglev-hil serve: Modbus TCP listening on %s:%d (unit 1), kernel %s, flash %s, %.0f Hz real time\n",
+              o.host.c_str(), modbus->port(), hil::to_string(o.kernel), o.flash.c_str(), io::stage::kServoRate_Hz);
+  std::fflush(stdout);
+
+  const double dt = 1.0 / io::stage::kServoRate_Hz;
+  const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 * dt));
+  const std::uint64_t end_tick =
+      o.duration_s > 0.0 ? static_cast<std::uint64_t>(std::llround(o.duration_s / dt)) : ~std::uint64_t{0};
+  can::LinkReceiver prx;
+  io::ActuatorCommand held = io::kSafeActuatorCommand;
+  std::uint8_t cm_counter = 0, hb_counter = 0;
+  ServeCounters c;
+  std::int64_t deadline = now_ns() + period_ns;
+  const std::int64_t wall0 = now_ns();
+
+  for (std::uint64_t n = 0; n < end_tick && g_stop == 0; ++n) {
+    const std::int64_t start = now_ns();
+    const double t = static_cast<double>(n) * dt;
+    // --- plant endpoint: sensors -> CAN.
+    const io::SensorSample s = plant.sample();
+    can::CanFrame f{};
+    if (n % can::kCurrentMonitorPeriodTicks == 0) {
+      can::CurrentMonitorFrame cm{};
+      std::copy(std::begin(s.coil_current_adc), std::end(s.coil_current_adc), cm.coil_current_adc);
+      can::encode_current_monitor(cm, cm_counter++, f);
+      plant_port->send(f);
+    }
+    const auto counter = static_cast<std::uint8_t>(n & 0xFFu);
+    can::encode_sensor(s, counter, f);
+    plant_port->send(f);
+    if (n % can::kHeartbeatPeriodTicks == 0) {
+      can::HeartbeatFrame hb{can::NodeState::kOperational, static_cast<std::uint32_t>(t * 1000.0), 0, 0};
+      can::encode_heartbeat(can::MessageKind::kHeartbeatPlant, hb, hb_counter++, f);
+      plant_port->send(f);
+    }
+    // --- controller: the firmware's servo tick.
+    loop.on_tick();
+    // --- plant endpoint: the actuator frame answering tick n (ZOH).
+    bool got = false;
+    while (plant_port->pending() > 0) {
+      can::CanFrame in{};
+      if (plant_port->receive(in, 0u) != can::PortStatus::kOk) break;
+      if (prx.accept(in) != can::RxStatus::kOk) continue;
+      if (prx.last_message() == &can::message(can::MessageKind::kActuator) && can::frame_counter(in) == counter) {
+        can::decode_actuator(in, held);
+        got = true;
+      }
+    }
+    if (!got) {
+      ++c.missed_actuator;
+      held = io::kSafeActuatorCommand;  // the amplifiers' own watchdog: zero current
+    }
+    plant.apply(held);
+    plant.advance_tick();
+    ++c.ticks;
+    // --- Modbus, between ticks: only requests already waiting.
+    c.modbus_requests += static_cast<std::uint64_t>(std::max(0, modbus->poll(0)));
+
+    const std::int64_t done = now_ns();
+    c.max_work_ns = std::max(c.max_work_ns, done - start);
+    if (done > deadline) {
+      ++c.deadline_misses;
+      c.max_late_ns = std::max(c.max_late_ns, done - deadline);
+      if (done - deadline > kResyncTicks * period_ns) {
+        ++c.resyncs;
+        deadline = done;
+      }
+    } else {
+      sleep_until_ns(deadline);
+    }
+    deadline += period_ns;
+
+    if ((n + 1) % 2500 == 0) {
+      const kernel::ControllerStatus& st = controller->status();
+      std::fprintf(stderr,
+                   "t=%8.1f s  state=%-9s fault=%u moving=%d  x=%+.9f y=%+.9f z=%+.9f m  "
+                   "misses=%llu resyncs=%llu max_tick=%lld us  modbus=%llu\n",
+                   t + dt, hil::to_string(st.state), static_cast<unsigned>(st.fault), st.motion_active ? 1 : 0,
+                   static_cast<double>(st.pose.x_pm) * 1e-12, static_cast<double>(st.pose.y_pm) * 1e-12,
+                   static_cast<double>(st.pose.z_pm) * 1e-12, static_cast<unsigned long long>(c.deadline_misses),
+                   static_cast<unsigned long long>(c.resyncs), static_cast<long long>(c.max_work_ns / 1000),
+                   static_cast<unsigned long long>(c.modbus_requests));
+    }
+  }
+  const double wall_s = static_cast<double>(now_ns() - wall0) * 1e-9;
+  const double sim_s = static_cast<double>(c.ticks) * dt;
+  std::fprintf(stderr,
+               "maglev-hil serve: stopped after %llu ticks (%.2f s simulated, %.2f s wall, real-time factor %.3f); "
+               "deadline misses %llu (max late %lld us, resyncs %llu), max tick work %lld us, missed actuator frames "
+               "%llu, Modbus requests %llu, final state %s\n",
+               static_cast<unsigned long long>(c.ticks), sim_s, wall_s, wall_s > 0 ? sim_s / wall_s : 0.0,
+               static_cast<unsigned long long>(c.deadline_misses), static_cast<long long>(c.max_late_ns / 1000),
+               static_cast<unsigned long long>(c.resyncs), static_cast<long long>(c.max_work_ns / 1000),
+               static_cast<unsigned long long>(c.missed_actuator), static_cast<unsigned long long>(c.modbus_requests),
+               hil::to_string(controller->status().state));
+  return 0;
+}
+
+}  // namespace
+
+int serve_main(int argc, char** argv) {
+  ServeOptions o;
+  if (!parse(argc, argv, &o)) {
+    usage();
+    return 2;
+  }
+  hil::PlantConfig plant_config;
+  std::uint64_t seed = 1;
+  if (!o.scenario.empty()) {
+    std::string path = o.scenario;
+    if (!(fs::exists(path) && fs::is_regular_file(path))) path = (fs::path(o.scenarios) / (o.scenario + ".scenario")).string();
+    auto r = scenario::load_scenario_file(path);
+    if (!r.ok()) {
+      for (const auto& e : r.errors) std::fprintf(stderr, "%s\n", e.to_string().c_str());
+      return 2;
+    }
+    std::string err;
+    if (!plant_overrides(*r.scenario, &plant_config, &seed, &err)) {
+      std::fprintf(stderr, "%s\n", err.c_str());
+      return 2;
+    }
+  }
+  if (o.seed_given) seed = o.seed;
+
+  struct sigaction sa{};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: clock_nanosleep returns at once
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+
+  return o.kernel == hil::KernelKind::kQ7_24 ? serve<numeric::Q7_24>(o, plant_config, seed)
+                                             : serve<float>(o, plant_config, seed);
+}
+
+}  // namespace maglev::bench

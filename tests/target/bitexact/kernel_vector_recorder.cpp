@@ -1,0 +1,202 @@
+// kernel-vector-recorder: closes the loop between the HIL plant (maglev_plant,
+// default PlantConfig, seed 1) and Controller<float> in lockstep -- the bench's
+// per-tick order: sample(), command(s) due this tick, step(), apply(),
+// advance_tick() -- through levitation start-up and then a fixed list of
+// steps / moves / profiles / an excitation, and writes
+//   <vectors.bin>       the kernel's inputs per tick (replay_format.hpp), and
+//   <host_outputs.bin>  this host kernel's outputs per tick, encoded exactly as
+//                       the M7 replay image encodes its own.
+// Exit status 0 only if the stage reached Ready and every command was accepted
+// (so the recorded run really exercises the levitated kernel).
+//
+// usage: kernel-vector-recorder <vectors.bin> <host_outputs.bin>
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "maglev/controller/controller.hpp"
+#include "maglev/hil/plant.hpp"
+#include "maglev/hil/plant_config.hpp"
+#include "maglev/kernel_replay/replay_format.hpp"
+
+namespace {
+
+namespace kr = maglev::kernel_replay;
+namespace kernel = maglev::kernel;
+using kernel::Axis;
+using kernel::MotionCommand;
+using kernel::MotionType;
+
+constexpr std::uint64_t kSeed = 1;
+// Give up if start-up has not reached Ready after this many ticks (4 s).
+constexpr std::uint32_t kMaxStartupTicks = 10000;
+// Ticks recorded after Ready: the command schedule below ends well before.
+constexpr std::uint32_t kTicksAfterReady = 5000;
+
+// One scheduled command, `after_ready` ticks after the first Ready tick.
+struct Scheduled {
+  std::uint32_t after_ready;
+  const char* text;
+  MotionCommand command;
+  bool relative_to_reference;  // kMoveTo: target is an offset from the present reference
+};
+
+MotionCommand make(MotionType type, Axis axis) {
+  MotionCommand c;
+  c.type = type;
+  c.axis = axis;
+  return c;
+}
+
+std::vector<Scheduled> schedule() {
+  std::vector<Scheduled> s;
+  MotionCommand c = make(MotionType::kStep, Axis::kX);
+  c.target = 8e-6;
+  s.push_back({250, "step x +8 um", c, false});
+  c.target = -4e-6;
+  s.push_back({750, "step x -4 um", c, false});
+  c = make(MotionType::kMoveTo, Axis::kY);
+  c.target = 0.5e-3;
+  c.velocity = 0.05;
+  c.acceleration = 0.5;
+  s.push_back({1250, "move_to y +0.5 mm (trapezoid)", c, true});
+  c = make(MotionType::kStep, Axis::kThetaZ);
+  c.target = 2e-6;
+  s.push_back({2000, "step theta_z +2 urad", c, false});
+  c = make(MotionType::kStep, Axis::kZ);
+  c.target = 2e-6;
+  s.push_back({2300, "step z +2 um", c, false});
+  c = make(MotionType::kSinusoid, Axis::kX);
+  c.amplitude = 20e-6;
+  c.frequency_Hz = 10.0;
+  c.turns = 3.0;
+  s.push_back({2600, "sinusoid x 20 um 10 Hz 3 cycles (libm sin)", c, false});
+  c = make(MotionType::kExcite, Axis::kThetaZ);
+  c.amplitude = 0.05;
+  c.frequency_Hz = 20.0;
+  c.harmonics = 4;
+  c.duration_s = 0.3;
+  s.push_back({3500, "excite theta_z 0.05 A, 20 Hz x 4 lines, 0.3 s", c, false});
+  c = make(MotionType::kCircle, Axis::kX);
+  c.diameter_m = 1e-3;
+  c.period_s = 0.6;
+  c.turns = 1.0;
+  s.push_back({4300, "circle 1 mm, 0.6 s, 1 turn", c, false});
+  return s;
+}
+
+bool write_file(const std::string& path, const std::vector<std::uint8_t>& bytes) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  return static_cast<bool>(f);
+}
+
+double reference_si(const kernel::ControllerStatus& st, Axis axis) {
+  const kernel::Pose64& r = st.reference;
+  const std::int64_t v[6] = {r.x_pm, r.y_pm, r.theta_z_prad, r.z_pm, r.theta_x_prad, r.theta_y_prad};
+  return static_cast<double>(v[static_cast<int>(axis)]) * 1e-12;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 3) {
+    std::fprintf(stderr, "usage: %s <vectors.bin> <host_outputs.bin>\n", argv[0]);
+    return 2;
+  }
+  maglev::hil::Plant plant(maglev::hil::PlantConfig::Default(), kSeed);
+  auto controller = std::make_unique<kernel::Controller<float>>();
+  if (controller->apply_config(kernel::default_kernel_config()) != kernel::ConfigError::kOk) {
+    std::fprintf(stderr, "recorder: default_kernel_config() refused\n");
+    return 1;
+  }
+  const std::vector<Scheduled> plan = schedule();
+  std::size_t next = 0;
+
+  std::vector<std::uint8_t> inputs(kr::kHeaderBytes);
+  std::vector<std::uint8_t> outputs;
+  kr::InputHeader header;
+  bool ok = true;
+  std::int64_t ready_tick = -1;
+  std::uint32_t end_tick = kMaxStartupTicks;
+
+  for (std::uint32_t tick = 0; tick < end_tick; ++tick) {
+    kr::InputRecord in;
+    in.sample = plant.sample();
+    in.tick_overrun = false;
+    const char* text = nullptr;
+    if (tick == 0) {
+      in.has_command = true;
+      in.command = make(MotionType::kLevitate, Axis::kX);
+      text = "levitate";
+    } else if (ready_tick >= 0 && next < plan.size() &&
+               static_cast<std::int64_t>(tick) == ready_tick + plan[next].after_ready) {
+      in.has_command = true;
+      in.command = plan[next].command;
+      if (plan[next].relative_to_reference) {
+        in.command.target += reference_si(controller->status(), in.command.axis);
+      }
+      text = plan[next].text;
+      ++next;
+    }
+    // Drive this kernel with the DECODED record, exactly what the image reads
+    // (a MotionCommand field the format does not carry stays default on both).
+    const std::size_t in_at = inputs.size();
+    inputs.resize(in_at + kr::kInputRecordBytes);
+    kr::encode_input(in, &inputs[in_at]);
+    kr::decode_input(&inputs[in_at], &in);
+
+    kr::OutputRecord out;
+    out.tick = tick;
+    if (in.has_command) {
+      const kernel::CommandResult result = controller->command(in.command);
+      out.command_result = static_cast<std::uint8_t>(result);
+      std::printf("recorder: tick %6u  %-48s -> result %u%s\n", tick, text, static_cast<unsigned>(result),
+                  result == kernel::CommandResult::kAccepted ? " (accepted)" : " (NOT accepted)");
+      if (result != kernel::CommandResult::kAccepted) ok = false;
+      ++header.command_count;
+    }
+    out.actuator = controller->step(in.sample, in.tick_overrun);
+    out.status = &controller->status();
+    plant.apply(out.actuator);
+    plant.advance_tick();
+
+    const std::size_t out_at = outputs.size();
+    outputs.resize(out_at + kr::kOutputRecordBytes);
+    kr::encode_output(out, &outputs[out_at]);
+
+    if (ready_tick < 0 && out.status->state == kernel::SequencerState::kReady) {
+      ready_tick = tick;
+      end_tick = tick + kTicksAfterReady;
+      std::printf("recorder: tick %6u  Ready (start-up took %.3f s)\n", tick, tick / 2500.0);
+    }
+    if (out.status->fault != kernel::FaultCode::kNone) {
+      std::printf("recorder: tick %6u  FAULT %u latched\n", tick, static_cast<unsigned>(out.status->fault));
+      ok = false;
+      end_tick = tick + 1;
+    }
+  }
+  header.tick_count = static_cast<std::uint32_t>(outputs.size() / kr::kOutputRecordBytes);
+  header.input_record_bytes = kr::kInputRecordBytes;
+  header.output_record_bytes = kr::kOutputRecordBytes;
+  kr::encode_header(header, inputs.data());
+  if (!write_file(argv[1], inputs) || !write_file(argv[2], outputs)) {
+    std::fprintf(stderr, "recorder: cannot write %s / %s\n", argv[1], argv[2]);
+    return 1;
+  }
+  std::printf("recorder: %u ticks, %u commands; wrote %zu input bytes to %s, %zu output bytes to %s\n",
+              header.tick_count, header.command_count, inputs.size(), argv[1], outputs.size(), argv[2]);
+  if (ready_tick < 0) {
+    std::fprintf(stderr, "recorder: FAIL: the stage never reached Ready within %u ticks\n", kMaxStartupTicks);
+    return 1;
+  }
+  if (next != plan.size()) ok = false;
+  if (!ok) {
+    std::fprintf(stderr, "recorder: FAIL: a command was refused or a fault latched (see above)\n");
+    return 1;
+  }
+  return 0;
+}
