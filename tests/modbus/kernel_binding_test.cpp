@@ -199,7 +199,8 @@ TEST(KernelBinding, RecordTheKernelRefusesFallsBackToKernelDefaults) {
   Stage st(flash);
   const kernel::KernelConfig c = st.config();
   DOUBLES_EQUAL(36000.0, static_cast<double>(c.axis[0].pid.kp), 0.0);  // kernel default, not 20000
-  DOUBLES_EQUAL(0.028, static_cast<double>(c.supervisor.x_max_m), 1e-7);
+  DOUBLES_EQUAL(static_cast<double>(kernel::default_kernel_config().supervisor.x_max_m),
+                static_cast<double>(c.supervisor.x_max_m), 0.0);  // kernel default, not 0.001
   std::uint16_t flags = 0;
   LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::persist_flags), 1, &flags));
   CHECK(flags & kRefused);

@@ -495,6 +495,15 @@ void compute_metrics(const scenario::Scenario& sc, const std::vector<Action>& ac
   const double fs = io::stage::kServoRate_Hz;
   // In-band noise: a 10 ms boxcar (25 ticks) = 50 Hz equivalent noise bandwidth.
   const auto kInBandAverageTicks = static_cast<std::size_t>(std::lround(0.010 * fs));
+  // Rest window for the CCQ noise reference: from Ready (plus 0.5 s) to the
+  // first motion command of the scenario.
+  double rest_end = sc.duration_s();
+  for (const auto& a : actions) {
+    if (a.verb == Verb::kStep || a.verb == Verb::kMove || a.verb == Verb::kMoveTo || a.verb == Verb::kMoveJerk) {
+      rest_end = std::min(rest_end, a.t_s);
+    }
+  }
+  const double rest_begin = ready_t >= 0.0 ? ready_t + 0.5 : rest_end;
   for (const auto& req : sc.metrics) {
     MetricSpec s;
     std::string err;
@@ -564,6 +573,19 @@ void compute_metrics(const scenario::Scenario& sc, const std::vector<Action>& ac
           if (unit != "s" && unit != "rad*s/m" && unit != "m*s/rad") suffix = "si";
           M[s.name + "_pp_" + kPoseNames[q] + "_" + si_unit(q)] = pp;
           M[s.name + "_ccq_" + kPoseNames[q] + "_" + suffix] = c.value;
+          // The same quantity computed from the REST p-p of this axis over an
+          // equally long window just before the scenario's first motion: a
+          // CCQ close to it is rest noise, not coupling.
+          if (rest_end > rest_begin) {
+            const double len = std::min(s.t1 - t_cmd, rest_end - rest_begin);
+            const auto rq = metrics::slice(tr.pose[q], metrics::window(t, rest_end - len, rest_end));
+            if (rq.size() > 2) {
+              const double rpp = metrics::peak_to_peak(rq);
+              M[s.name + "_rest_pp_" + kPoseNames[q] + "_" + si_unit(q)] = rpp;
+              M[s.name + "_ccq_rest_noise_" + kPoseNames[q] + "_" + suffix] =
+                  metrics::cross_coupling_quantity(tp, rpp, size, pk, qk).value;
+            }
+          }
         }
       }
     } else if (s.kind == "tracking") {

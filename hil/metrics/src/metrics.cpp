@@ -109,7 +109,12 @@ StepMetrics analyze_step(std::span<const double> t_s, std::span<const double> y,
   // than the 2% band's quarter (0.5% of the step: above interferometer noise);
   // a response that does not overshoot (shaped moves, paper 003 Figs 17, 20)
   // has its "peak" where it first reaches the 2% band around its final value.
-  if (m.overshoot_percent > 0.5) {
+  // An "overshoot" no larger than the rest noise (6 x its rms before the
+  // step) is a noise maximum, not a peak: its time would be random (a 2 um
+  // step with 3 nm rms noise peaked anywhere in the window).
+  const double pre_rms = pre.size() > 2 ? rms_about_mean(slice(y, pre)) : 0.0;
+  const bool above_noise = (p_peak - final_progress) * mag > 6.0 * pre_rms;
+  if (m.overshoot_percent > 0.5 && above_noise) {
     m.peak_time_s = t_s[i_peak] - t_step_s;
   } else {
     m.peak_time_s = m.settling_time_s;

@@ -106,6 +106,25 @@ TEST(Step, NoOvershootPeakTimeIsEntryIntoBand) {
 TEST_GROUP(Ccq){};
 
 // Paper 003 Table 7: 2 um step in y, t_p = 0.05 s.
+TEST(Step, NoiseMaximumIsNotAPeak) {
+  // First-order 2 um step (tau 5 ms, no overshoot) with a deterministic
+  // +-15 nm "noise" (rms 10.6 nm before and after the step). The late noise
+  // maximum (0.75 % of the step) must not become the peak: the peak time is
+  // the entry into the 2 % band, as without noise.
+  std::vector<double> t, y;
+  const double tau = 5e-3;
+  for (int i = 0; i < 5000; ++i) {
+    const double ti = i / 2500.0;  // step at 0.5 s
+    t.push_back(ti);
+    const double clean = ti < 0.5 ? 0.0 : 2e-6 * (1.0 - std::exp(-(ti - 0.5) / tau));
+    y.push_back(clean + 15e-9 * std::sin(2 * std::numbers::pi * 37.0 * ti));
+  }
+  const StepMetrics m = analyze_step(t, y, 0.5, 2.0, 2e-6, 0.2);
+  CHECK(m.overshoot_percent > 0.5);             // the noise does exceed 0.5 %
+  CHECK(m.peak_time_s < 0.03);                  // band entry ~ tau ln 50 = 19.6 ms (+ noise)
+  DOUBLES_EQUAL(tau * std::log(50.0), m.peak_time_s, 0.006);
+}
+
 TEST(Ccq, ReproducesPaper003Table7) {
   const auto x = cross_coupling_quantity(0.05, 127e-9, 2e-6, AxisKind::kTranslational, AxisKind::kTranslational);
   DOUBLES_EQUAL(0.0032, x.value, 0.00005);
