@@ -65,3 +65,11 @@ if [[ -x "$fetch_vm_packages" ]]; then
   echo "setup-debian.sh: running tests/socketcan-vm/fetch-vm-packages.sh"
   "$fetch_vm_packages"
 fi
+
+# CppUTest sources for the kernel suites cross-compiled for the M7 (qemu-m7
+# preset, tests/target/cpputest_m7): apt-get source cpputest into build/deps.
+fetch_cpputest_source="$repo_root/tests/target/cpputest_m7/fetch-cpputest-source.sh"
+if [[ -x "$fetch_cpputest_source" ]]; then
+  echo "setup-debian.sh: running tests/target/cpputest_m7/fetch-cpputest-source.sh"
+  "$fetch_cpputest_source"
+fi

@@ -176,7 +176,9 @@ int report_run(const maglev::scenario::Scenario& sc, const maglev::bench::RunRes
   std::printf("  final state %s, fault %s; %llu ticks in %.2f s wall: real-time factor %.1f, bus load %.1f %%\n",
               r.final_state.c_str(), r.fault.c_str(), static_cast<unsigned long long>(r.ticks), r.wall_s,
               r.real_time_factor, r.bus_load_percent);
-  std::printf("  results in %s\n", dir.c_str());
+  std::printf("  results in %s: metrics.json, trace.csv, commands.txt", dir.c_str());
+  if (a.plots && wrote) std::printf(", plots pose.png and currents.png");
+  std::printf("\n");
   return r.completed && wrote ? 0 : 1;
 }
 

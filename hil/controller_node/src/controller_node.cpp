@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "maglev/app/servo_loop.hpp"
+#include "maglev/app/telemetry.hpp"
 #include "maglev/can_link/catalog.hpp"
 #include "maglev/can_link/codec.hpp"
 #include "maglev/numeric/fixed.hpp"
@@ -24,22 +26,11 @@ bool parse_kernel_kind(const std::string& s, KernelKind* out) {
   return false;
 }
 
-// ---------------------------------------------------------------- CanServoIo
-CanServoIo::CanServoIo(can::CanPort& port, can::BusLoadMeter* tx_meter) : port_(port), meter_(tx_meter) {}
-
-void CanServoIo::send(const can::CanFrame& f) {
-  if (port_.send(f) != can::PortStatus::kOk) ++tx_errors_;
-  if (meter_ != nullptr) meter_->on_frame(f);
-}
-
-bool CanServoIo::read_sensors(io::SensorSample& sample, std::uint32_t timeout_us) {
-  // Waits (up to timeout_us) for a sensor frame, then drains what is already
-  // queued without waiting: a late (delayed) frame is superseded by the
-  // newest one, as the board's CanSensorSource does. In lockstep nothing but
-  // this tick's frames is queued, so draining changes nothing there.
+// ------------------------------------------------------------------ NodePort
+bool NodePort::wait(std::uint32_t timeout_us) {
   using Clock = std::chrono::steady_clock;
   const auto deadline = Clock::now() + std::chrono::microseconds(timeout_us);
-  bool got = false;
+  bool got = queued_sensor_frames_ > 0;
   for (;;) {
     can::CanFrame in{};
     std::uint32_t left = 0;
@@ -48,16 +39,10 @@ bool CanServoIo::read_sensors(io::SensorSample& sample, std::uint32_t timeout_us
       left = us > 0 ? static_cast<std::uint32_t>(us) : 0u;
     }
     if (port_.receive(in, left) != can::PortStatus::kOk) return got;
-    if (rx_.accept(in) != can::RxStatus::kOk) continue;  // counted in rx_stats()
-    const can::Message* m = rx_.last_message();
-    if (m == &can::message(can::MessageKind::kCurrentMonitor)) {
-      can::CurrentMonitorFrame cm{};
-      can::decode_current_monitor(in, cm);
-      std::copy(std::begin(cm.coil_current_adc), std::end(cm.coil_current_adc), coil_current_adc_);
-      if (got) std::copy(std::begin(coil_current_adc_), std::end(coil_current_adc_), sample.coil_current_adc);
-      continue;
-    }
-    if (m == &can::message(can::MessageKind::kHostCommand)) {
+    const bool ok = rx_.accept(in) == can::RxStatus::kOk;  // rejections counted in receiver().stats()
+    if (in.id == can::message(can::MessageKind::kHostCommand).can_id) {
+      // The operator's channel: executed by the node, never by the servo tick.
+      if (!ok) continue;
       can::HostCommandFrame hc{};
       can::decode_host_command(in, hc);
       commands_.push_back(hc);
@@ -67,17 +52,53 @@ bool CanServoIo::read_sensors(io::SensorSample& sample, std::uint32_t timeout_us
       }
       continue;
     }
-    if (m == &can::message(can::MessageKind::kSensor)) {
-      if (got) ++superseded_;
-      can::decode_sensor(in, sample);
-      std::copy(std::begin(coil_current_adc_), std::end(coil_current_adc_), sample.coil_current_adc);
-      last_sensor_counter_ = can::frame_counter(in);
+    const bool sensor = ok && rx_.last_message() == &can::message(can::MessageKind::kSensor);
+    queue_.push_back(Queued{in, sensor});
+    if (sensor) {
+      ++queued_sensor_frames_;
       got = true;
-      continue;
     }
-    // Plant heartbeats and anything else the controller does not consume.
   }
 }
+
+bool NodePort::next_host_command(can::HostCommandFrame& out) {
+  if (commands_.empty()) return false;
+  out = commands_.front();
+  commands_.pop_front();
+  return true;
+}
+
+can::PortStatus NodePort::send(const can::CanFrame& f) {
+  const can::PortStatus s = port_.send(f);
+  if (s != can::PortStatus::kOk) ++tx_errors_;
+  if (meter_ != nullptr) meter_->on_frame(f);
+  return s;
+}
+
+can::PortStatus NodePort::receive(can::CanFrame& f, std::uint32_t timeout_us) {
+  (void)timeout_us;  // the app polls (0); nothing to wait for inside a tick
+  if (queue_.empty()) return can::PortStatus::kTimeout;
+  f = queue_.front().frame;
+  if (queue_.front().accepted_sensor) --queued_sensor_frames_;
+  queue_.pop_front();
+  return can::PortStatus::kOk;
+}
+
+// ---------------------------------------------------------------- CanServoIo
+namespace {
+app::CanSensorConfig node_sensor_config() {
+  app::CanSensorConfig c{};
+  c.period_us = static_cast<std::uint32_t>(1e6 / io::stage::kServoRate_Hz);
+  c.now_us = nullptr;  // the tick clock: deterministic, what lockstep needs
+  // The board bounds its ISR's drain at 16 frames; the host node drains all
+  // that wait() queued (a backlog after a stall: newest sensor frame wins).
+  c.max_frames_per_read = 255;
+  return c;
+}
+}  // namespace
+
+CanServoIo::CanServoIo(can::CanPort& port, can::BusLoadMeter* tx_meter)
+    : port_(port, tx_meter), sensors_(port_, node_sensor_config()), actuators_(port_, sensors_) {}
 
 void CanServoIo::announce() {
   can::HeartbeatFrame hb{can::NodeState::kInit, 0, 0, 0};
@@ -86,54 +107,30 @@ void CanServoIo::announce() {
   send(f);
 }
 
-bool CanServoIo::next_host_command(can::HostCommandFrame& out) {
-  if (commands_.empty()) return false;
-  out = commands_.front();
-  commands_.pop_front();
-  return true;
-}
-
 void CanServoIo::acknowledge(const can::HostCommandAckFrame& ack) {
   can::CanFrame f{};
   can::encode_host_command_ack(ack, ack_counter_++, f);
   send(f);
 }
 
-void CanServoIo::write_actuators(const io::ActuatorCommand& command) {
-  can::CanFrame f{};
-  can::encode_actuator(command, last_sensor_counter_, f);
-  send(f);
-}
-
 void CanServoIo::publish_status(const kernel::ControllerStatus& st) {
+  // Catalog rates on the tick grid (10, 20, ...; 250, 500, ...): the bus
+  // carries the same frames at the same ticks as every earlier bench run.
   ++ticks_;
   if (ticks_ % can::kControllerStatusPeriodTicks == 0) {
-    can::ControllerStatusFrame s{};
-    const std::int64_t pose[6] = {st.pose.x_pm, st.pose.y_pm, st.pose.z_pm,
-                                  st.pose.theta_x_prad, st.pose.theta_y_prad, st.pose.theta_z_prad};
-    for (int i = 0; i < 6; ++i) {
-      const std::int64_t v = pose[i] / 1000;  // pm -> nm, prad -> nrad
-      s.pose_nm_nrad[i] = static_cast<std::int32_t>(std::clamp<std::int64_t>(v, INT32_MIN, INT32_MAX));
-    }
-    s.sequencer_state = static_cast<std::uint8_t>(st.state);
-    s.fault_code = static_cast<std::uint16_t>(st.fault);
-    s.saturation_flags = st.saturated ? 1u : 0u;
-    s.scale_k_e4 = static_cast<std::uint16_t>(std::lround(std::clamp(st.scale_k, 0.0f, 1.0f) * 10000.0f));
-    for (int j = 0; j < io::kCoils; ++j) {
-      const float mA = std::clamp(st.coil_current_A[j] * 1000.0f, -32768.0f, 32767.0f);
-      s.current_command_mA[j] = static_cast<std::int16_t>(std::lround(mA));
-    }
-    s.tick = st.tick;
     can::CanFrame f{};
-    can::encode_controller_status(s, status_counter_++, f);
+    can::encode_controller_status(app::to_status_frame(st), status_counter_++, f);
     send(f);
   }
   if (ticks_ % can::kHeartbeatPeriodTicks == 0) {
+    // Same content as app::Application's heartbeat.
     can::HeartbeatFrame hb{};
-    hb.node_state = st.state == kernel::SequencerState::kFault ? can::NodeState::kFault : can::NodeState::kOperational;
+    const bool fault = st.fault != kernel::FaultCode::kNone || st.state == kernel::SequencerState::kFault;
+    hb.node_state = fault ? can::NodeState::kFault : can::NodeState::kOperational;
     hb.uptime_ms = static_cast<std::uint32_t>(static_cast<std::uint64_t>(ticks_) * 1000u /
                                               static_cast<std::uint64_t>(io::stage::kServoRate_Hz));
-    hb.rx_rejected = static_cast<std::uint16_t>(std::min<std::uint32_t>(rx_.stats().rejected_total(), 65535u));
+    hb.rx_rejected = static_cast<std::uint16_t>(std::min<std::uint32_t>(rx_stats().rejected_total(), 65535u));
+    hb.bus_errors = static_cast<std::uint16_t>(std::min<std::uint32_t>(port_.counters().error_frames, 65535u));
     can::CanFrame f{};
     can::encode_heartbeat(can::MessageKind::kHeartbeatController, hb, heartbeat_counter_++, f);
     send(f);
@@ -141,9 +138,10 @@ void CanServoIo::publish_status(const kernel::ControllerStatus& st) {
 }
 
 // ----------------------------------------------------------- ControllerNode
+// The Kernel ServoLoop steps: step(sample, tick_overrun), as on the board.
 struct ControllerNode::Kernel {
   virtual ~Kernel() = default;
-  virtual io::ActuatorCommand step(const io::SensorSample& s) = 0;
+  virtual io::ActuatorCommand step(const io::SensorSample& s, bool tick_overrun) = 0;
   virtual kernel::CommandResult command(const kernel::MotionCommand& c) = 0;
   virtual kernel::ConfigError apply_config(const kernel::KernelConfig& c) = 0;
   virtual const kernel::KernelConfig& config() const = 0;
@@ -154,51 +152,65 @@ namespace {
 template <typename Scalar>
 struct KernelImpl final : ControllerNode::Kernel {
   kernel::Controller<Scalar> c;
-  io::ActuatorCommand step(const io::SensorSample& s) override { return c.step(s, false); }
+  io::ActuatorCommand step(const io::SensorSample& s, bool tick_overrun) override { return c.step(s, tick_overrun); }
   kernel::CommandResult command(const kernel::MotionCommand& m) override { return c.command(m); }
   kernel::ConfigError apply_config(const kernel::KernelConfig& k) override { return c.apply_config(k); }
   const kernel::KernelConfig& config() const override { return c.config(); }
   const kernel::ControllerStatus& status() const override { return c.status(); }
 };
+
+// Remembers what ServoLoop wrote (after its safe preset), then hands it on.
+class RememberingSink final : public app::ActuatorSink {
+ public:
+  explicit RememberingSink(app::ActuatorSink& inner) : inner_(inner) {}
+  void write(const io::ActuatorCommand& command) override {
+    last = command;
+    inner_.write(command);
+  }
+  io::ActuatorCommand last = io::kSafeActuatorCommand;
+
+ private:
+  app::ActuatorSink& inner_;
+};
 }  // namespace
 
-ControllerNode::ControllerNode(KernelKind kind, ServoIo& io) : kind_(kind), io_(io) {
+struct ControllerNode::Servo {
+  Servo(CanServoIo& io, Kernel& kernel)
+      : sink(io.actuators()), loop(io.sensors(), sink, kernel, app::ServoConfig{}, app::ServoHooks{}) {}
+  RememberingSink sink;
+  // No cycle budget / deadline hooks on the host: lockstep has no wall-clock
+  // deadline, so tick_overrun stays false exactly as in a board tick that fits.
+  app::ServoLoop<Kernel> loop;
+};
+
+ControllerNode::ControllerNode(KernelKind kind, CanServoIo& io) : kind_(kind), io_(io) {
   if (kind == KernelKind::kFloat32) {
     kernel_ = std::make_unique<KernelImpl<float>>();
   } else {
     kernel_ = std::make_unique<KernelImpl<numeric::Q7_24>>();
   }
+  servo_ = std::make_unique<Servo>(io_, *kernel_);
 }
 
 ControllerNode::~ControllerNode() = default;
 
 bool ControllerNode::run_once(std::uint32_t timeout_us, bool stale_if_missing) {
-  io::SensorSample sample{};
-  const bool fresh = io_.read_sensors(sample, timeout_us);
+  const bool fresh = io_.port().wait(timeout_us);
   execute_pending();
-  const auto period_us = static_cast<std::uint32_t>(1e6 / io::stage::kServoRate_Hz);
-  const auto now_us = static_cast<std::uint32_t>(ticks_ * period_us);
-  if (ticks_ == 0) watchdog_.arm(now_us);
-  if (fresh) {
-    last_sample_ = sample;
-    have_sample_ = true;
-    watchdog_.feed(now_us);
-    ++link_.fresh_ticks;
-  } else {
-    if (!stale_if_missing || !have_sample_ || io_.stop_requested()) return false;
-    sample = last_sample_;
-    sample.status_flags = static_cast<std::uint16_t>(sample.status_flags | io::kStaleFrame);
-    if (link_.stale_ticks == 0) link_.first_stale_tick = static_cast<std::uint32_t>(ticks_);
-    ++link_.stale_ticks;
+  if (!fresh && (!stale_if_missing || ticks_ == 0 || io_.stop_requested())) return false;
+  const app::CanSensorStats before = io_.sensors().stats();
+  servo_->loop.on_tick();
+  const app::CanSensorStats& after = io_.sensors().stats();
+  const auto tick = static_cast<std::uint32_t>(ticks_);
+  link_.fresh_ticks += after.fresh - before.fresh;
+  if (after.stale != before.stale) {
+    if (link_.stale_ticks == 0) link_.first_stale_tick = tick;
+    link_.stale_ticks += after.stale - before.stale;
   }
-  io::ActuatorCommand cmd = kernel_->step(sample);
-  if (watchdog_.check(now_us)) {
-    if (link_.link_lost_ticks == 0) link_.first_link_lost_tick = static_cast<std::uint32_t>(ticks_);
-    ++link_.link_lost_ticks;
-    cmd = io::kSafeActuatorCommand;  // defence in depth below the supervisor
+  if (after.link_lost != before.link_lost) {
+    if (link_.link_lost_ticks == 0) link_.first_link_lost_tick = tick;
+    link_.link_lost_ticks += after.link_lost - before.link_lost;
   }
-  last_output_ = cmd;
-  if (fresh) io_.write_actuators(cmd);  // a stale tick answers no sensor frame
   io_.publish_status(kernel_->status());
   ++ticks_;
   return true;
@@ -217,6 +229,10 @@ void ControllerNode::execute_pending() {
     ++link_.host_commands;
   }
 }
+
+const io::ActuatorCommand& ControllerNode::last_output() const { return servo_->sink.last; }
+std::uint32_t ControllerNode::servo_ticks() const { return servo_->loop.state().ticks; }
+std::uint32_t ControllerNode::sensor_faults() const { return servo_->loop.state().sensor_faults; }
 
 double reference_si(const kernel::Pose64& r, int a) {
   // kernel::Axis order: x, y, theta_z, z, theta_x, theta_y.

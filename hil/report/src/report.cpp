@@ -74,14 +74,22 @@ bool write_trace_csv(const bench::Trace& t, const std::string& path, std::string
     const auto res = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, precision);
     row.append(buf, res.ptr);
   };
+  auto put_float = [&](double v) {
+    row += ',';
+    const auto res = std::to_chars(buf, buf + sizeof buf, static_cast<float>(v));
+    row.append(buf, res.ptr);
+  };
   for (std::size_t n = 0; n < t.size(); ++n) {
     row.clear();
     const auto res = std::to_chars(buf, buf + sizeof buf, t.t_s[n], std::chars_format::fixed, 4);
     row.append(buf, res.ptr);
     for (int i = 0; i < 6; ++i) put(t.pose[i][n], 12);
     for (int i = 0; i < 6; ++i) put(t.reference[i][n], 12);
-    for (int j = 0; j < 8; ++j) put(t.current_cmd_A[j][n], 6);
-    for (int j = 0; j < 8; ++j) put(t.current_A[j][n], 6);
+    // Currents: the shortest text that round-trips the value as a float
+    // (<= 9 significant digits, 0.1 uA resolution at amperes) -- Ryu's
+    // shortest float path is several times cheaper than a fixed precision.
+    for (int j = 0; j < 8; ++j) put_float(t.current_cmd_A[j][n]);
+    for (int j = 0; j < 8; ++j) put_float(t.current_A[j][n]);
     row += ',';
     const auto rs = std::to_chars(buf, buf + sizeof buf, t.state[n]);
     row.append(buf, rs.ptr);
@@ -91,15 +99,30 @@ bool write_trace_csv(const bench::Trace& t, const std::string& path, std::string
   return static_cast<bool>(f);
 }
 
+namespace {
+// How a measurement compares with the paper's figure. Noise, overshoot,
+// settling/peak times, tracking errors and CCQs are "smaller is better"
+// (ok when <= paper); loop figures (crossover, margins, bandwidths, peaks)
+// and measured step sizes are reproductions (ok within 20 %).
+std::string verdict(const std::string& k, double measured, double paper) {
+  static const char* kMatch[] = {"crossover", "phase_margin", "bandwidth", "_peak_dB", "_peak_Hz", "_measured_",
+                                 "levitation_time"};
+  for (const char* m : kMatch) {
+    if (k.find(m) != std::string::npos) {
+      const double rel = paper != 0.0 ? std::fabs(measured - paper) / std::fabs(paper) : std::fabs(measured);
+      return rel <= 0.20 ? "ok (within 20 %)" : "DIFFERS (> 20 %)";
+    }
+  }
+  return std::fabs(measured) <= std::fabs(paper) ? "ok (<= paper)" : "ABOVE paper";
+}
+}  // namespace
+
 std::string format_table(const bench::RunResult& r) {
   std::ostringstream o;
-  o << "  " << std::left << std::setw(52) << "metric" << std::right << std::setw(16) << "measured"
-    << std::setw(16) << "paper" << "\n";
-  auto row = [&](const std::string& k, double v) {
-    o << "  " << std::left << std::setw(52) << k << std::right << std::setw(16) << std::setprecision(5) << v;
-    const auto p = r.paper.find(k);
-    if (p != r.paper.end()) o << std::setw(16) << std::setprecision(5) << p->second;
-    o << "\n";
+  auto cell = [&](double v) {
+    std::ostringstream c;
+    c << std::setprecision(4) << v;
+    return c.str();
   };
   static const char* kHousekeeping[] = {"bus_frames", "ticks", "simulated_time_s", "missed_actuator_frames",
                                         "controller_rx_rejected_frames", "plant_rx_rejected_frames",
@@ -111,19 +134,34 @@ std::string format_table(const bench::RunResult& r) {
     }
     return false;
   };
+  // 1. Every metric the scenario compares with the paper, with a verdict.
+  if (!r.paper.empty()) {
+    o << "  vs the paper (SI units; the unit is the name's suffix)\n";
+    o << "  " << std::left << std::setw(50) << "metric" << std::right << std::setw(13) << "measured" << std::setw(13)
+      << "paper" << "  verdict\n";
+    for (const auto& [k, p] : r.paper) {
+      const auto m = r.metrics.find(k);
+      o << "  " << std::left << std::setw(50) << k << std::right;
+      if (m == r.metrics.end()) {
+        o << std::setw(13) << "(missing)" << std::setw(13) << cell(p) << "  not measured\n";
+      } else {
+        o << std::setw(13) << cell(m->second) << std::setw(13) << cell(p) << "  " << verdict(k, m->second, p)
+          << "\n";
+      }
+    }
+  }
+  // 2. The other metrics (no figure in the papers).
+  o << "  other metrics\n";
   for (const auto& [k, v] : r.metrics) {
-    if (!house(k)) row(k, v);
+    if (house(k) || r.paper.count(k)) continue;
+    o << "  " << std::left << std::setw(50) << k << std::right << std::setw(13) << cell(v) << "\n";
   }
-  for (const auto& [k, v] : r.paper) {
-    if (!r.metrics.count(k)) o << "  " << std::left << std::setw(52) << k << std::right << std::setw(16) << "(not measured)"
-                               << std::setw(16) << std::setprecision(5) << v << "\n";
-  }
-  o << "  " << std::left << std::setw(52) << "real_time_factor" << std::right << std::setw(16) << std::setprecision(4)
-    << r.real_time_factor << "\n";
-  o << "  " << std::left << std::setw(52) << "wall_time_per_tick_us" << std::right << std::setw(16)
-    << std::setprecision(4) << r.metrics.at("wall_time_per_tick_us") << "\n";
-  o << "  " << std::left << std::setw(52) << "bus_load_percent" << std::right << std::setw(16) << std::setprecision(4)
-    << r.bus_load_percent << "\n";
+  o << "  " << std::left << std::setw(50) << "real_time_factor (simulated s / wall s)" << std::right << std::setw(13)
+    << cell(r.real_time_factor) << "\n";
+  o << "  " << std::left << std::setw(50) << "wall_time_per_tick_us" << std::right << std::setw(13)
+    << cell(r.metrics.at("wall_time_per_tick_us")) << "\n";
+  o << "  " << std::left << std::setw(50) << "bus_load_percent" << std::right << std::setw(13)
+    << cell(r.bus_load_percent) << "\n";
   return o.str();
 }
 

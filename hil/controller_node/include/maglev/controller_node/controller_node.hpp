@@ -1,20 +1,26 @@
-// The host controller node of the HIL bench: the firmware kernel
-// (maglev::kernel::Controller<Scalar>) with its I/O over CAN frames.
+// The host controller node of the HIL bench: the firmware application
+// (firmware/app) -- app::ServoLoop over app::CanSensorSource /
+// app::CanActuatorSink, stepping maglev::kernel::Controller<Scalar> -- with
+// its I/O over CAN frames of the one catalog. "The same kernel and firmware
+// application code as on the board, with its I/O over CAN": the tick body,
+// the stale-frame / frame-watchdog policy, the zero-current preset and the
+// actuator-frame counter rule are the app's objects, not copies.
 //
-// firmware/app (the shared servo application with its BoardIo seam) did not
-// exist when this was written, so the node reproduces that seam here:
-//   ServoIo        -- what the servo loop needs from "the board": read this
-//                     tick's io::SensorSample, write its io::ActuatorCommand.
-//   CanServoIo     -- ServoIo over the CAN link: sensor + current-monitor
-//                     frames in (E2E-checked by a LinkReceiver), actuator frame
-//                     out with the answered sensor frame's counter, status and
-//                     heartbeat frames at their catalog rates.
-//   ControllerNode -- the servo application: on every accepted sensor frame,
-//                     one kernel step, one actuator frame. Commands come in
-//                     through command() (in-process bench) -- the CAN
-//                     host-command frame is not in the catalog yet.
-// When firmware/app lands, ControllerNode should become a thin wrapper around
-// it with CanServoIo as its BoardIo.
+// What the node adds around them (host-only, STL allowed):
+//   CanServoIo     -- the node's CAN front end. Its NodePort (a can::CanPort
+//                     adapter between the real port and the app) waits, with
+//                     a timeout, until an ACCEPTED sensor frame is queued,
+//                     takes host_command frames out of the stream (they are
+//                     the bench operator's channel, executed by the node
+//                     before the step, acknowledged with host_command_ack),
+//                     meters what the node sends, and hands everything else
+//                     to the app's CanSensorSource in arrival order. Also
+//                     sends controller_status (app::to_status_frame) and
+//                     heartbeat_controller at their catalog ticks.
+//   ControllerNode -- the kernel (float32 or Q7.24, chosen at run time) under
+//                     app::ServoLoop; run_once() = wait for the tick's sensor
+//                     frame, execute queued host commands, ServoLoop::on_tick(),
+//                     telemetry.
 #pragma once
 
 #include <cstdint>
@@ -22,7 +28,9 @@
 #include <memory>
 #include <string>
 
+#include "maglev/app/can_io.hpp"
 #include "maglev/can_link/bus_load.hpp"
+#include "maglev/can_link/codec.hpp"
 #include "maglev/can_link/receiver.hpp"
 #include "maglev/can_link/watchdog.hpp"
 #include "maglev/can_port/can_port.hpp"
@@ -37,63 +45,99 @@ const char* to_string(KernelKind k);
 // "float32" / "float" -> kFloat32, "q7.24" / "q7_24" / "fixed" -> kQ7_24.
 bool parse_kernel_kind(const std::string& s, KernelKind* out);
 
-// The BoardIo-shaped seam between the servo application and its I/O.
-class ServoIo {
+// can::CanPort between the node's real port and the app's CanSensorSource /
+// CanActuatorSink. Every received frame goes through ONE LinkReceiver here
+// (the node's receive-side statistics, as before: all frames, host commands
+// included). The app's own receiver sees the same frames in the same order
+// minus the host commands; E2E counters are per message, so its verdicts on
+// the frames it sees equal this one's -- which is what lets wait() know, before
+// the tick, whether the app will find a fresh sensor frame.
+class NodePort final : public can::CanPort {
  public:
-  virtual ~ServoIo() = default;
-  // Waits up to timeout_us for this tick's sensors. false: nothing (yet).
-  virtual bool read_sensors(io::SensorSample& sample, std::uint32_t timeout_us) = 0;
-  virtual void write_actuators(const io::ActuatorCommand& command) = 0;
-  // Telemetry after the step (decimated inside the transport).
-  virtual void publish_status(const kernel::ControllerStatus& status) = 0;
-  // Host commands received (in arrival order) and their acknowledgements.
-  // Commands that arrived before this tick's sensor frame are executed before
-  // its step: over CAN, exactly where the in-process bench applies them.
-  virtual bool next_host_command(can::HostCommandFrame& out) {
-    (void)out;
-    return false;
-  }
-  virtual void acknowledge(const can::HostCommandAckFrame& ack) { (void)ack; }
-  // A shutdown host command arrived (read_sensors returned early).
-  virtual bool stop_requested() const { return false; }
-};
+  NodePort(can::CanPort& port, can::BusLoadMeter* tx_meter) : port_(port), meter_(tx_meter) {}
 
-// ServoIo over one CanPort (virtual bus or SocketCAN).
-class CanServoIo final : public ServoIo {
- public:
-  explicit CanServoIo(can::CanPort& port, can::BusLoadMeter* tx_meter = nullptr);
-  bool read_sensors(io::SensorSample& sample, std::uint32_t timeout_us) override;
-  void write_actuators(const io::ActuatorCommand& command) override;
-  void publish_status(const kernel::ControllerStatus& status) override;
-  bool next_host_command(can::HostCommandFrame& out) override;
-  void acknowledge(const can::HostCommandAckFrame& ack) override;
-  bool stop_requested() const override { return stop_requested_; }
-  // Two-process start-up: one heartbeat_controller (node_state init) so the
-  // plant knows the controller's socket is open before it sends tick 0.
-  void announce();
-  const can::RxStats& rx_stats() const { return rx_.stats(); }
+  // Waits up to timeout_us for an accepted sensor frame, then moves whatever
+  // else is already queued into the app's queue without waiting (a late frame
+  // is then superseded by the newest, in the app). host_command frames go to
+  // the command queue; a shutdown command ends the wait at once.
+  // true: an accepted sensor frame is queued for the app.
+  bool wait(std::uint32_t timeout_us);
+  bool next_host_command(can::HostCommandFrame& out);
+  bool stop_requested() const { return stop_requested_; }
+
+  // can::CanPort, as the app sees it: receive() serves only what wait()
+  // queued (never blocks, never reads the real port: frames arriving during
+  // the tick belong to the next one, as on the board's FIFO snapshot).
+  can::PortStatus send(const can::CanFrame& frame) override;
+  can::PortStatus receive(can::CanFrame& frame, std::uint32_t timeout_us) override;
+  const can::PortCounters& counters() const override { return port_.counters(); }
+
+  const can::LinkReceiver& receiver() const { return rx_; }
   std::uint32_t tx_errors() const { return tx_errors_; }
-  // Accepted sensor frames replaced by a newer one in the same read.
-  std::uint32_t superseded() const { return superseded_; }
 
  private:
-  void send(const can::CanFrame& f);
+  struct Queued {
+    can::CanFrame frame;
+    bool accepted_sensor;
+  };
   can::CanPort& port_;
   can::BusLoadMeter* meter_;
   can::LinkReceiver rx_;
-  std::uint8_t last_sensor_counter_ = 0;
-  std::int16_t coil_current_adc_[io::kCoils] = {};
+  std::deque<Queued> queue_;
+  std::uint32_t queued_sensor_frames_ = 0;
+  std::deque<can::HostCommandFrame> commands_;
+  bool stop_requested_ = false;
+  std::uint32_t tx_errors_ = 0;
+};
+
+// The node's CAN I/O: NodePort + the app's CanSensorSource/CanActuatorSink +
+// telemetry and host-command acknowledgements.
+class CanServoIo {
+ public:
+  explicit CanServoIo(can::CanPort& port, can::BusLoadMeter* tx_meter = nullptr);
+  CanServoIo(const CanServoIo&) = delete;
+  CanServoIo& operator=(const CanServoIo&) = delete;
+
+  // The app's servo-side objects (ServoLoop's SensorSource / ActuatorSink).
+  app::CanSensorSource& sensors() { return sensors_; }
+  const app::CanSensorSource& sensors() const { return sensors_; }
+  app::CanActuatorSink& actuators() { return actuators_; }
+  NodePort& port() { return port_; }
+
+  // Two-process start-up: one heartbeat_controller (node_state init) so the
+  // plant knows the controller's socket is open before it sends tick 0.
+  void announce();
+  // After each servo tick: controller_status every kControllerStatusPeriodTicks
+  // ticks (app::to_status_frame), heartbeat_controller every
+  // kHeartbeatPeriodTicks -- on ticks 10, 20, ... and 250, 500, ...
+  void publish_status(const kernel::ControllerStatus& status);
+  void acknowledge(const can::HostCommandAckFrame& ack);
+  bool next_host_command(can::HostCommandFrame& out) { return port_.next_host_command(out); }
+  // A shutdown host command arrived (run_once returned early).
+  bool stop_requested() const { return port_.stop_requested(); }
+
+  // Every frame the node received, through one LinkReceiver.
+  const can::RxStats& rx_stats() const { return port_.receiver().stats(); }
+  std::uint32_t tx_errors() const { return port_.tx_errors(); }
+  // Accepted sensor frames replaced by a newer one in the same tick (the app's count).
+  std::uint32_t superseded() const { return sensors_.stats().superseded; }
+
+ private:
+  void send(const can::CanFrame& f) { (void)port_.send(f); }
+  NodePort port_;
+  app::CanSensorSource sensors_;
+  app::CanActuatorSink actuators_;
   std::uint32_t ticks_ = 0;
   std::uint8_t status_counter_ = 0;
   std::uint8_t heartbeat_counter_ = 0;
   std::uint8_t ack_counter_ = 0;
-  std::uint32_t tx_errors_ = 0;
-  std::uint32_t superseded_ = 0;
-  std::deque<can::HostCommandFrame> commands_;
-  bool stop_requested_ = false;
 };
 
-// Counters of the node's link supervision (lockstep clock: tick * period).
+// Former name of the node's I/O seam (now app::SensorSource/ActuatorSink).
+using ServoIo = CanServoIo;
+
+// Counters of the node's link supervision (lockstep clock: tick * period),
+// from app::CanSensorSource's statistics.
 struct NodeLinkStats {
   std::uint32_t fresh_ticks = 0;     // stepped on a sensor frame accepted this tick
   std::uint32_t stale_ticks = 0;     // stepped on the previous sample, io::kStaleFrame set
@@ -103,21 +147,24 @@ struct NodeLinkStats {
   std::uint32_t host_commands = 0;   // host commands executed (acked)
 };
 
-// The servo application on the kernel, for either Scalar.
+// The firmware servo application on the kernel, for either Scalar.
 class ControllerNode {
  public:
-  ControllerNode(KernelKind kind, ServoIo& io);
+  ControllerNode(KernelKind kind, CanServoIo& io);
   ~ControllerNode();
   ControllerNode(const ControllerNode&) = delete;
   ControllerNode& operator=(const ControllerNode&) = delete;
 
-  // One servo tick if sensors arrive within timeout_us: read, execute the
-  // host commands that came before the sensor frame, step, write.
-  // stale_if_missing (lockstep, the plant's tick is known to be due): no
-  // accepted sensor frame -> step on the previous sample flagged
-  // io::kStaleFrame (the supervisor latches kStaleFrames on the 3rd), send no
-  // actuator frame (nothing to answer), and once the SensorFrameWatchdog
-  // (1.2 ms = 3 periods) expired force io::kSafeActuatorCommand.
+  // One servo tick if an accepted sensor frame arrives within timeout_us:
+  // execute the host commands that came with/before it, ServoLoop::on_tick()
+  // (CanSensorSource::read -> Controller::step -> CanActuatorSink::write),
+  // telemetry. stale_if_missing (lockstep, the plant's tick is known to be
+  // due): no accepted sensor frame -> the tick runs anyway and the app
+  // handles it: previous sample flagged io::kStaleFrame (the supervisor
+  // latches kStaleFrames on the 3rd), no actuator frame, and once the
+  // SensorFrameWatchdog (1.2 ms = 3 periods) expired read() fails, so
+  // ServoLoop adds io::kAdcFault and writes io::kSafeActuatorCommand.
+  // No tick before the first sensor frame, none after a shutdown command.
   // Returns true if a tick ran.
   bool run_once(std::uint32_t timeout_us, bool stale_if_missing = false);
 
@@ -125,9 +172,12 @@ class ControllerNode {
   // result is a kernel::CommandResult value or can::kHostResultNotExecuted.
   std::uint8_t execute(const can::HostCommandFrame& cmd);
   const NodeLinkStats& link_stats() const { return link_; }
-  const can::SensorFrameWatchdog& sensor_watchdog() const { return watchdog_; }
-  // Last actuator command the kernel path produced (after the watchdog).
-  const io::ActuatorCommand& last_output() const { return last_output_; }
+  const can::SensorFrameWatchdog& sensor_watchdog() const { return io_.sensors().watchdog(); }
+  // Last actuator command ServoLoop wrote (safe preset applied), sent or not.
+  const io::ActuatorCommand& last_output() const;
+  // ServoLoop's own counters (ticks, overruns, sensor_faults = link-lost ticks).
+  std::uint32_t servo_ticks() const;
+  std::uint32_t sensor_faults() const;
 
   kernel::CommandResult command(const kernel::MotionCommand& cmd);
   kernel::ConfigError apply_config(const kernel::KernelConfig& config);
@@ -136,19 +186,17 @@ class ControllerNode {
   KernelKind kind() const { return kind_; }
   std::uint64_t ticks() const { return ticks_; }
 
-  struct Kernel;  // type-erased Controller<float> / Controller<Q7_24>
+  struct Kernel;  // type-erased Controller<float> / Controller<Q7_24>, step(sample, overrun)
+  struct Servo;   // app::ServoLoop<Kernel> + the sink that remembers the last output
 
  private:
-  KernelKind kind_;
-  ServoIo& io_;
-  std::unique_ptr<Kernel> kernel_;
-  std::uint64_t ticks_ = 0;
   void execute_pending();
-  io::SensorSample last_sample_{};
-  bool have_sample_ = false;
-  can::SensorFrameWatchdog watchdog_{};
+  KernelKind kind_;
+  CanServoIo& io_;
+  std::unique_ptr<Kernel> kernel_;
+  std::unique_ptr<Servo> servo_;
+  std::uint64_t ticks_ = 0;
   NodeLinkStats link_{};
-  io::ActuatorCommand last_output_ = io::kSafeActuatorCommand;
 };
 
 // The MotionCommand a host command means, given the present reference
