@@ -33,6 +33,45 @@ def scaled(values, rotation):
     return values, "rad" if rotation else "m"
 
 
+def small_steps(run_dir, primary, d, col, sl):
+    """Times of up to 4 'step' commands on the primary axis that are < 2 % of
+    the plotted span (invisible at full scale)."""
+    path = os.path.join(run_dir, "commands.txt")
+    if not os.path.exists(path):
+        return []
+    names = {primary, {"theta_x": "thx", "theta_y": "thy", "theta_z": "thz"}.get(primary, primary)}
+    times = []
+    with open(path) as f:
+        for line in f:
+            p = line.split()
+            if len(p) >= 4 and p[1] == "step" and p[2] in names and "accepted" in line:
+                times.append(float(p[0]))
+    v = d[col[primary]][sl]
+    span = float(np.nanmax(v) - np.nanmin(v)) if v.size else 0.0
+    out = []
+    for ts in times:
+        i = np.searchsorted(d["t_s"], ts)
+        j = min(i + 500, d.size - 1)
+        size = abs(float(d[col[primary].replace("_m", "_ref_m").replace("_rad", "_ref_rad")][j]) -
+                   float(d[col[primary].replace("_m", "_ref_m").replace("_rad", "_ref_rad")][max(i - 1, 0)]))
+        if span > 0 and size < 0.02 * span:
+            out.append(ts)
+    return out[:4]
+
+
+def zoom(ax, d, t, c, r, ts, rot):
+    m = (t >= ts - 0.1) & (t < ts + 0.25)
+    y, u = scaled(np.concatenate([d[c][m], d[r][m]]), rot)
+    n = int(m.sum())
+    base = y[n:][0]
+    ax.plot(t[m] - ts, y[:n] - base, lw=0.6)
+    ax.plot(t[m] - ts, y[n:] - base, lw=0.8, ls="--", color="k")
+    ax.set_title(f"step at {ts:g} s ({u})", fontsize=7)
+    ax.set_xlabel("t - t_step (s)", fontsize=7)
+    ax.tick_params(labelsize=6)
+    ax.grid(True, lw=0.3)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("run_dir")
@@ -52,12 +91,25 @@ def main():
     col = {a2: (a2 + ("_rad" if a2.startswith("theta") else "_m")) for a2 in AXES}
     ref = {a2: (a2 + ("_ref_rad" if a2.startswith("theta") else "_ref_m")) for a2 in AXES}
     rot = a.primary.startswith("theta")
-    ax0 = fig.add_subplot(gs[:, 0])
+    # Steps on the primary axis that the full-scale panel cannot show (a 10 nm
+    # step beside a 6 mm circle) get zoom panels below it: +-0.1 s around each.
+    steps = small_steps(a.run_dir, a.primary, d, col, sl)
+    if steps:
+        sub = gs[:, 0].subgridspec(2, len(steps), height_ratios=[2.2, 1.0], hspace=0.35, wspace=0.35)
+        ax0 = fig.add_subplot(sub[0, :])
+        for k, ts in enumerate(steps):
+            zoom(fig.add_subplot(sub[1, k]), d, t, col[a.primary], ref[a.primary], ts, rot)
+    else:
+        ax0 = fig.add_subplot(gs[:, 0])
     y = d[col[a.primary]][sl]
     r = d[ref[a.primary]][sl]
     both, unit = scaled(np.concatenate([y, r]), rot)
     n = y.size
     ax0.plot(t[sl], both[:n], lw=0.7, label="measured")
+    if n > 25 and np.std(both[:n] - both[n:]) > 0.02 * (np.ptp(both[n:]) + 1e-30):
+        # Noise-dominated primary (e.g. 0.1 urad steps): also its 10 ms average.
+        avg = np.convolve(both[:n], np.ones(25) / 25.0, mode="same")
+        ax0.plot(t[sl][12:-12], avg[12:-12], lw=0.9, color="C3", label="measured, 10 ms avg")
     ax0.plot(t[sl], both[n:], lw=0.9, ls="--", color="k", label="reference")
     ax0.set_xlabel("time (s)")
     ax0.set_ylabel(f"{LABEL[a.primary]} ({unit})")
@@ -68,7 +120,14 @@ def main():
         ax = fig.add_subplot(gs[i, 1])
         v = d[col[a2]][sl]
         vs, u2 = scaled(v - np.mean(v), a2.startswith("theta"))
-        ax.plot(t[sl], vs, lw=0.5, color="C1")
+        # Raw samples (light; per-sample sensor noise) and their 10 ms moving
+        # average (dark; what the loops can resolve, ~50 Hz noise bandwidth).
+        ax.plot(t[sl], vs, lw=0.4, color="C1", alpha=0.45, label="raw")
+        if vs.size > 25:
+            avg = np.convolve(vs, np.ones(25) / 25.0, mode="same")
+            ax.plot(t[sl][12:-12], avg[12:-12], lw=0.7, color="C3", label="10 ms avg")
+        if i == 0:
+            ax.legend(fontsize=6, loc="upper right", ncol=2)
         ax.set_ylabel(f"{LABEL[a2]} ({u2})", fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(True, lw=0.3)
@@ -83,7 +142,7 @@ def main():
         axc.plot(t, d[f"i{j + 1}_A"], lw=0.5, color=f"C{j}", label=f"i{j + 1}")
         axc.plot(t, d[f"i{j + 1}_cmd_A"], lw=0.5, ls="--", color=f"C{j}")
     axc.set_ylabel("coil current (A)\n(solid actual, dashed commanded)")
-    axc.legend(ncol=8, fontsize=7, loc="upper left")
+    axc.legend(ncol=8, fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.0), frameon=False)
     axc.grid(True, lw=0.3)
     axs.step(t, d["state"], where="post", lw=0.8)
     axs.set_yticks(range(len(STATES)))
