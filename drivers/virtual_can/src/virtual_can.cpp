@@ -103,8 +103,13 @@ PortStatus VirtualCanPort::send(const CanFrame& frame) {
 
 PortStatus VirtualCanPort::receive(CanFrame& frame, std::uint32_t timeout_us) {
   std::unique_lock<std::mutex> lock(bus_->mu_);
-  const bool got = bus_->cv_.wait_for(lock, std::chrono::microseconds(timeout_us),
-                                      [this] { return !rx_.empty(); });
+  // A zero timeout is a poll: no condition-variable wait at all (a timed
+  // futex wait, even an expired one, costs a syscall plus the kernel's 50 us
+  // timer slack -- it was most of a lockstep HIL tick's wall time).
+  const bool got = (timeout_us == 0 || !rx_.empty())
+                       ? !rx_.empty()
+                       : bus_->cv_.wait_for(lock, std::chrono::microseconds(timeout_us),
+                                            [this] { return !rx_.empty(); });
   if (!got) {
     ++counters_.rx_timeouts;
     return PortStatus::kTimeout;

@@ -146,6 +146,25 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
     sides_[idx].quarter_turns =
         static_cast<int>(std::nearbyint((sides_[idx].r_body_m[ax] - ref.r_body_m[ax]) / (pitch / 4.0)));
   }
+  for (std::size_t idx = 0; idx < sides_.size(); ++idx) {
+    const CoilSide& cs = sides_[idx];
+    SideConstants& c = side_constants_[idx];
+    for (int a = 0; a < 3; ++a) c.rb[a] = cs.r_body_m[a];
+    c.ux = cs.u_body.x();
+    c.uy = cs.u_body.y();
+    static constexpr double kQc[4] = {1.0, 0.0, -1.0, 0.0};
+    static constexpr double kQs[4] = {0.0, 1.0, 0.0, -1.0};
+    c.qc = kQc[cs.quarter_turns & 3];
+    c.qs = kQs[cs.quarter_turns & 3];
+    c.q_half_pi = cs.quarter_turns * (kPi / 2.0);
+    c.sel_x = cs.array_axis == 0 ? 1.0 : 0.0;
+    c.sel_y = cs.array_axis == 0 ? 0.0 : 1.0;
+    c.eps_t_x = c.sel_x * config.forcer_errors.epsilon_tangential[cs.forcer];
+    c.eps_t_y = c.sel_y * config.forcer_errors.epsilon_tangential[cs.forcer];
+    c.eps_z = config.forcer_errors.epsilon_off_axis_z[cs.forcer];
+    c.ax = cs.array_axis;
+    c.coil = cs.coil;
+  }
   for (int f = 0; f < kForcers; ++f) {
     if (config.forcer_errors.epsilon_tangential[f] != 0.0 || config.forcer_errors.epsilon_off_axis_z[f] != 0.0) {
       forcer_errors_active_ = true;
@@ -281,14 +300,16 @@ void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* ac
   // (R a x R b = R (a x b)); only the round-off differs.
   const double gamma1 = field_.gamma1_per_m();
   const double rest_gap = config_.field.rest_gap_m;
+  const double* amp = field_.side_amplitudes_T();
+  const int harmonics = field_.harmonics();
   const double(&r)[3][3] = k.r;
   double fb[3] = {0.0, 0.0, 0.0};  // platen-frame force sum
   double tb[3] = {0.0, 0.0, 0.0};  // platen-frame torque sum (about the CoM)
   double ref_s = 0.0, ref_gap = 0.0, ref_sin = 0.0, ref_cos = 1.0, ref_exp = 1.0;
-  for (std::size_t idx = 0; idx < sides_.size(); ++idx) {
-    const CoilSide& cs = sides_[idx];
-    const double* rb = cs.r_body_m.data();
-    const int ax = cs.array_axis;
+  for (std::size_t idx = 0; idx < side_constants_.size(); ++idx) {
+    const SideConstants& c = side_constants_[idx];
+    const double* rb = c.rb;
+    const int ax = c.ax;
     // World coordinate along the array axis and air gap of the side midpoint.
     const double s = k.p[ax] + (r[ax][0] * rb[0] + r[ax][1] * rb[1] + r[ax][2] * rb[2]);
     const double gap = rest_gap + k.p[2] + (r[2][0] * rb[0] + r[2][1] * rb[1] + r[2][2] * rb[2]) - rb[2];
@@ -304,42 +325,53 @@ void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* ac
       exp1 = ref_exp;
     } else {
       // theta = theta_ref + q pi/2 + eps: exact quarter turns, then eps.
-      double sq = ref_sin, cq = ref_cos;
-      switch (cs.quarter_turns & 3) {
-        case 1: sq = ref_cos; cq = -ref_sin; break;
-        case 2: sq = -ref_sin; cq = -ref_cos; break;
-        case 3: sq = -ref_cos; cq = ref_sin; break;
-        default: break;
-      }
-      const double eps = gamma1 * (s - ref_s) - cs.quarter_turns * (io::stage::kPi / 2.0);
+      const double sq = ref_sin * c.qc + ref_cos * c.qs;
+      const double cq = ref_cos * c.qc - ref_sin * c.qs;
+      const double eps = gamma1 * (s - ref_s) - c.q_half_pi;
       double se, ce;
       SmallSinCos(eps, &se, &ce);
       sin1 = sq * ce + cq * se;
       cos1 = cq * ce - sq * se;
       exp1 = ref_exp * SmallExp(-gamma1 * (gap - ref_gap));
     }
-    const FieldSZ b = field_.SideAverageFieldFrom(sin1, cos1, exp1);
+    FieldSZ b;
+    if (harmonics == 4) {  // the default n = 1, 5, 9, 13, unrolled
+      const double s2 = 2.0 * sin1 * cos1;
+      const double c2 = cos1 * cos1 - sin1 * sin1;
+      const double s4 = 2.0 * s2 * c2;
+      const double c4 = c2 * c2 - s2 * s2;
+      const double e2 = exp1 * exp1;
+      const double e4 = e2 * e2;
+      const double s5 = sin1 * c4 + cos1 * s4, c5 = cos1 * c4 - sin1 * s4, e5 = exp1 * e4;
+      const double s9 = s5 * c4 + c5 * s4, c9 = c5 * c4 - s5 * s4, e9 = e5 * e4;
+      const double s13 = s9 * c4 + c9 * s4, c13 = c9 * c4 - s9 * s4, e13 = e9 * e4;
+      b.b_s_T = amp[0] * exp1 * sin1 + amp[1] * e5 * s5 + amp[2] * e9 * s9 + amp[3] * e13 * s13;
+      b.b_z_T = amp[0] * exp1 * cos1 + amp[1] * e5 * c5 + amp[2] * e9 * c9 + amp[3] * e13 * c13;
+    } else {
+      b = field_.SideAverageFieldFrom(sin1, cos1, exp1);
+    }
     // Field in the platen frame: R^T (B_s e_ax + B_z e_z).
     const double bb0 = b.b_s_T * r[ax][0] + b.b_z_T * r[2][0];
     const double bb1 = b.b_s_T * r[ax][1] + b.b_z_T * r[2][1];
     const double bb2 = b.b_s_T * r[ax][2] + b.b_z_T * r[2][2];
     // F = N p I (u x B); u lies in the platen plane (u_z = 0).
-    const double scale = side_force_per_A_ * currents_A[cs.coil];
-    const double ux = cs.u_body.x();
-    const double uy = cs.u_body.y();
-    double f[3] = {scale * (uy * bb2), scale * (-ux * bb2), scale * (ux * bb1 - uy * bb0)};
-    if (forcer_errors_active_) {
-      // Paper 003: F_t -> F_t (1 + eps_t), dF_z = eps_z F_t (platen frame).
-      const double ft = f[ax];
-      f[ax] += config_.forcer_errors.epsilon_tangential[cs.forcer] * ft;
-      f[2] += config_.forcer_errors.epsilon_off_axis_z[cs.forcer] * ft;
-    }
-    fb[0] += f[0];
-    fb[1] += f[1];
-    fb[2] += f[2];
-    tb[0] += rb[1] * f[2] - rb[2] * f[1];
-    tb[1] += rb[2] * f[0] - rb[0] * f[2];
-    tb[2] += rb[0] * f[1] - rb[1] * f[0];
+    const double scale = side_force_per_A_ * currents_A[c.coil];
+    double f0 = scale * (c.uy * bb2);
+    double f1 = scale * (-c.ux * bb2);
+    double f2 = scale * (c.ux * bb1 - c.uy * bb0);
+    // Paper 003: F_t -> F_t (1 + eps_t), dF_z = eps_z F_t (platen frame).
+    // Branch-free in registers: the selectors are exact 0/1 (the tangential
+    // axis is X' or Y'), eps = 0 when the errors are off (exact no-ops).
+    const double ft = c.sel_x * f0 + c.sel_y * f1;
+    f0 += c.eps_t_x * ft;
+    f1 += c.eps_t_y * ft;
+    f2 += c.eps_z * ft;
+    fb[0] += f0;
+    fb[1] += f1;
+    fb[2] += f2;
+    tb[0] += rb[1] * f2 - rb[2] * f1;
+    tb[1] += rb[2] * f0 - rb[0] * f2;
+    tb[2] += rb[0] * f1 - rb[1] * f0;
   }
   for (int a = 0; a < 3; ++a) {
     acc->f[a] += r[a][0] * fb[0] + r[a][1] * fb[1] + r[a][2] * fb[2];
@@ -375,6 +407,13 @@ void Plant::AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* 
     return;
   }
   const double c = config_.contact.corner_half_size_m;
+  // Levitated: the lowest corner is clearly above the surface (a lower bound
+  // of the four heights below, with a 1 pm margin for round-off) -> no
+  // contact, exactly what the corner loop would find.
+  const double lowest = k.p[2] - c * (std::fabs(k.r[2][0]) + std::fabs(k.r[2][1])) - com_arm_m_ * (k.r[2][2] - 1.0);
+  if (lowest > 1e-12) {
+    return;
+  }
   const double corners[4][2] = {{c, c}, {-c, c}, {-c, -c}, {c, -c}};
   for (const auto& corner : corners) {
     const Eigen::Vector3d rb(corner[0], corner[1], -com_arm_m_);

@@ -80,6 +80,8 @@ class HalbachField {
   double C1(double gap_m) const;
 
   double peak_magnetization_A_per_m() const { return m0_; }
+  // Side-averaged amplitude of each harmonic (T), in SumHarmonicsFrom order.
+  const double* side_amplitudes_T() const { return side_amp_; }
   double gamma1_per_m() const { return gamma1_; }
   int harmonics() const { return harmonics_; }
 

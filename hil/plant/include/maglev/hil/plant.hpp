@@ -166,6 +166,20 @@ class Plant {
   mutable PlantState truth_;
   mutable bool truth_wrench_stale_ = true;
   std::array<CoilSide, 2 * kCoils> sides_{};
+  // The same sides as flat constants for the force loop: no Eigen, no
+  // branches (the quarter-turn rotation as exact 0/+-1 factors).
+  struct SideConstants {
+    double rb[3];        // r_body_m
+    double ux, uy;       // u_body (u_z = 0)
+    double qc, qs;       // cos, sin of quarter_turns * pi/2 (exactly 0 or +-1)
+    double q_half_pi;    // quarter_turns * pi/2
+    double sel_x, sel_y;      // 1 for the tangential axis (X' or Y'), else 0
+    double eps_t_x, eps_t_y;  // the forcer's paper-003 tangential error on X' / Y'
+    double eps_z;             // its off-axis vertical error
+    int ax;
+    int coil;
+  };
+  std::array<SideConstants, 2 * kCoils> side_constants_{};
   bool forcer_errors_active_ = false;
 
   double mass_;
