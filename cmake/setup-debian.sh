@@ -27,7 +27,9 @@ PACKAGES=(
   # scripts and plots
   python3 python3-matplotlib python3-numpy
   # SocketCAN VM: initramfs building, serial/socket plumbing, kernel modules
-  busybox-static cpio socat kmod
+  busybox-static cpio socat kmod xz-utils bc
+  # apt-get source (CppUTest sources for the on-target kernel suites)
+  dpkg-dev
   # analysis: clang (+ its sanitizer runtimes), valgrind
   clang libclang-rt-14-dev valgrind
 )
