@@ -648,6 +648,21 @@ void compute_metrics(const scenario::Scenario& sc, const std::vector<Action>& ac
 }  // namespace
 
 // ------------------------------------------------------------------------ run
+// Real-time mode: deadline misses, and the wake-up lateness as a histogram
+// (one metric per bin of can::JitterHistogram, upper edge in the name).
+static void add_realtime_metrics(const can::PeriodicTimer& timer, std::map<std::string, double>* M) {
+  const can::JitterHistogram& j = timer.jitter();
+  (*M)["realtime_deadline_misses"] = static_cast<double>(timer.deadline_misses());
+  (*M)["realtime_max_lateness_us"] = static_cast<double>(j.max_ns) * 1e-3;
+  (*M)["realtime_mean_lateness_us"] = j.samples > 0 ? j.sum_ns * 1e-3 / static_cast<double>(j.samples) : 0.0;
+  for (std::size_t b = 0; b < j.counts.size(); ++b) {
+    const std::string name = b < can::JitterHistogram::kEdges_us.size()
+                                 ? "realtime_lateness_le_" + std::to_string(can::JitterHistogram::kEdges_us[b]) + "us_ticks"
+                                 : "realtime_lateness_gt_" + std::to_string(can::JitterHistogram::kEdges_us.back()) + "us_ticks";
+    (*M)[name] = static_cast<double>(j.counts[b]);
+  }
+}
+
 std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt, std::vector<ScenarioError>* errors) {
   std::vector<ScenarioError> errs = validate(sc);
   Overrides ov;
@@ -903,10 +918,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   M["final_sequencer_state"] = static_cast<double>(static_cast<int>(node.status().state));
   M["fault_code"] = static_cast<double>(static_cast<int>(node.status().fault));
   M["completed"] = R.completed ? 1.0 : 0.0;
-  if (timer) {
-    M["realtime_deadline_misses"] = static_cast<double>(timer->deadline_misses());
-    M["realtime_max_lateness_us"] = static_cast<double>(timer->jitter().max_ns) * 1e-3;
-  }
+  if (timer) add_realtime_metrics(*timer, &M);
   compute_metrics(sc, actions, tr, excitations, levitate_t, ready_t, &M, &R.warnings);
   return R;
 }
@@ -1216,10 +1228,7 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
   M["fault_code"] = static_cast<double>(rh.fault);
   M["completed"] = R.completed ? 1.0 : 0.0;
   M["host_commands_acked"] = static_cast<double>(R.commands.size() - pending.size());
-  if (paced) {
-    M["realtime_deadline_misses"] = static_cast<double>(timer.deadline_misses());
-    M["realtime_max_lateness_us"] = static_cast<double>(timer.jitter().max_ns) * 1e-3;
-  }
+  if (paced) add_realtime_metrics(timer, &M);
   compute_metrics(sc, actions, tr, {}, levitate_t, ready_t, &M, &R.warnings);
   if (!pending.empty()) R.warnings.push_back(std::to_string(pending.size()) + " host command(s) never acknowledged");
   return R;
