@@ -118,7 +118,7 @@ bool write_trace_csv(const bench::Trace& t, const std::string& path, std::string
 namespace {
 // How a measurement compares with the paper's figure. Noise, overshoot,
 // settling/peak times, tracking errors and CCQs are "smaller is better"
-// (ok when <= paper; rest noise <= 1.2 x paper); loop figures (crossover, margins, bandwidths, peaks)
+// (ok when <= paper); loop figures (crossover, margins, bandwidths, peaks)
 // and measured step sizes are reproductions (ok within 20 %).
 std::string verdict(const std::string& k, double measured, double paper) {
   static const char* kMatch[] = {"crossover", "phase_margin", "bandwidth", "_peak_dB", "_peak_Hz", "_measured_",
@@ -128,11 +128,6 @@ std::string verdict(const std::string& k, double measured, double paper) {
       const double rel = paper != 0.0 ? std::fabs(measured - paper) / std::fabs(paper) : std::fabs(measured);
       return rel <= 0.20 ? "ok (within 20 %)" : "DIFFERS (> 20 %)";
     }
-  }
-  if (k.find("_rms_noise_") != std::string::npos) {
-    // The rest noise is what the bench's noise model is identified from
-    // (docs/BENCH.md): seed-to-seed spread of a 0.5 s window is ~10 %.
-    return std::fabs(measured) <= 1.2 * std::fabs(paper) ? "ok (<= 1.2 x paper)" : "ABOVE paper";
   }
   return std::fabs(measured) <= std::fabs(paper) ? "ok (<= paper)" : "ABOVE paper";
 }

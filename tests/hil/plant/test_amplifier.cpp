@@ -128,14 +128,14 @@ NoiseStats MeasureNoise(const PlantConfig& c, std::int16_t code, int coil) {
 }  // namespace
 
 TEST(PlantAmplifier, ForceNoiseIsTheIdentifiedInBandDensity) {
-  // Default noise model: white additive force noise, 12 uA/sqrt(Hz) over the
-  // 1250 Hz band of per-tick samples = 0.424 mA per tick, at any current.
+  // Default noise model: white additive force noise, 10 uA/sqrt(Hz) over the
+  // 1250 Hz band of per-tick samples = 0.354 mA per tick, at any current.
   PlantConfig c = Floating();
   const PlantConfig d = PlantConfig::Default();
   c.amplifier.current_noise_density_A_per_rtHz = d.amplifier.current_noise_density_A_per_rtHz;
   c.amplifier.current_noise_scale = 1.0;
-  DOUBLES_EQUAL(12e-6, d.amplifier.current_noise_density_A_per_rtHz, 1e-15);
-  const double expected = 12e-6 * std::sqrt(1250.0);
+  DOUBLES_EQUAL(10e-6, d.amplifier.current_noise_density_A_per_rtHz, 1e-15);
+  const double expected = 10e-6 * std::sqrt(1250.0);
   DOUBLES_EQUAL(expected, maglev::hil::ForceNoiseStd_A(c.amplifier), 1e-12);
   for (const std::int16_t code : {std::int16_t{0}, std::int16_t{1399}, std::int16_t{14000}}) {  // 0, 213 mA, 2.14 A
     const NoiseStats st = MeasureNoise(c, code, 4);

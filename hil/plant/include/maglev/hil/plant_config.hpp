@@ -114,7 +114,7 @@ struct AmplifierConfig {
   // loop), std = density * sqrt(bandwidth) * scale. The density is an
   // IDENTIFICATION: the value that gives paper 000's measured 3 nm rms x
   // rest noise under the paper's gains (eq 27) on this bench.
-  double current_noise_density_A_per_rtHz = 12.0e-6;
+  double current_noise_density_A_per_rtHz = 10.0e-6;
   double current_noise_bandwidth_Hz = 0.5 * io::stage::kServoRate_Hz;  // one-sided band of per-tick samples
   double current_noise_scale = 1.0;  // multiplier on the density (scenario key; 0 = off)
   double monitor_gain_V_per_A = io::stage::kCurrentMonitorGain_V_per_A;
