@@ -32,6 +32,10 @@ void CanSensorSource::handle(const can::CanFrame& frame, std::uint32_t now_us, b
   } else if (m == &can::message(can::MessageKind::kHeartbeatPlant)) {
     can::decode_heartbeat(frame, heartbeat_);
     ++stats_.heartbeats;
+  } else if (m == &can::message(can::MessageKind::kHostCommand)) {
+    can::HostCommandFrame hc{};
+    can::decode_host_command(frame, hc);
+    if (host_commands_.push(hc)) ++stats_.host_commands;
   } else {
     ++stats_.ignored;
   }

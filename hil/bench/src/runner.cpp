@@ -10,6 +10,7 @@
 #include <csignal>
 #include <memory>
 
+#include "maglev/app/host_command.hpp"
 #include "maglev/bench/units.hpp"
 #include "maglev/can_link/bus_load.hpp"
 #include "maglev/can_link/catalog.hpp"
@@ -397,33 +398,6 @@ double pose_si(const kernel::Pose64& p, int i) {
   return static_cast<double>(v[i]) * 1e-12;
 }
 
-MotionCommand to_command(const Action& a, double now_ref) {
-  MotionCommand c;
-  c.axis = kernel_axis(a.axis);
-  switch (a.verb) {
-    case Verb::kLevitate: c.type = MotionType::kLevitate; break;
-    case Verb::kLand: c.type = MotionType::kLand; break;
-    case Verb::kStop: c.type = MotionType::kStop; break;
-    case Verb::kHome: c.type = MotionType::kHome; break;
-    case Verb::kClearFault: c.type = MotionType::kClearFault; break;
-    case Verb::kHold: c.type = MotionType::kHold; break;
-    case Verb::kStep: c.type = MotionType::kStep; c.target = a.a0; break;
-    case Verb::kMove:
-      c.type = MotionType::kMoveTo; c.target = now_ref + a.a0; c.velocity = a.a1; c.acceleration = a.a2; break;
-    case Verb::kMoveTo:
-      c.type = MotionType::kMoveTo; c.target = a.a0; c.velocity = a.a1; c.acceleration = a.a2; break;
-    case Verb::kMoveJerk:
-      c.type = MotionType::kMoveJerkLimited; c.target = now_ref + a.a0; c.velocity = a.a1;
-      c.acceleration = a.a2; c.jerk = a.a3; break;
-    case Verb::kCircle:
-      c.type = MotionType::kCircle; c.diameter_m = a.a0; c.period_s = a.a1; c.turns = a.a2; break;
-    case Verb::kSinusoid:
-      c.type = MotionType::kSinusoid; c.amplitude = a.a0; c.frequency_Hz = a.a1; c.period_s = a.a2; break;
-    case Verb::kExcite: break;
-  }
-  return c;
-}
-
 // The streamed fallback reference offset (relative to its start) at time t.
 void streamed_offset(const Streamed& s, double t, double out[6]) {
   for (int i = 0; i < 6; ++i) out[i] = 0.0;
@@ -645,6 +619,151 @@ void compute_metrics(const scenario::Scenario& sc, const std::vector<Action>& ac
   }
 }
 
+
+// ------------------------------------------ shared by run() and the plant process
+// The scenario's [plant]/[controller] overrides on the defaults, then the
+// command line's kernel and seed. false: *errors says why.
+bool resolve_overrides(const scenario::Scenario& sc, const RunOptions& opt, Overrides* ov,
+                       std::vector<ScenarioError>* errors) {
+  std::vector<ScenarioError> errs = validate(sc);
+  ov->plant = hil::PlantConfig::Default();
+  ov->controller = kernel::default_kernel_config();
+  if (errs.empty()) apply_overrides(sc, ov, &errs);
+  if (!errs.empty()) {
+    if (errors != nullptr) *errors = errs;
+    return false;
+  }
+  if (opt.kernel) ov->kernel = *opt.kernel;
+  if (opt.seed) ov->seed = *opt.seed;
+  return true;
+}
+
+RunResult new_result(const scenario::Scenario& sc, const Overrides& ov) {
+  RunResult R;
+  R.name = sc.name();
+  R.title = sc.scenario.count("title") ? sc.scenario.at("title") : R.name;
+  R.kernel = hil::to_string(ov.kernel);
+  R.seed = ov.seed;
+  R.paper = sc.paper;
+  return R;
+}
+
+// The plant endpoint's frames of tick n at the catalog rates: current_monitor
+// every kCurrentMonitorPeriodTicks, the sensor frame (E2E counter n mod 256),
+// heartbeat_plant every kHeartbeatPeriodTicks; each one metered.
+struct PlantFrames {
+  std::uint8_t cm_counter = 0;
+  std::uint8_t hb_counter = 0;
+  // Returns the sensor frame's counter (the actuator frame answering it carries the same).
+  std::uint8_t send(std::uint64_t n, double t, const io::SensorSample& s, can::CanPort& port,
+                    can::BusLoadMeter& meter) {
+    auto out = [&](const can::CanFrame& f) {
+      port.send(f);
+      meter.on_frame(f);
+    };
+    can::CanFrame f{};
+    if (n % can::kCurrentMonitorPeriodTicks == 0) {
+      can::CurrentMonitorFrame cm{};
+      std::copy(std::begin(s.coil_current_adc), std::end(s.coil_current_adc), cm.coil_current_adc);
+      can::encode_current_monitor(cm, cm_counter++, f);
+      out(f);
+    }
+    const auto counter = static_cast<std::uint8_t>(n & 0xFFu);
+    can::encode_sensor(s, counter, f);
+    out(f);
+    if (n % can::kHeartbeatPeriodTicks == 0) {
+      can::HeartbeatFrame hb{can::NodeState::kOperational, static_cast<std::uint32_t>(t * 1000.0), 0, 0};
+      can::encode_heartbeat(can::MessageKind::kHeartbeatPlant, hb, hb_counter++, f);
+      out(f);
+    }
+    return counter;
+  }
+};
+
+// A timeline action as the host_command frame that carries it (both modes
+// execute it through app::to_motion_command, as the board does). false:
+// the verb has no host command (excite: a bench-side disturbance).
+bool host_command_for(const Action& a, std::uint16_t seq, can::HostCommandFrame* out, std::string* why) {
+  can::HostCommandFrame h{};
+  h.seq = seq;
+  h.axis = static_cast<std::uint8_t>(kPoseToKernel[a.axis]);
+  using C = can::HostCommandCode;
+  switch (a.verb) {
+    case Verb::kLevitate: h.code = C::kLevitate; break;
+    case Verb::kLand: h.code = C::kLand; break;
+    case Verb::kStop: h.code = C::kStop; break;
+    case Verb::kHome: h.code = C::kHome; break;
+    case Verb::kClearFault: h.code = C::kClearFault; break;
+    case Verb::kHold: h.code = C::kHold; break;
+    case Verb::kStep: h.code = C::kStep; h.arg[0] = a.a0; break;
+    case Verb::kMove: h.code = C::kMoveBy; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
+    case Verb::kMoveTo: h.code = C::kMoveTo; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
+    case Verb::kMoveJerk:
+      h.code = C::kMoveJerkBy; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; h.arg[3] = a.a3; break;
+    case Verb::kCircle: h.code = C::kCircle; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
+    case Verb::kSinusoid: h.code = C::kSinusoid; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
+    case Verb::kExcite:
+      *why = "'excite' is a bench disturbance computed from the controller's pose every tick: in-process only";
+      return false;
+  }
+  *out = h;
+  return true;
+}
+
+// The timeline's actions in order; with need_host_command, an action that has
+// no host command is an error "file:line: why".
+bool parse_timeline(const scenario::Scenario& sc, bool need_host_command, std::vector<Action>* actions,
+                    std::string* error) {
+  for (const auto& e : sc.timeline) {
+    Action a;
+    std::string err;
+    parse_action(e, &a, &err);
+    can::HostCommandFrame h{};
+    if (need_host_command && !host_command_for(a, 0, &h, &err)) {
+      *error = sc.source + ":" + std::to_string(e.line) + ": " + err;
+      return false;
+    }
+    actions->push_back(a);
+  }
+  return true;
+}
+
+// Wall time, tick count, real-time factor and bus load of a finished run.
+// Returns the simulated time [s].
+double set_run_timing(RunResult* R, double wall_s, const can::BusLoadMeter& meter, double dt) {
+  R->wall_s = wall_s;
+  R->ticks = R->trace.size();
+  const double sim_s = static_cast<double>(R->ticks) * dt;
+  R->real_time_factor = R->wall_s > 0 ? sim_s / R->wall_s : 0.0;
+  R->bus_load_percent = sim_s > 0 ? 1e-4 * meter.load_ppm(static_cast<std::uint64_t>(sim_s * 1e9)) : 0.0;
+  return sim_s;
+}
+
+// What the metrics need from the link and the kernel at the end of a run.
+struct LinkTotals {
+  std::uint64_t missed_actuator_frames;
+  std::uint32_t controller_rx_rejected;
+  std::uint32_t plant_rx_rejected;
+  double final_sequencer_state;
+  double fault_code;
+};
+// The run metrics both modes report (R's timing and completed already set).
+void add_run_metrics(RunResult* R, const can::BusLoadMeter& meter, double sim_s, const LinkTotals& l) {
+  auto& M = R->metrics;
+  M["real_time_factor"] = R->real_time_factor;
+  M["wall_time_per_tick_us"] = R->ticks > 0 ? 1e6 * R->wall_s / static_cast<double>(R->ticks) : 0.0;
+  M["bus_load_percent"] = R->bus_load_percent;
+  M["bus_frames"] = static_cast<double>(meter.frames());
+  M["ticks"] = static_cast<double>(R->ticks);
+  M["simulated_time_s"] = sim_s;
+  M["missed_actuator_frames"] = static_cast<double>(l.missed_actuator_frames);
+  M["controller_rx_rejected_frames"] = static_cast<double>(l.controller_rx_rejected);
+  M["plant_rx_rejected_frames"] = static_cast<double>(l.plant_rx_rejected);
+  M["final_sequencer_state"] = l.final_sequencer_state;
+  M["fault_code"] = l.fault_code;
+  M["completed"] = R->completed ? 1.0 : 0.0;
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------------ run
@@ -664,32 +783,14 @@ static void add_realtime_metrics(const can::PeriodicTimer& timer, std::map<std::
 }
 
 std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt, std::vector<ScenarioError>* errors) {
-  std::vector<ScenarioError> errs = validate(sc);
   Overrides ov;
-  ov.plant = hil::PlantConfig::Default();
-  ov.controller = kernel::default_kernel_config();
-  if (errs.empty()) apply_overrides(sc, &ov, &errs);
-  if (!errs.empty()) {
-    if (errors != nullptr) *errors = errs;
-    return std::nullopt;
-  }
-  if (opt.kernel) ov.kernel = *opt.kernel;
-  if (opt.seed) ov.seed = *opt.seed;
+  if (!resolve_overrides(sc, opt, &ov, errors)) return std::nullopt;
 
   std::vector<Action> actions;
-  for (const auto& e : sc.timeline) {
-    Action a;
-    std::string err;
-    parse_action(e, &a, &err);
-    actions.push_back(a);
-  }
+  std::string unused;
+  (void)parse_timeline(sc, false, &actions, &unused);  // validate() vetted every line
 
-  RunResult R;
-  R.name = sc.name();
-  R.title = sc.scenario.count("title") ? sc.scenario.at("title") : R.name;
-  R.kernel = hil::to_string(ov.kernel);
-  R.seed = ov.seed;
-  R.paper = sc.paper;
+  RunResult R = new_result(sc, ov);
 
   Link link = open_link(opt.can, true);
   if (!link.plant_port || !link.ctrl_port) {
@@ -749,7 +850,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   std::size_t next_action = 0;
   double levitate_t = -1.0, ready_t = -1.0;
   std::uint64_t missed_actuator = 0;
-  std::uint8_t cm_counter = 0, hb_counter = 0;
+  PlantFrames plant_frames;
   bool aborted = false;
   io::ActuatorCommand held = io::kSafeActuatorCommand;
   const auto wall0 = std::chrono::steady_clock::now();
@@ -765,8 +866,13 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
         log.result = "accepted (bench: multisine disturbance effort at the plant input)";
         log.accepted = true;
       } else {
-        const double now_ref = pose_si(node.status().reference, a.axis);
-        const MotionCommand c = to_command(a, now_ref);
+        // The two-process bench's and the board's path: action -> host
+        // command -> app::to_motion_command (relative moves on the present reference).
+        can::HostCommandFrame h{};
+        std::string why;
+        (void)host_command_for(a, 0, &h, &why);  // every verb but excite, handled above
+        MotionCommand c{};
+        (void)app::to_motion_command(h, node.status().reference, &c);
         kernel::CommandResult r = node.command(c);
         if (a.verb == Verb::kLevitate && levitate_t < 0) levitate_t = t;
         log.result = hil::to_string(r);
@@ -817,24 +923,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     // wrench evaluation).
     double current_before_A[8];
     for (int j = 0; j < 8; ++j) current_before_A[j] = plant.amplifiers().current_A(j);
-    can::CanFrame f{};
-    if (n % can::kCurrentMonitorPeriodTicks == 0) {
-      can::CurrentMonitorFrame cm{};
-      std::copy(std::begin(s.coil_current_adc), std::end(s.coil_current_adc), cm.coil_current_adc);
-      can::encode_current_monitor(cm, cm_counter++, f);
-      link.plant_port->send(f);
-      meter.on_frame(f);
-    }
-    const auto counter = static_cast<std::uint8_t>(n & 0xFFu);
-    can::encode_sensor(s, counter, f);
-    link.plant_port->send(f);
-    meter.on_frame(f);
-    if (n % can::kHeartbeatPeriodTicks == 0) {
-      can::HeartbeatFrame hb{can::NodeState::kOperational, static_cast<std::uint32_t>(t * 1000.0), 0, 0};
-      can::encode_heartbeat(can::MessageKind::kHeartbeatPlant, hb, hb_counter++, f);
-      link.plant_port->send(f);
-      meter.on_frame(f);
-    }
+    const std::uint8_t counter = plant_frames.send(n, t, s, *link.plant_port, meter);
 
     // --- controller node: one tick.
     if (!node.run_once(rx_timeout_us)) {
@@ -896,28 +985,16 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     if (ready_t < 0 && st.state == kernel::SequencerState::kReady) ready_t = t;
   }
   const auto wall1 = std::chrono::steady_clock::now();
-  R.wall_s = std::chrono::duration<double>(wall1 - wall0).count();
-  R.ticks = tr.size();
-  const double sim_s = static_cast<double>(R.ticks) * dt;
-  R.real_time_factor = R.wall_s > 0 ? sim_s / R.wall_s : 0.0;
-  R.bus_load_percent = sim_s > 0 ? 1e-4 * meter.load_ppm(static_cast<std::uint64_t>(sim_s * 1e9)) : 0.0;
+  const double sim_s = set_run_timing(&R, std::chrono::duration<double>(wall1 - wall0).count(), meter, dt);
   R.final_state = hil::to_string(node.status().state);
   R.fault = std::to_string(static_cast<int>(node.status().fault));
   R.completed = !aborted;
 
   auto& M = R.metrics;
-  M["real_time_factor"] = R.real_time_factor;
-  M["wall_time_per_tick_us"] = R.ticks > 0 ? 1e6 * R.wall_s / static_cast<double>(R.ticks) : 0.0;
-  M["bus_load_percent"] = R.bus_load_percent;
-  M["bus_frames"] = static_cast<double>(meter.frames());
-  M["ticks"] = static_cast<double>(R.ticks);
-  M["simulated_time_s"] = sim_s;
-  M["missed_actuator_frames"] = static_cast<double>(missed_actuator);
-  M["controller_rx_rejected_frames"] = static_cast<double>(cio.rx_stats().rejected_total());
-  M["plant_rx_rejected_frames"] = static_cast<double>(prx.stats().rejected_total());
-  M["final_sequencer_state"] = static_cast<double>(static_cast<int>(node.status().state));
-  M["fault_code"] = static_cast<double>(static_cast<int>(node.status().fault));
-  M["completed"] = R.completed ? 1.0 : 0.0;
+  add_run_metrics(&R, meter, sim_s,
+                  LinkTotals{missed_actuator, cio.rx_stats().rejected_total(), prx.stats().rejected_total(),
+                             static_cast<double>(static_cast<int>(node.status().state)),
+                             static_cast<double>(static_cast<int>(node.status().fault))});
   if (timer) add_realtime_metrics(*timer, &M);
   compute_metrics(sc, actions, tr, excitations, levitate_t, ready_t, &M, &R.warnings);
   return R;
@@ -950,33 +1027,6 @@ struct RecordHeader {
 
 volatile std::sig_atomic_t g_stop_signal = 0;
 extern "C" void on_stop_signal(int) { g_stop_signal = 1; }
-
-bool host_command_for(const Action& a, std::uint16_t seq, can::HostCommandFrame* out, std::string* why) {
-  can::HostCommandFrame h{};
-  h.seq = seq;
-  h.axis = static_cast<std::uint8_t>(kPoseToKernel[a.axis]);
-  using C = can::HostCommandCode;
-  switch (a.verb) {
-    case Verb::kLevitate: h.code = C::kLevitate; break;
-    case Verb::kLand: h.code = C::kLand; break;
-    case Verb::kStop: h.code = C::kStop; break;
-    case Verb::kHome: h.code = C::kHome; break;
-    case Verb::kClearFault: h.code = C::kClearFault; break;
-    case Verb::kHold: h.code = C::kHold; break;
-    case Verb::kStep: h.code = C::kStep; h.arg[0] = a.a0; break;
-    case Verb::kMove: h.code = C::kMoveBy; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
-    case Verb::kMoveTo: h.code = C::kMoveTo; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
-    case Verb::kMoveJerk:
-      h.code = C::kMoveJerkBy; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; h.arg[3] = a.a3; break;
-    case Verb::kCircle: h.code = C::kCircle; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
-    case Verb::kSinusoid: h.code = C::kSinusoid; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
-    case Verb::kExcite:
-      *why = "'excite' is a bench disturbance computed from the controller's pose every tick: in-process only";
-      return false;
-  }
-  *out = h;
-  return true;
-}
 
 bool write_record(const std::string& path, const RecordHeader& h, const std::vector<double>& rows,
                   const std::vector<std::int32_t>& states) {
@@ -1012,35 +1062,15 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
     if (errors != nullptr) errors->push_back({m});
     return std::nullopt;
   };
-  std::vector<ScenarioError> errs = validate(sc);
   Overrides ov;
-  ov.plant = hil::PlantConfig::Default();
-  ov.controller = kernel::default_kernel_config();
-  if (errs.empty()) apply_overrides(sc, &ov, &errs);
-  if (!errs.empty()) {
-    if (errors != nullptr) *errors = errs;
-    return std::nullopt;
-  }
-  if (opt.kernel) ov.kernel = *opt.kernel;
-  if (opt.seed) ov.seed = *opt.seed;
+  if (!resolve_overrides(sc, opt, &ov, errors)) return std::nullopt;
   std::vector<Action> actions;
-  for (const auto& e : sc.timeline) {
-    Action a;
-    std::string err;
-    parse_action(e, &a, &err);
-    can::HostCommandFrame h{};
-    if (!host_command_for(a, 0, &h, &err)) return fail(sc.source + ":" + std::to_string(e.line) + ": " + err);
-    actions.push_back(a);
-  }
+  std::string timeline_error;
+  if (!parse_timeline(sc, true, &actions, &timeline_error)) return fail(timeline_error);
   Link link = open_link(opt.can, false);
   if (!link.plant_port) return fail("cannot open CAN '" + opt.can + "': " + link.error);
 
-  RunResult R;
-  R.name = sc.name();
-  R.title = sc.scenario.count("title") ? sc.scenario.at("title") : R.name;
-  R.kernel = hil::to_string(ov.kernel);
-  R.seed = ov.seed;
-  R.paper = sc.paper;
+  RunResult R = new_result(sc, ov);
 
   hil::Plant plant(ov.plant, ov.seed);
   can::LinkReceiver prx;
@@ -1053,7 +1083,8 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
   std::vector<double> current_A[8];
   io::ActuatorCommand held = io::kSafeActuatorCommand;
   std::uint64_t missed = 0;
-  std::uint8_t cm_counter = 0, hb_counter = 0, cmd_counter = 0;
+  PlantFrames plant_frames;
+  std::uint8_t cmd_counter = 0;
   std::uint16_t seq = 0;
   std::map<std::uint16_t, std::size_t> pending;  // command seq -> R.commands index
   std::size_t next_action = 0;
@@ -1122,21 +1153,7 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
     if (paced) timer.wait();
     const io::SensorSample s = plant.sample();
     const hil::PlantState truth_before = plant.truth();
-    can::CanFrame f{};
-    if (n % can::kCurrentMonitorPeriodTicks == 0) {
-      can::CurrentMonitorFrame cm{};
-      std::copy(std::begin(s.coil_current_adc), std::end(s.coil_current_adc), cm.coil_current_adc);
-      can::encode_current_monitor(cm, cm_counter++, f);
-      send(f);
-    }
-    const auto counter = static_cast<std::uint8_t>(n & 0xFFu);
-    can::encode_sensor(s, counter, f);
-    send(f);
-    if (n % can::kHeartbeatPeriodTicks == 0) {
-      can::HeartbeatFrame hb{can::NodeState::kOperational, static_cast<std::uint32_t>(t * 1000.0), 0, 0};
-      can::encode_heartbeat(can::MessageKind::kHeartbeatPlant, hb, hb_counter++, f);
-      send(f);
-    }
+    const std::uint8_t counter = plant_frames.send(n, t, s, *link.plant_port, meter);
     bool got = false;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::microseconds(paced ? 1000 : po.lockstep_timeout_us);
     while (!got && std::chrono::steady_clock::now() < deadline) {
@@ -1205,28 +1222,15 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
     tr.state.push_back(st);
     if (ready_t < 0 && st == static_cast<int>(kernel::SequencerState::kReady)) ready_t = tr.t_s[n];
   }
-  R.wall_s = std::chrono::duration<double>(wall1 - wall0).count();
-  R.ticks = tr.size();
-  const double sim_s = static_cast<double>(R.ticks) * dt;
-  R.real_time_factor = R.wall_s > 0 ? sim_s / R.wall_s : 0.0;
-  R.bus_load_percent = sim_s > 0 ? 1e-4 * meter.load_ppm(static_cast<std::uint64_t>(sim_s * 1e9)) : 0.0;
+  const double sim_s = set_run_timing(&R, std::chrono::duration<double>(wall1 - wall0).count(), meter, dt);
   const auto final_state = static_cast<kernel::SequencerState>(have_record ? rh.final_state : 0u);
   R.final_state = have_record ? hil::to_string(final_state) : "unknown";
   R.fault = std::to_string(have_record ? rh.fault : 0u);
   R.completed = have_record && rh.rows == tr.size() && missed == 0;
   auto& M = R.metrics;
-  M["real_time_factor"] = R.real_time_factor;
-  M["wall_time_per_tick_us"] = R.ticks > 0 ? 1e6 * R.wall_s / static_cast<double>(R.ticks) : 0.0;
-  M["bus_load_percent"] = R.bus_load_percent;
-  M["bus_frames"] = static_cast<double>(meter.frames());
-  M["ticks"] = static_cast<double>(R.ticks);
-  M["simulated_time_s"] = sim_s;
-  M["missed_actuator_frames"] = static_cast<double>(missed);
-  M["controller_rx_rejected_frames"] = static_cast<double>(rh.rx_rejected);
-  M["plant_rx_rejected_frames"] = static_cast<double>(prx.stats().rejected_total());
-  M["final_sequencer_state"] = static_cast<double>(rh.final_state);
-  M["fault_code"] = static_cast<double>(rh.fault);
-  M["completed"] = R.completed ? 1.0 : 0.0;
+  add_run_metrics(&R, meter, sim_s,
+                  LinkTotals{missed, rh.rx_rejected, prx.stats().rejected_total(), static_cast<double>(rh.final_state),
+                             static_cast<double>(rh.fault)});
   M["host_commands_acked"] = static_cast<double>(R.commands.size() - pending.size());
   if (paced) add_realtime_metrics(timer, &M);
   compute_metrics(sc, actions, tr, {}, levitate_t, ready_t, &M, &R.warnings);

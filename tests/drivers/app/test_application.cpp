@@ -338,20 +338,42 @@ TEST(Application, SaveOverModbusWritesFlashOutsideTheCriticalSection) {
 // The HIL node as the board's HIL image wires it: CanSensorSource owns RX on
 // the shared port, Application only transmits (drain_can_rx = false) and
 // reports the source's rejections in its heartbeat.
+namespace {
+// The board's HIL image wiring (stm32h743 main.cpp): one port, the source's
+// receiver statistics and host-command queue handed to the Application.
+app::ApplicationConfig hil_config(app::ApplicationConfig cfg) {
+  cfg.drain_can_rx = false;
+  return cfg;
+}
+app::ApplicationHooks hil_hooks(app::ApplicationHooks hooks, app::CanSensorSource& sensors) {
+  hooks.rx_stats = &sensors.receiver();
+  hooks.host_commands = &sensors.host_commands();
+  return hooks;
+}
+struct HilNode {
+  HilNode(Fixture& fx, const app::ApplicationConfig& cfg)
+      : sensors(*fx.node, app::CanSensorConfig{}),
+        actuators(*fx.node, sensors),
+        application(fx.kernel, &fx.store, fx.node.get(), &fx.uart, &fx.recorder, fx.gate, fx.dog, hil_config(cfg),
+                    hil_hooks(fx.hooks, sensors)),
+        loop(sensors, actuators, fx.kernel, app::ServoConfig{}, app::ServoHooks{nullptr, nullptr, &servo_ran, nullptr}) {
+    g_gate = &fx.gate;
+  }
+  app::CanSensorSource sensors;
+  app::CanActuatorSink actuators;
+  App application;
+  app::ServoLoop<kernel::Controller<float>> loop;
+};
+}  // namespace
+
 TEST(Application, HilWiringSharesOnePortAndReportsSourceRejections) {
   Fixture fx;
-  app::CanSensorSource sensors(*fx.node, app::CanSensorConfig{});
-  app::CanActuatorSink actuators(*fx.node, sensors);
   app::ApplicationConfig cfg{};
-  cfg.drain_can_rx = false;
   cfg.heartbeat_period_ticks = 20;
   cfg.sync_period_ticks = can::kSyncPeriodTicks;  // 25
-  app::ApplicationHooks hooks = fx.hooks;
-  hooks.rx_stats = &sensors.receiver();
-  App application(fx.kernel, &fx.store, fx.node.get(), &fx.uart, &fx.recorder, fx.gate, fx.dog, cfg, hooks);
-  g_gate = &fx.gate;
-  app::ServoLoop<kernel::Controller<float>> loop(sensors, actuators, fx.kernel, app::ServoConfig{},
-                                                 app::ServoHooks{nullptr, nullptr, &servo_ran, nullptr});
+  HilNode hil(fx, cfg);
+  App& application = hil.application;
+  auto& loop = hil.loop;
   io::SensorSample s{};
   int actuator_frames = 0;
   int status_frames = 0;
@@ -383,4 +405,128 @@ TEST(Application, HilWiringSharesOnePortAndReportsSourceRejections) {
   LONGS_EQUAL(26 * 400, last_sync.time_us);
   LONGS_EQUAL(0, application.stats().can_rx_frames);  // the application never stole a sensor frame
   LONGS_EQUAL(40, fx.dog.feeds);
+}
+
+namespace {
+can::CanFrame host_command(can::HostCommandCode code, std::uint16_t seq, std::uint8_t counter, double arg0 = 0.0) {
+  can::HostCommandFrame h{};
+  h.code = code;
+  h.axis = 0;
+  h.seq = seq;
+  h.arg[0] = arg0;
+  can::CanFrame f{};
+  can::encode_host_command(h, counter, f);
+  return f;
+}
+std::vector<can::HostCommandAckFrame> drain_acks(can::CanPort& plant) {
+  std::vector<can::HostCommandAckFrame> acks;
+  can::CanFrame f{};
+  while (plant.receive(f, 0) == can::PortStatus::kOk) {
+    if (f.id != can::message(can::MessageKind::kHostCommandAck).can_id) continue;
+    can::HostCommandAckFrame a{};
+    can::decode_host_command_ack(f, a);
+    acks.push_back(a);
+  }
+  return acks;
+}
+}  // namespace
+
+TEST(Application, HostCommandMappingIsTheBenchOne) {
+  kernel::Pose64 ref{};
+  ref.x_pm = 1'500'000;        // 1.5 um
+  ref.theta_z_prad = -250'000; // -0.25 urad
+  can::HostCommandFrame h{};
+  h.code = can::HostCommandCode::kMoveBy;
+  h.axis = 0;
+  h.arg[0] = 2e-6;
+  h.arg[1] = 1e-3;
+  h.arg[2] = 0.5;
+  kernel::MotionCommand c{};
+  CHECK(app::to_motion_command(h, ref, &c));
+  CHECK(c.type == kernel::MotionType::kMoveTo);
+  CHECK(c.axis == kernel::Axis::kX);
+  DOUBLES_EQUAL(3.5e-6, c.target, 1e-18);
+  DOUBLES_EQUAL(1e-3, c.velocity, 0.0);
+  DOUBLES_EQUAL(0.5, c.acceleration, 0.0);
+  h.code = can::HostCommandCode::kMoveJerkBy;
+  h.axis = 2;  // theta_z
+  h.arg[0] = 1e-6;
+  h.arg[3] = 40.0;
+  CHECK(app::to_motion_command(h, ref, &c));
+  CHECK(c.type == kernel::MotionType::kMoveJerkLimited);
+  DOUBLES_EQUAL(0.75e-6, c.target, 1e-18);
+  DOUBLES_EQUAL(40.0, c.jerk, 0.0);
+  h.code = can::HostCommandCode::kExcite;
+  h.arg[3] = 300.0;  // harmonics clamp to 255
+  CHECK(app::to_motion_command(h, ref, &c));
+  CHECK(c.type == kernel::MotionType::kExcite);
+  LONGS_EQUAL(255, c.harmonics);
+  h.code = can::HostCommandCode::kShutdown;
+  c.target = 42.0;
+  CHECK_FALSE(app::to_motion_command(h, ref, &c));
+  DOUBLES_EQUAL(42.0, c.target, 0.0);  // untouched
+}
+
+TEST(Application, HilBoardExecutesHostCommandsAndAcks) {
+  Fixture fx;
+  HilNode hil(fx, app::ApplicationConfig{});
+  const app::CanSensorSource& sensors = hil.sensors;
+  App& application = hil.application;
+  auto& loop = hil.loop;
+  io::SensorSample s{};
+  can::CanFrame f{};
+  // Tick 1: sensor frame + three host commands; one more arrives corrupted.
+  can::encode_sensor(s, 1, f);
+  CHECK(fx.plant->send(f) == can::PortStatus::kOk);
+  CHECK(fx.plant->send(host_command(can::HostCommandCode::kMoveTo, 7, 1, 1e-6)) == can::PortStatus::kOk);
+  CHECK(fx.plant->send(host_command(can::HostCommandCode::kHome, 8, 2)) == can::PortStatus::kOk);
+  CHECK(fx.plant->send(host_command(can::HostCommandCode::kShutdown, 9, 3)) == can::PortStatus::kOk);
+  can::CanFrame bad = host_command(can::HostCommandCode::kLand, 10, 4);
+  bad.data[12] ^= 0x01;
+  CHECK(fx.plant->send(bad) == can::PortStatus::kOk);
+  loop.on_tick();
+  LONGS_EQUAL(3, sensors.stats().host_commands);
+  LONGS_EQUAL(1, sensors.stats().rejected);
+  LONGS_EQUAL(3, hil.sensors.host_commands().size());
+  CHECK(fx.kernel.status().state == kernel::SequencerState::kIdle);  // never executed in the tick
+  application.service(400u, loop.state().ticks);
+  LONGS_EQUAL(0, hil.sensors.host_commands().size());
+  LONGS_EQUAL(3, application.stats().host_commands);
+  const auto acks = drain_acks(*fx.plant);
+  LONGS_EQUAL(3, acks.size());
+  LONGS_EQUAL(7, acks[0].seq);
+  CHECK(acks[0].code == can::HostCommandCode::kMoveTo);
+  LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kRefusedNotReady), acks[0].result);  // idle: not levitated
+  LONGS_EQUAL(static_cast<int>(kernel::SequencerState::kIdle), acks[0].sequencer_state);
+  LONGS_EQUAL(1, acks[0].tick);
+  LONGS_EQUAL(8, acks[1].seq);
+  LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kAccepted), acks[1].result);
+  LONGS_EQUAL(static_cast<int>(kernel::SequencerState::kIdle), acks[1].sequencer_state);  // taken at the next step
+  LONGS_EQUAL(9, acks[2].seq);
+  LONGS_EQUAL(can::kHostResultNotExecuted, acks[2].result);
+  // The accepted home starts on the next servo tick.
+  can::encode_sensor(s, 2, f);
+  CHECK(fx.plant->send(f) == can::PortStatus::kOk);
+  loop.on_tick();
+  CHECK(fx.kernel.status().state == kernel::SequencerState::kHoming);
+  LONGS_EQUAL(0, g_critical_depth);
+}
+
+TEST(Application, ProductionRxPathExecutesHostCommands) {
+  Fixture fx;
+  App application(fx.kernel, &fx.store, fx.node.get(), &fx.uart, &fx.recorder, fx.gate, fx.dog,
+                  app::ApplicationConfig{}, fx.hooks);
+  CHECK(fx.plant->send(host_command(can::HostCommandCode::kHome, 21, 1)) == can::PortStatus::kOk);
+  CHECK(fx.plant->send(host_command(can::HostCommandCode::kHome, 22, 1)) == can::PortStatus::kOk);  // repeated counter
+  application.service(400u, 5);
+  LONGS_EQUAL(2, application.stats().can_rx_frames);
+  LONGS_EQUAL(1, application.stats().host_commands);
+  const auto acks = drain_acks(*fx.plant);
+  LONGS_EQUAL(1, acks.size());
+  LONGS_EQUAL(21, acks[0].seq);
+  LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kAccepted), acks[0].result);
+  LONGS_EQUAL(5, acks[0].tick);
+  io::SensorSample s{};
+  (void)fx.kernel.step(s, false);
+  CHECK(fx.kernel.status().state == kernel::SequencerState::kHoming);
 }

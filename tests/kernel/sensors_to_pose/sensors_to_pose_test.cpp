@@ -20,8 +20,71 @@ using namespace maglev::kernel;  // NOLINT
 namespace io = maglev::io;
 namespace stage = maglev::io::stage;
 
-// Host-only exact reference arithmetic (the kernel itself never uses it).
-__extension__ typedef __int128 I128;
+// Exact reference arithmetic, portable (32-bit Arm has no __int128): a
+// 128-bit magnitude in four 32-bit limbs, least significant first, plus a
+// sign. Only what the references need: signed 64 x 64 -> 128 (schoolbook on
+// 32-bit limbs, every partial product exact in uint64), add, shift right,
+// and "fits in int64". The kernel itself never uses it.
+struct Wide128 {
+  bool negative = false;
+  std::uint32_t limb[4] = {0, 0, 0, 0};
+};
+
+std::uint64_t Magnitude(std::int64_t v) {
+  return v < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(v) : static_cast<std::uint64_t>(v);
+}
+
+Wide128 MulExact(std::int64_t a, std::int64_t b) {
+  const std::uint64_t ma = Magnitude(a), mb = Magnitude(b);
+  const std::uint32_t x[2] = {static_cast<std::uint32_t>(ma), static_cast<std::uint32_t>(ma >> 32)};
+  const std::uint32_t y[2] = {static_cast<std::uint32_t>(mb), static_cast<std::uint32_t>(mb >> 32)};
+  Wide128 r;
+  r.negative = (a < 0) != (b < 0) && ma != 0 && mb != 0;
+  for (int i = 0; i < 2; ++i) {
+    std::uint64_t carry = 0;
+    for (int j = 0; j < 2; ++j) {
+      // <= (2^32-1)^2 + 2 (2^32-1) = 2^64 - 1: no overflow.
+      const std::uint64_t t = static_cast<std::uint64_t>(x[i]) * y[j] + r.limb[i + j] + carry;
+      r.limb[i + j] = static_cast<std::uint32_t>(t);
+      carry = t >> 32;
+    }
+    r.limb[i + 2] = static_cast<std::uint32_t>(carry);
+  }
+  return r;
+}
+
+// |w| + v (the magnitude; no overflow for the values used here: < 2^127).
+Wide128 AddMagnitude(Wide128 w, std::uint64_t v) {
+  std::uint64_t carry = v;
+  for (auto& l : w.limb) {
+    const std::uint64_t t = static_cast<std::uint64_t>(l) + (carry & 0xFFFFFFFFu);
+    carry = (carry >> 32) + (t >> 32);
+    l = static_cast<std::uint32_t>(t);
+  }
+  return w;
+}
+
+// |w| >> n, 0 < n < 32.
+Wide128 ShiftRightMagnitude(Wide128 w, int n) {
+  for (int i = 0; i < 4; ++i) {
+    const std::uint32_t next = i < 3 ? w.limb[i + 1] : 0u;
+    w.limb[i] = (w.limb[i] >> n) | static_cast<std::uint32_t>(static_cast<std::uint64_t>(next) << (32 - n));
+  }
+  return w;
+}
+
+Wide128 ShiftRightMagnitudeBy(Wide128 w, int n) {
+  for (; n >= 31; n -= 31) w = ShiftRightMagnitude(w, 31);
+  return n > 0 ? ShiftRightMagnitude(w, n) : w;
+}
+
+// The signed value if |w| <= INT64_MAX.
+bool ToInt64(const Wide128& w, std::int64_t* out) {
+  if (w.limb[3] != 0 || w.limb[2] != 0 || (w.limb[1] & 0x80000000u) != 0) return false;
+  const auto m = static_cast<std::int64_t>((static_cast<std::uint64_t>(w.limb[1]) << 32) | w.limb[0]);
+  *out = w.negative ? -m : m;
+  return true;
+}
 
 constexpr double kLsb_m = 632.991e-9 / 1024.0;
 
@@ -87,15 +150,13 @@ TEST(SensorsToPose, ExactCountToPicometre) {
   CHECK_EQUAL(618, CountsToPicometres(1, st));      // 618.155
   CHECK_EQUAL(-618, CountsToPicometres(-1, st));
   CHECK_EQUAL(1854, CountsToPicometres(3, st));     // 1854.466
-  // Exhaustive check against an exact 128-bit reference (host only).
+  // Exhaustive check against an exact 128-bit reference (Wide128, host and M7).
   std::mt19937_64 rng(42);
   for (int n = 0; n < 200000; ++n) {
     const std::int64_t c = static_cast<std::int64_t>(rng() >> 22) - (std::int64_t{1} << 41);
-    const I128 num = static_cast<I128>(c) * 632991;
-    // round half away from zero
-    const I128 mag = num < 0 ? -num : num;
-    const I128 q = (2 * mag + 1024) / 2048;
-    const std::int64_t expect = static_cast<std::int64_t>(num < 0 ? -q : q);
+    // c * 632991 / 1024, rounded half away from zero: (|num| + 512) >> 10 on the magnitude.
+    std::int64_t expect = 0;
+    CHECK(ToInt64(ShiftRightMagnitudeBy(AddMagnitude(MulExact(c, 632991), 512), 10), &expect));
     if (CountsToPicometres(c, st) != expect) {
       std::printf("\n counts %lld", static_cast<long long>(c));
       CHECK_EQUAL(expect, CountsToPicometres(c, st));
@@ -106,18 +167,48 @@ TEST(SensorsToPose, ExactCountToPicometre) {
   CHECK_EQUAL(-316496, CountsToPicometres(-512, st));
 }
 
-TEST(SensorsToPose, WideMulShiftMatchesInt128) {
+TEST(SensorsToPose, ExactReferenceArithmetic) {
+  // The reference itself, on values with known 128-bit results.
+  const Wide128 max_sq = MulExact(INT64_MAX, INT64_MAX);  // (2^63-1)^2 = 2^126 - 2^64 + 1
+  CHECK_EQUAL(1u, max_sq.limb[0]);
+  CHECK_EQUAL(0u, max_sq.limb[1]);
+  CHECK_EQUAL(0xFFFFFFFFu, max_sq.limb[2]);
+  CHECK_EQUAL(0x3FFFFFFFu, max_sq.limb[3]);
+  CHECK_FALSE(max_sq.negative);
+  const Wide128 min_sq = MulExact(INT64_MIN, -1);  // 2^63: one past INT64_MAX
+  CHECK_EQUAL(0x80000000u, min_sq.limb[1]);
+  CHECK(min_sq.negative == false);
+  std::int64_t v = 0;
+  CHECK_FALSE(ToInt64(min_sq, &v));
+  CHECK(ToInt64(MulExact(-3037000499LL, 3037000499LL), &v));  // -(2^31.5)^2, just below 2^63
+  CHECK_EQUAL(-9223372030926249001LL, v);
+  // Carries across every limb: (2^96 - 1) + 1 = 2^96.
+  Wide128 w;
+  w.limb[0] = w.limb[1] = w.limb[2] = 0xFFFFFFFFu;
+  w = AddMagnitude(w, 1);
+  CHECK_EQUAL(0u, w.limb[0]);
+  CHECK_EQUAL(0u, w.limb[2]);
+  CHECK_EQUAL(1u, w.limb[3]);
+  w = ShiftRightMagnitudeBy(w, 40);  // 2^56
+  CHECK(ToInt64(w, &v));
+  CHECK_EQUAL(std::int64_t{1} << 56, v);
+  CHECK(ToInt64(MulExact(0, -5), &v));
+  CHECK_EQUAL(0, v);
+}
+
+TEST(SensorsToPose, WideMulShiftMatchesExactReference) {
   std::mt19937_64 rng(5);
+  int checked = 0;
   for (int n = 0; n < 100000; ++n) {
     const std::int64_t a = static_cast<std::int64_t>(rng()) >> (static_cast<int>(rng() % 30) + 1);
     const std::int64_t c = static_cast<std::int64_t>(rng()) >> (static_cast<int>(rng() % 30) + 20);
-    const I128 p = static_cast<I128>(a) * c;
-    const I128 mag = p < 0 ? -p : p;
-    const I128 q = (mag + (static_cast<I128>(1) << 39)) >> 40;
-    const I128 expect = p < 0 ? -q : q;
-    if (expect > INT64_MAX || expect < -INT64_MAX) continue;
-    CHECK_EQUAL(static_cast<std::int64_t>(expect), wide::MulShiftRound(a, c));
+    // a * c / 2^40, rounded half away from zero, where the result fits int64.
+    std::int64_t expect = 0;
+    if (!ToInt64(ShiftRightMagnitudeBy(AddMagnitude(MulExact(a, c), std::uint64_t{1} << 39), 40), &expect)) continue;
+    CHECK_EQUAL(expect, wide::MulShiftRound(a, c));
+    ++checked;
   }
+  CHECK(checked > 50000);  // most draws fit; the reference did not skip them all
 }
 
 TEST(SensorsToPose, BeamLayoutSolveWithAbbeAndCosine) {

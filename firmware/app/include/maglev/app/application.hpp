@@ -14,6 +14,11 @@
 //        long_operation hook brackets it: the board lengthens the IWDG);
 //     2. CAN RX (when Config::drain_can_rx): frames checked by a LinkReceiver
 //        and counted (the HIL board's CanSensorSource owns RX instead);
+//     2b. host commands (host_command frames from that receiver, or from
+//        Hooks::host_commands -- the HIL board's CanSensorSource queue):
+//        app::to_motion_command -> kernel command() inside the critical
+//        section, answered with host_command_ack (result, sequencer state,
+//        servo tick) -- the same mapping as the bench's controller node;
 //     3. CAN telemetry by servo ticks: controller_status every
 //        status_period_ticks (catalog: 10 = 250 Hz) from kernel status(),
 //        heartbeat_controller every heartbeat_period_ticks (250 = 10 Hz);
@@ -38,6 +43,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "maglev/app/host_command.hpp"
+#include "maglev/app/host_command_queue.hpp"
 #include "maglev/app/recorder.hpp"
 #include "maglev/app/telemetry.hpp"
 #include "maglev/can_link/catalog.hpp"
@@ -95,6 +102,8 @@ struct ApplicationHooks {
   void (*long_operation)(bool begin) = nullptr;  // around flash saves
   // Rejections reported in the heartbeat; null: the Application's own receiver.
   const can::LinkReceiver* rx_stats = nullptr;
+  // Host commands received elsewhere (HIL: CanSensorSource::host_commands()); may be null.
+  HostCommandQueue* host_commands = nullptr;
 };
 
 struct ApplicationStats {
@@ -106,6 +115,7 @@ struct ApplicationStats {
   std::uint32_t sync_frames = 0;
   std::uint32_t can_tx_errors = 0;
   std::uint32_t can_rx_frames = 0;
+  std::uint32_t host_commands = 0;  // executed (or refused) and acknowledged
   std::uint32_t recorder_drained = 0;
   std::uint32_t recorder_lost = 0;
   std::uint32_t saves = 0;
@@ -206,7 +216,11 @@ class Application {
   // The communications loop body; servo_ticks = ServoLoop::state().ticks.
   void service(std::uint32_t now_us, std::uint32_t servo_ticks) {
     service_modbus(now_us);
-    service_can_rx();
+    service_can_rx(servo_ticks);
+    if (hooks_.host_commands != nullptr) {
+      can::HostCommandFrame h{};
+      while (pop_host_command(h)) execute_host_command(h, servo_ticks);
+    }
     service_telemetry(now_us, servo_ticks);
     service_recorder();
     ++stats_.services;
@@ -238,14 +252,45 @@ class Application {
     if (uart_ == nullptr || !uart_->transmit(tx_, n)) ++stats_.uart_tx_errors;
   }
 
-  void service_can_rx() {
+  void service_can_rx(std::uint32_t servo_ticks) {
     if (can_ == nullptr || !config_.drain_can_rx) return;
     can::CanFrame f{};
     for (std::uint8_t i = 0; i < config_.max_can_rx_per_service; ++i) {
       if (can_->receive(f, 0) != can::PortStatus::kOk) break;
       ++stats_.can_rx_frames;
-      (void)receiver_.accept(f);
+      if (receiver_.accept(f) != can::RxStatus::kOk) continue;
+      if (receiver_.last_message() != &can::message(can::MessageKind::kHostCommand)) continue;
+      can::HostCommandFrame h{};
+      can::decode_host_command(f, h);
+      execute_host_command(h, servo_ticks);
     }
+  }
+
+  bool pop_host_command(can::HostCommandFrame& h) {
+    enter();  // the producer is the servo interrupt
+    const bool got = hooks_.host_commands->pop(h);
+    exit();
+    return got;
+  }
+
+  // The bench controller node's rule: mapped command -> kernel result; no
+  // kernel meaning (shutdown) -> kHostResultNotExecuted. Always acknowledged.
+  void execute_host_command(const can::HostCommandFrame& h, std::uint32_t servo_ticks) {
+    can::HostCommandAckFrame ack{};
+    ack.seq = h.seq;
+    ack.code = h.code;
+    ack.tick = servo_ticks;
+    enter();
+    kernel::MotionCommand c{};
+    ack.result = to_motion_command(h, kernel_.status().reference, &c) ? static_cast<std::uint8_t>(kernel_.command(c))
+                                                                       : can::kHostResultNotExecuted;
+    ack.sequencer_state = static_cast<std::uint8_t>(kernel_.status().state);
+    exit();
+    ++stats_.host_commands;
+    if (can_ == nullptr) return;
+    can::CanFrame f{};
+    can::encode_host_command_ack(ack, ack_counter_++, f);
+    send(f);
   }
 
   void send(const can::CanFrame& f) {
@@ -349,6 +394,7 @@ class Application {
   bool heartbeat_started_ = false;
   std::uint8_t status_counter_ = 0;
   std::uint8_t heartbeat_counter_ = 0;
+  std::uint8_t ack_counter_ = 0;
   bool clock_started_ = false;
   std::uint32_t last_now_us_ = 0;
   std::uint64_t uptime_us_ = 0;

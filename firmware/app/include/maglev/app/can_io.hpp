@@ -11,7 +11,9 @@
 //   * sensor frame accepted -> the sample for this tick, SensorFrameWatchdog
 //     fed; several accepted in one tick -> the newest wins (older ones counted
 //     superseded); current_monitor frames update coil_current_adc (decimated,
-//     500 Hz); heartbeat_plant frames are counted;
+//     500 Hz); heartbeat_plant frames are counted; host_command frames are
+//     decoded into host_commands() (Application executes and acks them in
+//     thread mode: never in the servo tick);
 //   * no accepted sensor frame this tick (lost, late, bad CRC, repeated
 //     counter) -> the previous sample repeated with io::kStaleFrame set and
 //     read() returns true: the kernel's supervisor decides (it tolerates
@@ -36,6 +38,7 @@
 #include <cstdint>
 
 #include "maglev/app/board_io.hpp"
+#include "maglev/app/host_command_queue.hpp"
 #include "maglev/can_link/catalog.hpp"
 #include "maglev/can_link/codec.hpp"
 #include "maglev/can_link/receiver.hpp"
@@ -62,6 +65,7 @@ struct CanSensorStats {
   std::uint32_t rejected = 0;          // frames the LinkReceiver rejected (all reasons)
   std::uint32_t current_monitor = 0;   // accepted current_monitor frames
   std::uint32_t heartbeats = 0;        // accepted heartbeat_plant frames
+  std::uint32_t host_commands = 0;     // accepted host_command frames queued for the Application
   std::uint32_t ignored = 0;           // accepted catalog frames not meant for the controller
 };
 
@@ -78,6 +82,8 @@ class CanSensorSource final : public SensorSource {
   // The last plant heartbeat (valid once stats().heartbeats > 0).
   const can::HeartbeatFrame& plant_heartbeat() const { return heartbeat_; }
 
+  // Accepted host_command frames, oldest first (ApplicationHooks::host_commands).
+  HostCommandQueue& host_commands() { return host_commands_; }
   const can::LinkReceiver& receiver() const { return receiver_; }
   const can::SensorFrameWatchdog& watchdog() const { return watchdog_; }
   const CanSensorStats& stats() const { return stats_; }
@@ -93,6 +99,7 @@ class CanSensorSource final : public SensorSource {
   io::SensorSample last_{};
   std::int16_t coil_current_adc_[io::kCoils] = {};
   can::HeartbeatFrame heartbeat_{};
+  HostCommandQueue host_commands_{};
   CanSensorStats stats_{};
   std::uint32_t tick_clock_us_ = 0;
   bool armed_ = false;

@@ -199,13 +199,9 @@ class ControllerNode {
   NodeLinkStats link_{};
 };
 
-// The MotionCommand a host command means, given the present reference
-// (relative moves: target = reference + distance, in double, exactly as the
-// in-process bench computes it). false: code has no kernel MotionCommand.
-bool to_motion_command(const can::HostCommandFrame& h, const kernel::Pose64& reference, kernel::MotionCommand* out);
-// Reference of kernel axis a in SI (m or rad): int64 pm/prad * 1e-12.
-double reference_si(const kernel::Pose64& reference, int kernel_axis);
-
+// The MotionCommand a host command means: app::to_motion_command
+// (firmware/app host_command.hpp), the same mapping the HIL board's
+// app::Application executes.
 const char* to_string(kernel::CommandResult r);
 const char* to_string(kernel::SequencerState s);
 

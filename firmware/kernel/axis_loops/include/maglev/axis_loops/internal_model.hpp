@@ -35,6 +35,7 @@
 #include <cmath>
 
 #include "maglev/axis_loops/design_error.hpp"
+#include "maglev/axis_loops/loop_terms.hpp"
 #include "maglev/numeric/saturation.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
 
@@ -387,6 +388,7 @@ template <typename Scalar>
 class InternalModelRegulator {
  public:
   using Traits = numeric::ScalarTraits<Scalar>;
+  using Terms = LoopTerms<Scalar>;
   using Config = InternalModelConfig;
   using Coefficients = InternalModelCoefficients<Scalar>;
   using State = InternalModelState<Scalar>;
@@ -398,21 +400,14 @@ class InternalModelRegulator {
     const Coefficients& c = *c_;
     State& s = *s_;
     const Scalar e = error_um;
-    Traits::mac(s.xi[0], c.step_gain, -reference_step_um);
-    s.prev_d_input += reference_step_um - Traits::mul(c.c, reference_step_um);
+    Terms::weight_step(s.xi[0], s.prev_d_input, c.step_gain, c.c, reference_step_um);
     // Output from the current internal-model state (eq (16)).
     auto v = s.xi[0];
     v += Traits::acc_mul(s.xi[1], c.out_r[0]);
     v += Traits::acc_mul(s.xi[2], c.out_r[1]);
     Traits::mac(v, c.k_e, e);
-    auto d = Traits::acc_zero();
-    Traits::mac(d, c.a_d, s.derivative);
-    Traits::mac(d, c.b_d, e - s.prev_d_input);
-    s.derivative = Traits::acc_to_scalar(d);
-    s.prev_d_input = e;
-    v += Traits::acc_from_scalar(s.derivative);
-    v += Traits::acc_from_scalar(feedforward_A);
-    s.last_output = Traits::acc_to_scalar(v);
+    Terms::filtered_derivative(s.derivative, s.prev_d_input, c.a_d, c.b_d, e);
+    s.last_output = Terms::finish_output(v, s.derivative, feedforward_A);
     // Advance the internal model (eq (14), exact discrete poles).
     Traits::mac(s.xi[0], c.in_xi0, e);
     s.xi[1] += Traits::acc_mul(s.xi[2], c.eps);

@@ -38,6 +38,7 @@
 
 #include "maglev/axis_loops/axis.hpp"
 #include "maglev/axis_loops/design_error.hpp"
+#include "maglev/axis_loops/loop_terms.hpp"
 #include "maglev/numeric/saturation.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
 
@@ -142,6 +143,7 @@ template <typename Scalar>
 class Pid2Dof {
  public:
   using Traits = numeric::ScalarTraits<Scalar>;
+  using Terms = LoopTerms<Scalar>;
   using Config = Pid2DofConfig;
   using Coefficients = Pid2DofCoefficients<Scalar>;
   using State = Pid2DofState<Scalar>;
@@ -157,24 +159,17 @@ class Pid2Dof {
     State& s = *s_;
     const Scalar e = error_um;
     // Setpoint weighting of the step (see header comment).
-    Traits::mac(s.integrator, c.one_minus_b_kp, -reference_step_um);
-    s.prev_d_input += reference_step_um - Traits::mul(c.c, reference_step_um);
+    Terms::weight_step(s.integrator, s.prev_d_input, c.one_minus_b_kp, c.c, reference_step_um);
     // Integral: Tustin.
     Traits::mac(s.integrator, c.ki_half_T, e);
     Traits::mac(s.integrator, c.ki_half_T, s.prev_error);
     s.prev_error = e;
     // Derivative, first-order filtered, on e minus the (1-c) part of steps.
-    auto d = Traits::acc_zero();
-    Traits::mac(d, c.a_d, s.derivative);
-    Traits::mac(d, c.b_d, e - s.prev_d_input);
-    s.derivative = Traits::acc_to_scalar(d);
-    s.prev_d_input = e;
+    Terms::filtered_derivative(s.derivative, s.prev_d_input, c.a_d, c.b_d, e);
     // Sum in the wide accumulator, one rounding.
     auto v = s.integrator;
     Traits::mac(v, c.kp, e);
-    v += Traits::acc_from_scalar(s.derivative);
-    v += Traits::acc_from_scalar(feedforward_A);
-    s.last_output = Traits::acc_to_scalar(v);
+    s.last_output = Terms::finish_output(v, s.derivative, feedforward_A);
     return s.last_output;
   }
 
