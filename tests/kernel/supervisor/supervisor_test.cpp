@@ -49,12 +49,12 @@ TEST(Supervisor, NominalTicksRaiseNothing) {
 TEST(Supervisor, TravelWindowLatchesWithAxisAndValueAndLands) {
   Rig r;
   r.tick();
-  r.in.pose[0] = 0.0285f;
+  r.in.pose[0] = 0.0295f;  // window: 28 mm travel + 1 mm
   const auto& s = r.tick();
   CHECK(s.first_fault.code == FaultCode::kTravelX);
   LONGS_EQUAL(2, s.first_fault.tick);
   LONGS_EQUAL(0, s.first_fault.axis);
-  DOUBLES_EQUAL(0.0285, s.first_fault.value, 1e-7);
+  DOUBLES_EQUAL(0.0295, s.first_fault.value, 1e-7);
   CHECK(s.reaction == FaultReaction::kLand);
   // A later, different fault does not overwrite the first-fault record.
   r.in.pose[1] = -0.02f;
@@ -66,7 +66,7 @@ TEST(Supervisor, TravelWindowLatchesWithAxisAndValueAndLands) {
 
 TEST(Supervisor, TravelYAndThetaZ) {
   Rig r;
-  r.in.pose[1] = 0.018f;
+  r.in.pose[1] = 0.019f;  // window: 17.5 mm travel + 1 mm
   CHECK(r.tick().first_fault.code == FaultCode::kTravelY);
   Rig r2;
   r2.in.pose[2] = -6e-3f;

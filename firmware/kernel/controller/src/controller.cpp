@@ -54,25 +54,16 @@ KernelConfig default_kernel_config() {
   c.measurement = DefaultSensorsToPoseConfig();
   for (Axis a : kAllAxes) c.axis[axis_index(a)] = default_axis_loop_config(a);
   c.allocation = DefaultForceAllocationConfig();
+  // Travel limits (x +-28 mm, y +-17.5 mm: paper 000's 56 mm x 35 mm) and the
+  // supervisor's window 1 mm beyond them are the structs' own defaults,
+  // derived from io::stage::kTravelX_m / kTravelY_m.
   c.references = ReferenceLimits{};
-  // Paper 000's travel is 56 mm x 35 mm (Sec. V, Fig. 10c: a 56 mm move):
-  // the references may span exactly that, x +-28 mm, y +-17.5 mm, and the
-  // supervisor's travel window sits 1 mm beyond so that a move's small
-  // following error at the end of travel does not trip it (HIL bench).
-  c.references.position_min[0] = -0.028f;
-  c.references.position_max[0] = 0.028f;
-  c.references.position_min[1] = -0.0175f;
-  c.references.position_max[1] = 0.0175f;
   c.sequencer = SequencerConfig{};
   c.sequencer.nominal_height_m = static_cast<float>(stage::kNominalHeight_m);
   c.supervisor = SupervisorConfig{};
   c.supervisor.peak_current_A = static_cast<float>(stage::kPeakCoilCurrent_A);
   c.supervisor.rms_current_A = static_cast<float>(stage::kRmsCoilCurrent_A);
   c.supervisor.interferometer_lsb_m = static_cast<float>(stage::kInterferometerLsb_m);
-  c.supervisor.x_min_m = -0.029f;
-  c.supervisor.x_max_m = 0.029f;
-  c.supervisor.y_min_m = -0.0185f;
-  c.supervisor.y_max_m = 0.0185f;
   c.payload_mass_kg = 0.0f;
   c.live_tuning = false;
   c.acceleration_feedforward = true;

@@ -18,6 +18,7 @@
 #include "maglev/force_allocation/force_allocation.hpp"
 #include "maglev/io/actuator_command.hpp"
 #include "maglev/io/sensor_sample.hpp"
+#include "maglev/io/stage_parameters.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
 #include "maglev/references/references.hpp"
 #include "maglev/sensors_to_pose/sensors_to_pose.hpp"
@@ -31,8 +32,12 @@ static_assert(kSequencedAxes == kAxisCount, "sequencer masks and Axis disagree")
 // Limits every motion command is checked against (SI). The stage is never
 // commanded beyond them; they must lie inside the supervisor's window.
 struct ReferenceLimits {
-  float position_min[kAxisCount] = {-0.027f, -0.0165f, -4e-3f, 10e-6f, -200e-6f, -200e-6f};
-  float position_max[kAxisCount] = {0.027f, 0.0165f, 4e-3f, 38e-6f, 200e-6f, 200e-6f};
+  // x, y: paper 000's travel, 56 mm x 35 mm (Sec. V, Fig. 10c moves the full
+  // 56 mm), centred on the interferometer zero.
+  static constexpr float kHalfTravelX_m = static_cast<float>(io::stage::kTravelX_m / 2);
+  static constexpr float kHalfTravelY_m = static_cast<float>(io::stage::kTravelY_m / 2);
+  float position_min[kAxisCount] = {-kHalfTravelX_m, -kHalfTravelY_m, -4e-3f, 10e-6f, -200e-6f, -200e-6f};
+  float position_max[kAxisCount] = {kHalfTravelX_m, kHalfTravelY_m, 4e-3f, 38e-6f, 200e-6f, 200e-6f};
   float max_velocity[kAxisCount] = {0.15f, 0.15f, 0.05f, 200e-6f, 1e-3f, 1e-3f};
   float max_acceleration[kAxisCount] = {1.5f, 1.5f, 0.5f, 5e-3f, 0.05f, 0.05f};
   // Steps are applied in one tick: bounded so the error fits the Scalar range (128 um).

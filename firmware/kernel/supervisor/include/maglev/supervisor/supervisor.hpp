@@ -12,6 +12,7 @@
 #include <cstdint>
 
 #include "maglev/io/sensor_sample.hpp"
+#include "maglev/io/stage_parameters.hpp"
 #include "maglev/sequencer/sequencer.hpp"
 
 namespace maglev::kernel {
@@ -56,9 +57,13 @@ enum class SupervisorConfigError : std::uint8_t {
 };
 
 struct SupervisorConfig {
-  // Travel window about the interferometer zero (paper 000: 56 mm x 35 mm).
-  float x_min_m = -0.028f, x_max_m = 0.028f;
-  float y_min_m = -0.0175f, y_max_m = 0.0175f;
+  // Travel window about the interferometer zero: paper 000's 56 mm x 35 mm
+  // plus 1 mm, so that a move to the end of travel (where the references may
+  // go) does not trip on its small following error.
+  float x_min_m = -static_cast<float>(io::stage::kTravelX_m / 2 + 1e-3);
+  float x_max_m = static_cast<float>(io::stage::kTravelX_m / 2 + 1e-3);
+  float y_min_m = -static_cast<float>(io::stage::kTravelY_m / 2 + 1e-3);
+  float y_max_m = static_cast<float>(io::stage::kTravelY_m / 2 + 1e-3);
   float theta_z_limit_rad = 5e-3f;
   // z / tilt envelope while z is closed (paper 000: within 40 um of rest).
   float z_min_m = -5e-6f, z_max_m = 40e-6f;
