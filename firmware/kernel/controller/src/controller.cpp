@@ -583,9 +583,10 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
 
   // --- 6. axis loops (all run; outputs selected by the closed mask) ----------------
   const Scalar ff_fraction = Traits::from_float(so.feedforward_fraction);
-  // The sequencer's fraction may exceed 1 (cable stiffness, payload margin);
-  // GravityFeedForward_A clamps its ramp to [0, 1], so scale the full value.
-  const Scalar gravity_A = ff_fraction * GravityFeedForward_A<Scalar>(Traits::one(), ap.allocation);
+  // The sequencer's fraction may exceed 1 (cable stiffness, payload margin),
+  // so it scales the full lift effort precomputed at apply time
+  // (GravityFeedForward_A would clamp the ramp to [0, 1]).
+  const Scalar gravity_A = ff_fraction * ap.allocation.gravity_effort_A;
   Scalar effort[kAxisCount];
   Scalar loop_out[kAxisCount];
   Scalar aw_offset[kAxisCount];  // loop output before the biquads minus after them
