@@ -4,13 +4,25 @@
 # area label (kernel, drivers, hil, can, socketcan-vm, modbus, target).
 # CppUTest's main is tests/support/cpputest_main.cpp so every runner prints
 # the same summary and returns non-zero on any failure.
-set(MAGLEV_TEST_LABELS kernel drivers hil can socketcan-vm modbus target)
+# An issue's label (bench, profiles, paper-001, ...) may be added beside the area:
+# LABEL "hil;bench".
+set(MAGLEV_TEST_LABELS kernel drivers hil can socketcan-vm modbus target
+    bench profiles paper-001 paper-002 fidelity faults tools)
+
+function(_maglev_check_labels fn name labels)
+  if(labels STREQUAL "")
+    message(FATAL_ERROR "${fn}(${name}): no LABEL")
+  endif()
+  foreach(_l IN LISTS labels)
+    if(NOT _l IN_LIST MAGLEV_TEST_LABELS)
+      message(FATAL_ERROR "${fn}(${name}): label '${_l}' is not one of ${MAGLEV_TEST_LABELS}")
+    endif()
+  endforeach()
+endfunction()
 
 function(maglev_add_cpputest)
   cmake_parse_arguments(T "" "NAME;LABEL;TIMEOUT" "SOURCES;LIBS;ARGS" ${ARGN})
-  if(NOT T_LABEL IN_LIST MAGLEV_TEST_LABELS)
-    message(FATAL_ERROR "maglev_add_cpputest(${T_NAME}): label '${T_LABEL}' is not one of ${MAGLEV_TEST_LABELS}")
-  endif()
+  _maglev_check_labels(maglev_add_cpputest ${T_NAME} "${T_LABEL}")
   add_executable(${T_NAME} ${T_SOURCES} ${PROJECT_SOURCE_DIR}/tests/support/cpputest_main.cpp)
   target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} PkgConfig::CPPUTEST)
   maglev_set_warnings(${T_NAME})
@@ -20,16 +32,14 @@ function(maglev_add_cpputest)
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 300)
   endif()
-  set_tests_properties(${T_NAME} PROPERTIES LABELS ${T_LABEL} TIMEOUT ${T_TIMEOUT})
+  set_tests_properties(${T_NAME} PROPERTIES LABELS "${T_LABEL}" TIMEOUT ${T_TIMEOUT})
 endfunction()
 
 # maglev_add_script_test(NAME <name> LABEL <area> COMMAND ... [TIMEOUT s])
 # For tests that are programs or scripts (VM tests, drift checks, QEMU runs).
 function(maglev_add_script_test)
   cmake_parse_arguments(T "" "NAME;LABEL;TIMEOUT;WORKING_DIRECTORY" "COMMAND" ${ARGN})
-  if(NOT T_LABEL IN_LIST MAGLEV_TEST_LABELS)
-    message(FATAL_ERROR "maglev_add_script_test(${T_NAME}): label '${T_LABEL}' is not one of ${MAGLEV_TEST_LABELS}")
-  endif()
+  _maglev_check_labels(maglev_add_script_test ${T_NAME} "${T_LABEL}")
   if(NOT T_WORKING_DIRECTORY)
     set(T_WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
   endif()
@@ -37,7 +47,7 @@ function(maglev_add_script_test)
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 300)
   endif()
-  set_tests_properties(${T_NAME} PROPERTIES LABELS ${T_LABEL} TIMEOUT ${T_TIMEOUT})
+  set_tests_properties(${T_NAME} PROPERTIES LABELS "${T_LABEL}" TIMEOUT ${T_TIMEOUT})
 endfunction()
 
 # maglev_add_all_subdirectories(): add every immediate child folder that has a
