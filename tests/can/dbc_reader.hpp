@@ -25,6 +25,8 @@ struct DbcSignal {
   double min = 0.0;
   double max = 0.0;
   bool is_float64 = false;  // SIG_VALTYPE_ ... : 2
+  bool is_multiplexor = false;  // "M": selects which multiplexed signals are present
+  int multiplex_value = -1;     // "mN": present only when the multiplexor equals N
 };
 struct DbcMessage {
   std::uint32_t id = 0;
@@ -38,7 +40,7 @@ inline std::map<std::uint32_t, DbcMessage> parse_dbc(const std::string& path) {
   std::map<std::uint32_t, DbcMessage> out;
   const std::regex bo(R"(^BO_ (\d+) (\w+): (\d+) (\w+)\s*$)");
   const std::regex sg(
-      R"(^ SG_ (\w+) : (\d+)\|(\d+)@([01])([+-]) \(([^,]+),([^)]+)\) \[([^|]+)\|([^\]]+)\] \"[^\"]*\" .*$)");
+      R"(^ SG_ (\w+)(?: (M|m\d+))? : (\d+)\|(\d+)@([01])([+-]) \(([^,]+),([^)]+)\) \[([^|]+)\|([^\]]+)\] \"[^\"]*\" .*$)");
   const std::regex vt(R"(^SIG_VALTYPE_ (\d+) (\w+) : 2;$)");
   std::string line;
   DbcMessage* cur = nullptr;
@@ -53,14 +55,17 @@ inline std::map<std::uint32_t, DbcMessage> parse_dbc(const std::string& path) {
     } else if (cur != nullptr && std::regex_match(line, m, sg)) {
       DbcSignal s;
       s.name = m[1];
-      s.start = std::stoi(m[2]);
-      s.length = std::stoi(m[3]);
-      s.little_endian = m[4] == "1";
-      s.is_signed = m[5] == "-";
-      s.factor = std::stod(m[6]);
-      s.offset = std::stod(m[7]);
-      s.min = std::stod(m[8]);
-      s.max = std::stod(m[9]);
+      const std::string mux = m[2];
+      s.is_multiplexor = mux == "M";
+      if (!mux.empty() && mux[0] == 'm') s.multiplex_value = std::stoi(mux.substr(1));
+      s.start = std::stoi(m[3]);
+      s.length = std::stoi(m[4]);
+      s.little_endian = m[5] == "1";
+      s.is_signed = m[6] == "-";
+      s.factor = std::stod(m[7]);
+      s.offset = std::stod(m[8]);
+      s.min = std::stod(m[9]);
+      s.max = std::stod(m[10]);
       cur->signals.push_back(s);
     } else if (std::regex_match(line, m, vt)) {
       auto it = out.find(static_cast<std::uint32_t>(std::stoul(m[1])));

@@ -246,7 +246,7 @@ TEST(Rejection, OutOfRangeEnableIsNeverApplied) {
 TEST_GROUP(HostCommand){};
 
 TEST(HostCommand, RoundTripIsBitExactForDoubles) {
-  HostCommandFrame c{HostCommandCode::kMoveJerkBy, 3, 4711, {8e-6, 1e-3, 0.0123456789012345, -1.0 / 3.0, 0.0}};
+  const HostCommandFrame c = make_host_command(4711, 3, MoveJerkByArgs{8e-6, 1e-3, 0.0123456789012345, -1.0 / 3.0});
   CanFrame f{};
   encode_host_command(c, 9, f);
   LONGS_EQUAL(0x040, f.id);
@@ -259,7 +259,26 @@ TEST(HostCommand, RoundTripIsBitExactForDoubles) {
   CHECK_TRUE(d.code == HostCommandCode::kMoveJerkBy);
   LONGS_EQUAL(3, d.axis);
   LONGS_EQUAL(4711, d.seq);
-  for (int i = 0; i < 5; ++i) CHECK_TRUE(std::memcmp(&c.arg[i], &d.arg[i], sizeof(double)) == 0);
+  CHECK_TRUE(std::memcmp(&c.args.move_jerk_by, &d.args.move_jerk_by, sizeof(MoveJerkByArgs)) == 0);
+  // Every command's named fields survive the wire bit for bit, in field order.
+  for (const HostCommandSpec& spec : kHostCommandSpecs) {
+    HostCommandFrame e{spec.code, 1, 7, {}};
+    with_args(spec.code, e.args, [&](auto& a) {
+      using A = std::remove_reference_t<decltype(a)>;
+      for (std::size_t i = 0; i < A::kFields.size(); ++i) a.*A::kFields[i].member = 0.1 * static_cast<double>(i + 1) + 1e-17;
+    });
+    encode_host_command(e, 10, f);
+    HostCommandFrame g{};
+    decode_host_command(f, g);
+    CHECK_TRUE(g.code == spec.code);
+    with_args(spec.code, g.args, [&](auto& a) {
+      using A = std::remove_reference_t<decltype(a)>;
+      LONGS_EQUAL(spec.field_count, A::kFields.size());
+      for (std::size_t i = 0; i < A::kFields.size(); ++i) {
+        DOUBLES_EQUAL(0.1 * static_cast<double>(i + 1) + 1e-17, a.*A::kFields[i].member, 0.0);
+      }
+    });
+  }
 
   HostCommandAckFrame a{4711, HostCommandCode::kStep, 9, 6, 123456u};
   encode_host_command_ack(a, 200, f);
@@ -278,7 +297,7 @@ TEST(HostCommand, RoundTripIsBitExactForDoubles) {
 TEST(HostCommand, RejectionsAreCountedAndNeverAccepted) {
   LinkReceiver rx;
   CanFrame f{};
-  const HostCommandFrame ok{HostCommandCode::kStep, 0, 1, {8e-6, 0, 0, 0, 0}};
+  const HostCommandFrame ok = make_host_command(1, 0, StepArgs{8e-6});
   encode_host_command(ok, 10, f);
   LONGS_EQUAL(static_cast<int>(RxStatus::kOk), static_cast<int>(rx.accept(f)));
   // Same counter again: repeated (a duplicated command is never applied twice).
@@ -295,13 +314,13 @@ TEST(HostCommand, RejectionsAreCountedAndNeverAccepted) {
   // NaN, infinity and |arg| > 1e9 are out of range even with a valid CRC.
   const double nan = std::numeric_limits<double>::quiet_NaN();
   HostCommandFrame c = ok;
-  c.arg[0] = nan;
+  c.args.step.delta = nan;
   encode_host_command(c, 12, f);
   LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
-  c.arg[0] = std::numeric_limits<double>::infinity();
+  c.args.step.delta = std::numeric_limits<double>::infinity();
   encode_host_command(c, 12, f);
   LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
-  c.arg[0] = 2e9;
+  c.args.step.delta = 2e9;
   encode_host_command(c, 12, f);
   LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
   // Command code 0 / 17 and axis 6: out of range.

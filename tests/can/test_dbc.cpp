@@ -33,7 +33,12 @@ void check_frame_against_dbc(const CanFrame& f, const std::map<std::string, doub
   const auto it = dbc().find(f.id);
   CHECK_TRUE(it != dbc().end());
   LONGS_EQUAL(it->second.length, f.len);
+  double mux = -1.0;
   for (const auto& s : it->second.signals) {
+    if (s.is_multiplexor) mux = dbc_decode(s, f.data);
+  }
+  for (const auto& s : it->second.signals) {
+    if (s.multiplex_value >= 0 && static_cast<double>(s.multiplex_value) != mux) continue;  // another command's field
     if (s.name == "e2e_crc") {
       DOUBLES_EQUAL(f.data[0] | (f.data[1] << 8), dbc_decode(s, f.data), 0.0);
       continue;
@@ -68,16 +73,44 @@ TEST(Dbc, SameMessagesAndSignalLayoutAsCatalog) {
     CHECK_TRUE(it != dbc().end());
     STRCMP_EQUAL(m.name, it->second.name.c_str());
     LONGS_EQUAL(m.length, it->second.length);
-    LONGS_EQUAL(m.signal_count, it->second.signals.size());
+    // Every catalog signal is in the DBC with its layout; host_command's value
+    // slots appear instead as each command's named fields (multiplexed).
+    const bool host_command = &m == &message(MessageKind::kHostCommand);
+    std::size_t expected_signals = 0;
     for (std::size_t i = 0; i < m.signal_count; ++i) {
-      const auto& d = it->second.signals[i];
-      STRCMP_EQUAL(m.signals[i].name, d.name.c_str());
-      LONGS_EQUAL(m.signals[i].start_bit, d.start);
-      LONGS_EQUAL(m.signals[i].length_bits, d.length);
-      CHECK_TRUE(d.little_endian);
-      CHECK_EQUAL(m.signals[i].is_signed, d.is_signed);
-      CHECK_EQUAL(m.signals[i].is_float64, d.is_float64);
+      const std::string name = m.signals[i].name;
+      if (host_command && name.rfind("value_slot_", 0) == 0) continue;
+      ++expected_signals;
+      const DbcSignal* d = nullptr;
+      for (const auto& s : it->second.signals) {
+        if (s.name == name) d = &s;
+      }
+      CHECK_TRUE_TEXT(d != nullptr, name.c_str());
+      LONGS_EQUAL(m.signals[i].start_bit, d->start);
+      LONGS_EQUAL(m.signals[i].length_bits, d->length);
+      CHECK_TRUE(d->little_endian);
+      CHECK_EQUAL(m.signals[i].is_signed, d->is_signed);
+      CHECK_EQUAL(m.signals[i].is_float64, d->is_float64);
+      CHECK_EQUAL(host_command && name == "command_code", d->is_multiplexor);
     }
+    if (host_command) {
+      for (const HostCommandSpec& c : kHostCommandSpecs) {
+        for (std::size_t f = 0; f < c.field_count; ++f) {
+          ++expected_signals;
+          const std::string name = std::string(c.name) + "_" + c.fields[f].name;
+          const DbcSignal* d = nullptr;
+          for (const auto& s : it->second.signals) {
+            if (s.name == name) d = &s;
+          }
+          CHECK_TRUE_TEXT(d != nullptr, name.c_str());
+          LONGS_EQUAL(static_cast<int>(c.code), d->multiplex_value);
+          const Signal& slot = m.signals[2 + 3 + f];  // e2e header, code/axis/seq, then the slots
+          LONGS_EQUAL(slot.start_bit, d->start);
+          CHECK_TRUE(d->is_float64);
+        }
+      }
+    }
+    LONGS_EQUAL(expected_signals, it->second.signals.size());
   }
 }
 
@@ -145,14 +178,21 @@ TEST(Dbc, EveryMessageDecodesLikeTheCodec) {
     encode_sync(sy, counter, f);
     check_frame_against_dbc(f, {{"e2e_counter", counter}, {"tick", sy.tick}, {"time_us", sy.time_us}});
 
+    // host_command: multiplexed by command_code, the named fields of that command.
     std::uniform_real_distribution<double> arg(-1.0, 1.0);
-    HostCommandFrame hc{static_cast<HostCommandCode>(1 + rng() % kHostCommandCodeMax),
-                        static_cast<std::uint8_t>(rng() % 6), static_cast<std::uint16_t>(rng()),
-                        {arg(rng) * 1e-5, arg(rng), arg(rng) * 100.0, arg(rng) * 1e3, 0.0}};
+    const auto code = static_cast<HostCommandCode>(1 + rng() % kHostCommandCodeMax);
+    HostCommandFrame hc{code, static_cast<std::uint8_t>(rng() % 6), static_cast<std::uint16_t>(rng()), {}};
+    std::map<std::string, double> he{{"e2e_counter", counter}, {"command_code", static_cast<double>(hc.code)},
+                                     {"axis", hc.axis}, {"command_seq", hc.seq}};
+    with_args(code, hc.args, [&](auto& args) {
+      using A = std::remove_reference_t<decltype(args)>;
+      for (const auto& fd : A::kFields) {
+        args.*fd.member = arg(rng) * 100.0;
+        he[std::string(to_string(code)) + "_" + fd.name] = args.*fd.member;
+      }
+    });
     encode_host_command(hc, counter, f);
-    check_frame_against_dbc(f, {{"e2e_counter", counter}, {"command_code", static_cast<double>(hc.code)},
-                                {"axis", hc.axis}, {"command_seq", hc.seq}, {"arg0", hc.arg[0]},
-                                {"arg1", hc.arg[1]}, {"arg2", hc.arg[2]}, {"arg3", hc.arg[3]}, {"arg4", hc.arg[4]}});
+    check_frame_against_dbc(f, he);
     const HostCommandAckFrame ack{static_cast<std::uint16_t>(rng()), static_cast<HostCommandCode>(1 + rng() % 16),
                                   static_cast<std::uint8_t>(rng() % 16), static_cast<std::uint8_t>(rng() % 16),
                                   static_cast<std::uint32_t>(rng())};

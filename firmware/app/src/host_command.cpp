@@ -15,7 +15,9 @@ bool to_motion_command(const can::HostCommandFrame& h, const kernel::Pose64& ref
   using kernel::MotionType;
   kernel::MotionCommand c;
   c.axis = static_cast<kernel::Axis>(h.axis);
-  const double* a = h.arg;
+  const can::HostCommandArgs& a = h.args;
+  // Relative moves: target = present reference + distance, in double.
+  const double here = reference_si(reference, h.axis);
   switch (h.code) {
     case C::kHome: c.type = MotionType::kHome; break;
     case C::kLevitate: c.type = MotionType::kLevitate; break;
@@ -23,27 +25,39 @@ bool to_motion_command(const can::HostCommandFrame& h, const kernel::Pose64& ref
     case C::kStop: c.type = MotionType::kStop; break;
     case C::kClearFault: c.type = MotionType::kClearFault; break;
     case C::kHold: c.type = MotionType::kHold; break;
-    case C::kStep: c.type = MotionType::kStep; c.target = a[0]; break;
+    case C::kStep: c.type = MotionType::kStep; c.target = a.step.delta; break;
     case C::kMoveTo:
-    case C::kMoveBy:
-    case C::kMoveJerkTo:
-    case C::kMoveJerkBy: {
-      const bool jerk_limited = h.code == C::kMoveJerkTo || h.code == C::kMoveJerkBy;
-      const bool relative = h.code == C::kMoveBy || h.code == C::kMoveJerkBy;
-      c.type = jerk_limited ? MotionType::kMoveJerkLimited : MotionType::kMoveTo;
-      c.target = relative ? reference_si(reference, h.axis) + a[0] : a[0];
-      c.velocity = a[1];
-      c.acceleration = a[2];
-      if (jerk_limited) c.jerk = a[3];
+      c.type = MotionType::kMoveTo;
+      c.target = a.move_to.target; c.velocity = a.move_to.velocity; c.acceleration = a.move_to.acceleration;
       break;
-    }
-    case C::kCircle: c.type = MotionType::kCircle; c.diameter_m = a[0]; c.period_s = a[1]; c.turns = a[2]; break;
+    case C::kMoveBy:
+      c.type = MotionType::kMoveTo;
+      c.target = here + a.move_by.distance; c.velocity = a.move_by.velocity; c.acceleration = a.move_by.acceleration;
+      break;
+    case C::kMoveJerkTo:
+      c.type = MotionType::kMoveJerkLimited;
+      c.target = a.move_jerk_to.target; c.velocity = a.move_jerk_to.velocity;
+      c.acceleration = a.move_jerk_to.acceleration; c.jerk = a.move_jerk_to.jerk;
+      break;
+    case C::kMoveJerkBy:
+      c.type = MotionType::kMoveJerkLimited;
+      c.target = here + a.move_jerk_by.distance; c.velocity = a.move_jerk_by.velocity;
+      c.acceleration = a.move_jerk_by.acceleration; c.jerk = a.move_jerk_by.jerk;
+      break;
+    case C::kCircle:
+      c.type = MotionType::kCircle;
+      c.diameter_m = a.circle.diameter_m; c.period_s = a.circle.period_s; c.turns = a.circle.turns;
+      break;
     case C::kSinusoid:
-      c.type = MotionType::kSinusoid; c.amplitude = a[0]; c.frequency_Hz = a[1]; c.period_s = a[2]; c.turns = a[3];
+      // The kernel counts cycles (0 = until hold); the command says how long.
+      c.type = MotionType::kSinusoid;
+      c.amplitude = a.sinusoid.amplitude; c.frequency_Hz = a.sinusoid.frequency_Hz;
+      c.turns = a.sinusoid.duration_s * a.sinusoid.frequency_Hz;
       break;
     case C::kExcite:
-      c.type = MotionType::kExcite; c.amplitude = a[0]; c.frequency_Hz = a[1]; c.duration_s = a[2];
-      c.harmonics = static_cast<std::uint8_t>(std::clamp(a[3], 1.0, 255.0));
+      c.type = MotionType::kExcite;
+      c.amplitude = a.excite.amplitude; c.frequency_Hz = a.excite.frequency_Hz; c.duration_s = a.excite.duration_s;
+      c.harmonics = static_cast<std::uint8_t>(std::clamp(a.excite.harmonics, 1.0, 255.0));
       break;
     case C::kStopExcitation: c.type = MotionType::kStopExcitation; break;
     case C::kShutdown: return false;

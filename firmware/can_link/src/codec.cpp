@@ -2,6 +2,7 @@
 
 #include <bit>
 #include <cmath>
+#include <type_traits>
 
 #include "maglev/can_link/e2e.hpp"
 
@@ -205,31 +206,15 @@ void decode_heartbeat(const CanFrame& f, HeartbeatFrame& out) {
   out.bus_errors = static_cast<std::uint16_t>(raw[kHdr + 3]);
 }
 
-const char* to_string(HostCommandCode c) {
-  switch (c) {
-    case HostCommandCode::kHome: return "home";
-    case HostCommandCode::kLevitate: return "levitate";
-    case HostCommandCode::kLand: return "land";
-    case HostCommandCode::kStop: return "stop";
-    case HostCommandCode::kClearFault: return "clear_fault";
-    case HostCommandCode::kHold: return "hold";
-    case HostCommandCode::kStep: return "step";
-    case HostCommandCode::kMoveTo: return "move_to";
-    case HostCommandCode::kMoveBy: return "move_by";
-    case HostCommandCode::kMoveJerkTo: return "move_jerk_to";
-    case HostCommandCode::kMoveJerkBy: return "move_jerk_by";
-    case HostCommandCode::kCircle: return "circle";
-    case HostCommandCode::kSinusoid: return "sinusoid";
-    case HostCommandCode::kExcite: return "excite";
-    case HostCommandCode::kStopExcitation: return "stop_excitation";
-    case HostCommandCode::kShutdown: return "shutdown";
-  }
-  return "?";
-}
-
 void encode_host_command(const HostCommandFrame& v, std::uint8_t counter, CanFrame& f) {
   std::int64_t raw[kHostCommandSignals.size()] = {0, counter, static_cast<std::uint8_t>(v.code), v.axis, v.seq};
-  for (std::size_t i = 0; i < 5; ++i) raw[kHdr + 3 + i] = std::bit_cast<std::int64_t>(v.arg[i]);
+  // Field i of the command -> value slot i; unused slots stay 0.0.
+  with_args(v.code, v.args, [&](const auto& a) {
+    using A = std::remove_cv_t<std::remove_reference_t<decltype(a)>>;
+    for (std::size_t i = 0; i < A::kFields.size(); ++i) {
+      raw[kHdr + 3 + i] = std::bit_cast<std::int64_t>(a.*A::kFields[i].member);
+    }
+  });
   encode_raw(message(MessageKind::kHostCommand), raw, counter, f);
 }
 void decode_host_command(const CanFrame& f, HostCommandFrame& out) {
@@ -238,7 +223,13 @@ void decode_host_command(const CanFrame& f, HostCommandFrame& out) {
   out.code = static_cast<HostCommandCode>(raw[kHdr + 0]);
   out.axis = static_cast<std::uint8_t>(raw[kHdr + 1]);
   out.seq = static_cast<std::uint16_t>(raw[kHdr + 2]);
-  for (std::size_t i = 0; i < 5; ++i) out.arg[i] = std::bit_cast<double>(raw[kHdr + 3 + i]);
+  out.args = HostCommandArgs{};
+  with_args(out.code, out.args, [&](auto& a) {
+    using A = std::remove_reference_t<decltype(a)>;
+    for (std::size_t i = 0; i < A::kFields.size(); ++i) {
+      a.*A::kFields[i].member = std::bit_cast<double>(raw[kHdr + 3 + i]);
+    }
+  });
 }
 
 void encode_host_command_ack(const HostCommandAckFrame& v, std::uint8_t counter, CanFrame& f) {

@@ -684,29 +684,25 @@ struct PlantFrames {
 // execute it through app::to_motion_command, as the board does). false:
 // the verb has no host command (excite: a bench-side disturbance).
 bool host_command_for(const Action& a, std::uint16_t seq, can::HostCommandFrame* out, std::string* why) {
-  can::HostCommandFrame h{};
-  h.seq = seq;
-  h.axis = static_cast<std::uint8_t>(kPoseToKernel[a.axis]);
+  const auto axis = static_cast<std::uint8_t>(kPoseToKernel[a.axis]);
   using C = can::HostCommandCode;
   switch (a.verb) {
-    case Verb::kLevitate: h.code = C::kLevitate; break;
-    case Verb::kLand: h.code = C::kLand; break;
-    case Verb::kStop: h.code = C::kStop; break;
-    case Verb::kHome: h.code = C::kHome; break;
-    case Verb::kClearFault: h.code = C::kClearFault; break;
-    case Verb::kHold: h.code = C::kHold; break;
-    case Verb::kStep: h.code = C::kStep; h.arg[0] = a.a0; break;
-    case Verb::kMove: h.code = C::kMoveBy; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
-    case Verb::kMoveTo: h.code = C::kMoveTo; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
-    case Verb::kMoveJerk:
-      h.code = C::kMoveJerkBy; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; h.arg[3] = a.a3; break;
-    case Verb::kCircle: h.code = C::kCircle; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
-    case Verb::kSinusoid: h.code = C::kSinusoid; h.arg[0] = a.a0; h.arg[1] = a.a1; h.arg[2] = a.a2; break;
+    case Verb::kLevitate: *out = can::make_host_command(C::kLevitate, seq, axis); break;
+    case Verb::kLand: *out = can::make_host_command(C::kLand, seq, axis); break;
+    case Verb::kStop: *out = can::make_host_command(C::kStop, seq, axis); break;
+    case Verb::kHome: *out = can::make_host_command(C::kHome, seq, axis); break;
+    case Verb::kClearFault: *out = can::make_host_command(C::kClearFault, seq, axis); break;
+    case Verb::kHold: *out = can::make_host_command(C::kHold, seq, axis); break;
+    case Verb::kStep: *out = can::make_host_command(seq, axis, can::StepArgs{a.a0}); break;
+    case Verb::kMove: *out = can::make_host_command(seq, axis, can::MoveByArgs{a.a0, a.a1, a.a2}); break;
+    case Verb::kMoveTo: *out = can::make_host_command(seq, axis, can::MoveToArgs{a.a0, a.a1, a.a2}); break;
+    case Verb::kMoveJerk: *out = can::make_host_command(seq, axis, can::MoveJerkByArgs{a.a0, a.a1, a.a2, a.a3}); break;
+    case Verb::kCircle: *out = can::make_host_command(seq, axis, can::CircleArgs{a.a0, a.a1, a.a2}); break;
+    case Verb::kSinusoid: *out = can::make_host_command(seq, axis, can::SinusoidArgs{a.a0, a.a1, a.a2}); break;
     case Verb::kExcite:
       *why = "'excite' is a bench disturbance computed from the controller's pose every tick: in-process only";
       return false;
   }
-  *out = h;
   return true;
 }
 

@@ -408,12 +408,13 @@ TEST(Application, HilWiringSharesOnePortAndReportsSourceRejections) {
 }
 
 namespace {
-can::CanFrame host_command(can::HostCommandCode code, std::uint16_t seq, std::uint8_t counter, double arg0 = 0.0) {
-  can::HostCommandFrame h{};
-  h.code = code;
-  h.axis = 0;
-  h.seq = seq;
-  h.arg[0] = arg0;
+// kStep: step by `value`; kMoveTo: move to `value` (no velocity: refused by
+// the kernel once it looks); any other code: the command without fields.
+can::CanFrame host_command(can::HostCommandCode code, std::uint16_t seq, std::uint8_t counter, double value = 0.0) {
+  const can::HostCommandFrame h = code == can::HostCommandCode::kStep ? can::make_host_command(seq, 0, can::StepArgs{value})
+                                  : code == can::HostCommandCode::kMoveTo
+                                      ? can::make_host_command(seq, 0, can::MoveToArgs{value, 0.0, 0.0})
+                                      : can::make_host_command(code, seq, 0);
   can::CanFrame f{};
   can::encode_host_command(h, counter, f);
   return f;
@@ -435,12 +436,7 @@ TEST(Application, HostCommandMappingIsTheBenchOne) {
   kernel::Pose64 ref{};
   ref.x_pm = 1'500'000;        // 1.5 um
   ref.theta_z_prad = -250'000; // -0.25 urad
-  can::HostCommandFrame h{};
-  h.code = can::HostCommandCode::kMoveBy;
-  h.axis = 0;
-  h.arg[0] = 2e-6;
-  h.arg[1] = 1e-3;
-  h.arg[2] = 0.5;
+  can::HostCommandFrame h = can::make_host_command(0, 0, can::MoveByArgs{2e-6, 1e-3, 0.5});
   kernel::MotionCommand c{};
   CHECK(app::to_motion_command(h, ref, &c));
   CHECK(c.type == kernel::MotionType::kMoveTo);
@@ -448,16 +444,12 @@ TEST(Application, HostCommandMappingIsTheBenchOne) {
   DOUBLES_EQUAL(3.5e-6, c.target, 1e-18);
   DOUBLES_EQUAL(1e-3, c.velocity, 0.0);
   DOUBLES_EQUAL(0.5, c.acceleration, 0.0);
-  h.code = can::HostCommandCode::kMoveJerkBy;
-  h.axis = 2;  // theta_z
-  h.arg[0] = 1e-6;
-  h.arg[3] = 40.0;
+  h = can::make_host_command(0, 2 /* theta_z */, can::MoveJerkByArgs{1e-6, 1e-3, 0.5, 40.0});
   CHECK(app::to_motion_command(h, ref, &c));
   CHECK(c.type == kernel::MotionType::kMoveJerkLimited);
   DOUBLES_EQUAL(0.75e-6, c.target, 1e-18);
   DOUBLES_EQUAL(40.0, c.jerk, 0.0);
-  h.code = can::HostCommandCode::kExcite;
-  h.arg[3] = 300.0;  // harmonics clamp to 255
+  h = can::make_host_command(0, 2, can::ExciteArgs{0.1, 5.0, 2.0, 300.0});  // harmonics clamp to 255
   CHECK(app::to_motion_command(h, ref, &c));
   CHECK(c.type == kernel::MotionType::kExcite);
   LONGS_EQUAL(255, c.harmonics);

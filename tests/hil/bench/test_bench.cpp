@@ -119,3 +119,32 @@ TEST(Bench, UnitsParse) {
   CHECK_FALSE(maglev::bench::parse_quantity("8parsec", Dim::kLength, &e).has_value());
   CHECK_FALSE(maglev::bench::parse_quantity("8um", Dim::kAngle, &e).has_value());
 }
+
+// Issue 11's bug: a scenario's `sinusoid AXIS AMPLITUDE FREQUENCY DURATION`
+// must stop after DURATION (the bench once sent the duration where the
+// catalog carried a period, so the controller read 0 cycles = "until hold").
+TEST(Bench, SinusoidHonoursItsDuration) {
+  const auto sc = parse(R"(
+[scenario]
+name = sinusoid_duration
+duration_s = 7.0
+seed = 3
+[timeline]
+0.0 levitate
+3.5 sinusoid x 2um 2Hz 1s
+)");
+  for (auto k : {maglev::hil::KernelKind::kFloat32, maglev::hil::KernelKind::kQ7_24}) {
+    const auto r = run_sc(sc, k);
+    const auto& t = r.trace.t_s;
+    const auto& xr = r.trace.reference[0];
+    double during_lo = 1e9, during_hi = -1e9, after_lo = 1e9, after_hi = -1e9;
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      if (t[i] >= 3.5 && t[i] < 4.5) { during_lo = std::fmin(during_lo, xr[i]); during_hi = std::fmax(during_hi, xr[i]); }
+      if (t[i] >= 4.6) { after_lo = std::fmin(after_lo, xr[i]); after_hi = std::fmax(after_hi, xr[i]); }
+    }
+    // It ran: about 4 um peak to peak during its second.
+    DOUBLES_EQUAL(4e-6, during_hi - during_lo, 0.1e-6);
+    // And it stopped: the reference holds still after 1 s (2 whole cycles).
+    CHECK_TRUE(after_hi - after_lo < 1e-12);
+  }
+}

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "maglev/can_link/host_commands.hpp"
 #include "maglev/io/sensor_sample.hpp"
 #include "maglev/io/stage_parameters.hpp"
 
@@ -178,20 +179,22 @@ inline constexpr auto kHeartbeatSignals = cd::layout(std::array<Signal, 4>{
 });
 
 // Host command (host/bench -> controller node), sporadic. command_code is
-// can::HostCommandCode (codec.hpp); the meaning of arg0..arg4 depends on it
-// (SI units: m, rad, m/s, rad/s, m/s^2, Hz, s, A; table in docs/CAN.md).
-inline constexpr std::uint8_t kHostCommandCodeMax = 16;
+// can::HostCommandCode; the value slots carry that command's named fields in
+// order (host_commands.hpp: field i -> value_slot_i, IEEE binary64, unused 0).
+// The DBC shows them as signals multiplexed by command_code, one named set
+// per command; nothing but the codec uses the slots.
 inline constexpr double kHostCommandArgLimit = 1e9;  // any sane SI argument; NaN/inf rejected
 inline constexpr auto kHostCommandSignals = cd::layout(std::array<Signal, 8>{
     cd::sig_range("command_code", 8, 1, kHostCommandCodeMax, "", "can::HostCommandCode (home, levitate, ..., shutdown)"),
     cd::sig_range("axis", 8, 0, 5, "", "kernel::Axis: 0 x, 1 y, 2 theta_z, 3 z, 4 theta_x, 5 theta_y"),
     cd::sig("command_seq", 16, false, 1.0, "", "sender's command number, echoed by host_command_ack"),
-    cd::sig_f64("arg0", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "target / delta / distance / diameter / amplitude"),
-    cd::sig_f64("arg1", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "velocity / period / frequency"),
-    cd::sig_f64("arg2", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "acceleration / turns / period or duration"),
-    cd::sig_f64("arg3", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "jerk / sinusoid turns / harmonics"),
-    cd::sig_f64("arg4", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "reserved (0)"),
+    cd::sig_f64("value_slot_0", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "field 0 of the command"),
+    cd::sig_f64("value_slot_1", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "field 1 of the command"),
+    cd::sig_f64("value_slot_2", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "field 2 of the command"),
+    cd::sig_f64("value_slot_3", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "field 3 of the command"),
+    cd::sig_f64("value_slot_4", -kHostCommandArgLimit, kHostCommandArgLimit, "SI", "field 4 of the command"),
 });
+static_assert(kHostCommandMaxFields == 5, "one value slot per field");
 
 inline constexpr auto kHostCommandAckSignals = cd::layout(std::array<Signal, 5>{
     cd::sig("command_seq", 16, false, 1.0, "", "command_seq of the host_command answered"),

@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "maglev/can_link/catalog.hpp"
+#include "maglev/can_link/host_commands.hpp"
 #include "maglev/can_port/can_port.hpp"
 #include "maglev/io/actuator_command.hpp"
 #include "maglev/io/sensor_sample.hpp"
@@ -78,44 +79,7 @@ struct HeartbeatFrame {
   std::uint16_t bus_errors;
 };
 
-// Host commands (host/bench -> controller node). Codes are stable wire values.
-// Arguments (SI; unused ones 0):
-//   kStep        axis, arg0 delta
-//   kMoveTo      axis, arg0 target, arg1 velocity, arg2 acceleration   (trapezoid)
-//   kMoveBy      axis, arg0 distance from the present reference, arg1 v, arg2 a
-//   kMoveJerkTo  axis, arg0 target, arg1 v, arg2 a, arg3 jerk          (S-curve)
-//   kMoveJerkBy  axis, arg0 distance from the present reference, arg1 v, arg2 a, arg3 jerk
-//   kCircle      arg0 diameter, arg1 period, arg2 turns                (x, y)
-//   kSinusoid    axis, arg0 amplitude, arg1 frequency, arg2 period_s, arg3 turns
-//   kExcite      axis, arg0 amplitude [A], arg1 frequency, arg2 duration, arg3 harmonics
-//   kShutdown    the controller node acknowledges and stops (bench only)
-enum class HostCommandCode : std::uint8_t {
-  kHome = 1,
-  kLevitate = 2,
-  kLand = 3,
-  kStop = 4,
-  kClearFault = 5,
-  kHold = 6,
-  kStep = 7,
-  kMoveTo = 8,
-  kMoveBy = 9,
-  kMoveJerkTo = 10,
-  kMoveJerkBy = 11,
-  kCircle = 12,
-  kSinusoid = 13,
-  kExcite = 14,
-  kStopExcitation = 15,
-  kShutdown = 16,
-};
-static_assert(static_cast<std::uint8_t>(HostCommandCode::kShutdown) == kHostCommandCodeMax);
-const char* to_string(HostCommandCode c);
-
-struct HostCommandFrame {
-  HostCommandCode code;
-  std::uint8_t axis;        // kernel::Axis index (0 x, 1 y, 2 theta_z, 3 z, 4 theta_x, 5 theta_y)
-  std::uint16_t seq;        // echoed by the ack
-  double arg[5];
-};
+// Host commands: host_commands.hpp (one struct per command, named fields).
 
 // Ack result: kernel::CommandResult value, or this when the node did not
 // execute the command (e.g. shutdown, or a code it does not implement).
