@@ -6,7 +6,8 @@
 
 #include "maglev/can_link/bus_load.hpp"
 #include "maglev/can_link/watchdog.hpp"
-#include "maglev/can_port/lockstep.hpp"
+#include "maglev/controller_node/controller_node.hpp"
+#include "maglev/lockstep/plant_endpoint.hpp"
 #include "maglev/can_port/open_can_port.hpp"
 #include "maglev/can_port/periodic_timer.hpp"
 #include "maglev/virtual_can/virtual_can.hpp"
@@ -45,24 +46,27 @@ struct LockstepResult {
   RxStats controller_rx;
 };
 
+// The bench's two endpoints (hil/lockstep's PlantEndpoint, the controller
+// node's CanServoIo = the firmware app's CAN I/O) with toy dynamics.
 LockstepResult run_lockstep(const std::string& bus_name, std::uint32_t ticks) {
   auto bus = VirtualBus::get(bus_name);
   auto plant_port = bus->open_endpoint();
   auto ctrl_port = bus->open_endpoint();
   LockstepResult r;
   std::thread controller([&] {
-    LockstepControllerLink link(*ctrl_port);
+    hil::CanServoIo cio(*ctrl_port);
     io::SensorSample s{};
     for (std::uint32_t i = 0; i < ticks; ++i) {
-      if (link.wait_sensor(s, 2'000'000) != LockstepStatus::kOk) break;
-      link.send_actuator(controller_step(s));
+      if (!cio.port().wait(2'000'000) || !cio.sensors().read(s)) break;
+      cio.actuators().write(controller_step(s));
     }
-    r.controller_rx = link.receiver().stats();
+    r.controller_rx = cio.rx_stats();
   });
-  LockstepPlantLink plant(*plant_port);
+  lockstep::PlantEndpoint plant(*plant_port, nullptr, lockstep::PlantEndpoint::Config{false, false});
   io::ActuatorCommand cmd = io::kSafeActuatorCommand;
   for (std::uint32_t tick = 0; tick < ticks; ++tick) {
-    if (plant.exchange(tick, plant_output(tick, cmd), cmd, 2'000'000) != LockstepStatus::kOk) break;
+    const std::uint8_t counter = plant.send_tick(tick, tick * 400e-6, plant_output(tick, cmd));
+    if (!plant.await_actuator(counter, 2'000'000, &cmd)) break;
     ++r.ok_ticks;
     for (auto c : cmd.dac_code) r.hash = (r.hash ^ static_cast<std::uint16_t>(c)) * 1099511628211ull;
   }
@@ -146,8 +150,8 @@ TEST(Lockstep, DeterministicAcrossRunsAndNoRejections) {
   LONGS_EQUAL(0, r1.controller_rx.rejected_total());
   LONGS_EQUAL(0, r1.plant_rx.lost);
   LONGS_EQUAL(5000, r1.plant_rx.accepted);
-  // sensor frames + a current monitor frame every 5th tick
-  LONGS_EQUAL(5000 + 1000, r1.controller_rx.accepted);
+  // sensor frames + a current monitor frame every 5th tick + a plant heartbeat every 250th
+  LONGS_EQUAL(5000 + 1000 + 20, r1.controller_rx.accepted);
   const double s = std::chrono::duration<double>(t1 - t0).count();
   std::printf("\n[measured] virtual-bus lockstep (2 threads): %.0f ticks/s\n", 5000.0 / s);
 }
@@ -262,22 +266,19 @@ TEST(FaultInjection, LockstepPlantTimesOutWhenActuatorFramesDropped) {
     if (f.id == message(MessageKind::kActuator).can_id) a.kind = FaultAction::kDrop;
     return a;
   });
-  LockstepPlantLink plant(*plant_port);
-  LockstepControllerLink ctrl(*ctrl_port);
+  lockstep::PlantEndpoint plant(*plant_port, nullptr, lockstep::PlantEndpoint::Config{false, false});
+  hil::CanServoIo ctrl(*ctrl_port);
   io::ActuatorCommand cmd = io::kSafeActuatorCommand;
   io::SensorSample s{};
   s.status_flags = 0;
-  // Single-threaded: send, let the controller answer, then the plant waits.
-  CanFrame f{};
-  encode_sensor(s, 0, f);
-  // Use exchange() with a short timeout; controller answers from this thread first.
+  const std::uint8_t counter = plant.send_tick(0, 0.0, s);
   std::thread t([&] {
     io::SensorSample got{};
-    if (ctrl.wait_sensor(got, 1'000'000) == LockstepStatus::kOk) ctrl.send_actuator(controller_step(got));
+    if (ctrl.port().wait(1'000'000) && ctrl.sensors().read(got)) ctrl.actuators().write(controller_step(got));
   });
-  const auto st = plant.exchange(0, s, cmd, 20'000);
+  const bool answered = plant.await_actuator(counter, 20'000, &cmd);
   t.join();
-  CHECK(st == LockstepStatus::kTimeout);
+  CHECK_FALSE(answered);
   CHECK_FALSE(cmd.amplifier_enable);  // untouched: still the safe command
   ActuatorFrameWatchdog wd;
   wd.arm(0);

@@ -14,7 +14,8 @@
 #include <thread>
 
 #include "maglev/can_link/codec.hpp"
-#include "maglev/can_port/lockstep.hpp"
+#include "maglev/controller_node/controller_node.hpp"
+#include "maglev/lockstep/plant_endpoint.hpp"
 #include "maglev/can_port/open_can_port.hpp"
 #include "maglev/socketcan/socketcan_port.hpp"
 
@@ -45,14 +46,22 @@ io::ActuatorCommand answer(const io::SensorSample& s) {
 }
 constexpr std::uint32_t kTicks = 500;
 
+// The controller endpoint: the controller node's CanServoIo (the firmware
+// application's CanSensorSource / CanActuatorSink).
 int run_controller(CanPort& port) {
-  LockstepControllerLink link(port);
+  hil::CanServoIo cio(port);
   io::SensorSample s{};
   for (std::uint32_t i = 0; i < kTicks; ++i) {
-    if (link.wait_sensor(s, 5'000'000) != LockstepStatus::kOk) return 1;
-    if (link.send_actuator(answer(s)) != LockstepStatus::kOk) return 2;
+    if (!cio.port().wait(5'000'000) || !cio.sensors().read(s)) return 1;
+    cio.actuators().write(answer(s));
+    if (cio.actuators().stats().send_errors != 0) return 2;
   }
-  return link.receiver().stats().rejected_total() == 0 ? 0 : 3;
+  return cio.rx_stats().rejected_total() == 0 ? 0 : 3;
+}
+// tick t through the plant endpoint; false: no answer within 5 s.
+bool exchange(lockstep::PlantEndpoint& plant, std::uint32_t t, io::ActuatorCommand* cmd) {
+  const std::uint8_t counter = plant.send_tick(t, t * 400e-6, sample_for(t));
+  return plant.await_actuator(counter, 5'000'000, cmd);
 }
 }  // namespace
 
@@ -153,12 +162,12 @@ TEST(SocketCan, LockstepTwoThreadsTwoSockets) {
   auto ctrl_port = SocketCanPort::open(kIf);
   int ctrl_rc = -1;
   std::thread ctrl([&] { ctrl_rc = run_controller(*ctrl_port); });
-  LockstepPlantLink plant(*plant_port);
+  lockstep::PlantEndpoint plant(*plant_port, nullptr, lockstep::PlantEndpoint::Config{false, false});
   io::ActuatorCommand cmd = io::kSafeActuatorCommand;
   const auto t0 = std::chrono::steady_clock::now();
   std::uint32_t ok = 0;
   for (std::uint32_t t = 0; t < kTicks; ++t) {
-    if (plant.exchange(t, sample_for(t), cmd, 5'000'000) != LockstepStatus::kOk) break;
+    if (!exchange(plant, t, &cmd)) break;
     const auto want = answer(sample_for(t));
     MEMCMP_EQUAL(want.dac_code, cmd.dac_code, sizeof cmd.dac_code);
     ++ok;
@@ -178,13 +187,13 @@ TEST(SocketCan, LockstepTwoProcesses) {
     _exit(port ? run_controller(*port) : 9);
   }
   auto plant_port = SocketCanPort::open(kIf);
-  LockstepPlantLink plant(*plant_port);
+  lockstep::PlantEndpoint plant(*plant_port, nullptr, lockstep::PlantEndpoint::Config{false, false});
   io::ActuatorCommand cmd = io::kSafeActuatorCommand;
   std::uint32_t ok = 0;
   // The child needs a moment to bind; the first sensor frames would be lost.
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   for (std::uint32_t t = 0; t < kTicks; ++t) {
-    if (plant.exchange(t, sample_for(t), cmd, 5'000'000) != LockstepStatus::kOk) break;
+    if (!exchange(plant, t, &cmd)) break;
     ++ok;
   }
   int status = 0;

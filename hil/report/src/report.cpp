@@ -90,8 +90,9 @@ bool write_trace_csv(const bench::Trace& t, const std::string& path, std::string
     return false;
   }
   f << "t_s";
-  for (int i = 0; i < 6; ++i) f << ',' << bench::kPoseNames[i] << (i < 3 ? "_m" : "_rad");
-  for (int i = 0; i < 6; ++i) f << ',' << bench::kPoseNames[i] << (i < 3 ? "_ref_m" : "_ref_rad");
+  // Columns in the papers' order (bench::kDisplayOrder), named from the one axis table.
+  for (bench::Axis a : bench::kDisplayOrder) f << ',' << bench::axis_name(a) << '_' << bench::si_unit(a);
+  for (bench::Axis a : bench::kDisplayOrder) f << ',' << bench::axis_name(a) << "_ref_" << bench::si_unit(a);
   for (int j = 0; j < 8; ++j) f << ",i" << (j + 1) << "_cmd_A";
   for (int j = 0; j < 8; ++j) f << ",i" << (j + 1) << "_A";
   f << ",state\n";
@@ -103,8 +104,8 @@ bool write_trace_csv(const bench::Trace& t, const std::string& path, std::string
   char row[2048];  // 29 values x <= 49 chars + state
   for (std::size_t n = 0; n < t.size(); ++n) {
     char* p = put_fixed(row, t.t_s[n], 4);
-    for (int i = 0; i < 6; ++i) { *p++ = ','; p = put_fixed(p, t.pose[i][n], 12); }
-    for (int i = 0; i < 6; ++i) { *p++ = ','; p = put_fixed(p, t.reference[i][n], 12); }
+    for (bench::Axis a : bench::kDisplayOrder) { *p++ = ','; p = put_fixed(p, t.pose[bench::index(a)][n], 12); }
+    for (bench::Axis a : bench::kDisplayOrder) { *p++ = ','; p = put_fixed(p, t.reference[bench::index(a)][n], 12); }
     for (int j = 0; j < 8; ++j) { *p++ = ','; p = put_fixed(p, t.current_cmd_A[j][n], 7); }
     for (int j = 0; j < 8; ++j) { *p++ = ','; p = put_fixed(p, t.current_A[j][n], 7); }
     *p++ = ',';

@@ -1,4 +1,8 @@
 // The HIL bench runner: one scenario, plant + controller node over CAN.
+// Parts: timeline.hpp (typed actions), metrics_registry.hpp (metric kinds),
+// overrides.hpp ([plant]/[controller] keys, validate), the in-process
+// executor (runner.cpp) and the two-process one (two_process.cpp), both on
+// hil/lockstep's PlantEndpoint and hil/controller_node's node.
 //
 // Lockstep tick N (default, --can virtual):
 //   plant endpoint: SensorSample s = plant.sample(); sensor frame N (+ current
@@ -17,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include "maglev/bench/axes.hpp"
+#include "maglev/bench/overrides.hpp"
 #include "maglev/controller_node/controller_node.hpp"
 #include "maglev/scenario/scenario.hpp"
 
@@ -32,21 +38,19 @@ struct RunOptions {
   bool verbose = true;                    // print command results while running
 };
 
-// The recorded time series: one row per servo tick (SI units).
-// Axis order of pose/reference: x, y, z, theta_x, theta_y, theta_z.
+// The recorded time series: one row per servo tick (SI units). Every
+// per-axis array is indexed by the kernel's Axis (axes.hpp: index(a)).
 struct Trace {
   std::vector<double> t_s;
-  std::vector<double> pose[6];       // measured by the kernel (m, rad)
-  std::vector<double> reference[6];  // kernel references (m, rad)
+  std::vector<double> pose[kAxes];       // measured by the kernel (m, rad)
+  std::vector<double> reference[kAxes];  // kernel references (m, rad)
   std::vector<double> current_cmd_A[8];
-  std::vector<double> current_A[8];  // actual coil currents (plant)
-  std::vector<double> effort_A[6];   // kernel efforts, kernel axis order x y thz z thx thy
-  std::vector<double> disturbance_A[6];  // injected excitation (same order)
-  std::vector<int> state;            // kernel::SequencerState
+  std::vector<double> current_A[8];      // actual coil currents (plant)
+  std::vector<double> effort_A[kAxes];   // kernel efforts
+  std::vector<double> disturbance_A[kAxes];  // injected bench excitation
+  std::vector<int> state;                // kernel::SequencerState
   std::size_t size() const { return t_s.size(); }
 };
-
-inline constexpr const char* kPoseNames[6] = {"x", "y", "z", "theta_x", "theta_y", "theta_z"};
 
 struct CommandLog {
   double t_s;
@@ -73,14 +77,6 @@ struct RunResult {
   std::string fault;
   bool completed = false;  // ran to duration_s without a link/controller failure
 };
-
-struct ScenarioError {
-  std::string message;  // "file:line: what" (like the parser's errors)
-};
-
-// Validates the timeline/metrics/overrides of a parsed scenario (verbs,
-// argument counts, units). Empty = fine.
-std::vector<ScenarioError> validate(const scenario::Scenario& sc);
 
 // Runs one scenario. Errors in the scenario come back in *errors (nothing ran).
 std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt,

@@ -1,0 +1,41 @@
+#include "maglev/bench/axes.hpp"
+
+namespace maglev::bench {
+
+namespace {
+// Names indexed by the kernel's Axis order.
+constexpr const char* kNames[kAxes] = {"x", "y", "theta_z", "z", "theta_x", "theta_y"};
+constexpr const char* kShort[kAxes][2] = {{"x", "x"}, {"y", "y"}, {"thz", "tz"}, {"z", "z"}, {"thx", "tx"}, {"thy", "ty"}};
+}  // namespace
+
+const char* axis_name(Axis a) { return kNames[index(a)]; }
+
+bool parse_axis(const std::string& s, Axis* out) {
+  for (Axis a : kernel::kAllAxes) {
+    if (s == kNames[index(a)] || s == kShort[index(a)][0] || s == kShort[index(a)][1]) {
+      *out = a;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::string axis_name_list() {
+  std::string l;
+  for (Axis a : kDisplayOrder) l += std::string(l.empty() ? "" : ", ") + axis_name(a);
+  return l;
+}
+
+double pose_si(const kernel::Pose64& p, Axis a) {
+  switch (a) {
+    case Axis::kX: return static_cast<double>(p.x_pm) * 1e-12;
+    case Axis::kY: return static_cast<double>(p.y_pm) * 1e-12;
+    case Axis::kThetaZ: return static_cast<double>(p.theta_z_prad) * 1e-12;
+    case Axis::kZ: return static_cast<double>(p.z_pm) * 1e-12;
+    case Axis::kThetaX: return static_cast<double>(p.theta_x_prad) * 1e-12;
+    case Axis::kThetaY: return static_cast<double>(p.theta_y_prad) * 1e-12;
+  }
+  return 0.0;
+}
+
+}  // namespace maglev::bench

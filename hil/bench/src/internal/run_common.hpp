@@ -1,0 +1,52 @@
+// What the in-process and the two-process executors share: the resolved
+// configuration, the CAN link by name, the result's bookkeeping.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "maglev/bench/overrides.hpp"
+#include "maglev/bench/runner.hpp"
+#include "maglev/can_link/bus_load.hpp"
+#include "maglev/can_port/periodic_timer.hpp"
+#include "maglev/virtual_can/virtual_can.hpp"
+
+namespace maglev::bench::internal {
+
+// The scenario's overrides on the defaults, then the command line's kernel
+// and seed. false: *errors says why.
+bool resolve_overrides(const scenario::Scenario& sc, const RunOptions& opt, Overrides* ov,
+                       std::vector<ScenarioError>* errors);
+
+RunResult new_result(const scenario::Scenario& sc, const Overrides& ov);
+
+struct Link {
+  std::shared_ptr<can::VirtualBus> bus;  // --can virtual: a private bus per run
+  std::unique_ptr<can::OwnedCanPort> plant_port, ctrl_port;
+  std::string error;
+};
+Link open_link(const std::string& name, bool need_controller);
+
+// Wall time, tick count, real-time factor and bus load of a finished run.
+// Returns the simulated time [s].
+double set_run_timing(RunResult* R, double wall_s, const can::BusLoadMeter& meter, double dt);
+
+// What the metrics need from the link and the kernel at the end of a run.
+struct LinkTotals {
+  std::uint64_t missed_actuator_frames;
+  std::uint32_t controller_rx_rejected;
+  std::uint32_t plant_rx_rejected;
+  double final_sequencer_state;
+  double fault_code;
+};
+// The run metrics both modes report (R's timing and completed already set).
+void add_run_metrics(RunResult* R, const can::BusLoadMeter& meter, double sim_s, const LinkTotals& l);
+// Real-time mode: deadline misses and the wake-up lateness histogram.
+void add_realtime_metrics(const can::PeriodicTimer& timer, std::map<std::string, double>* M);
+
+// Reserves n rows in every column of the trace.
+void reserve(Trace* tr, std::size_t n);
+
+}  // namespace maglev::bench::internal

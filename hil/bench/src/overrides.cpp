@@ -1,0 +1,127 @@
+#include "maglev/bench/overrides.hpp"
+
+#include <cmath>
+
+#include "maglev/bench/axes.hpp"
+#include "maglev/bench/metrics_registry.hpp"
+#include "maglev/bench/timeline.hpp"
+#include "maglev/bench/units.hpp"
+
+namespace maglev::bench {
+
+bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<ScenarioError>* errs) {
+  const std::size_t before = errs->size();
+  auto fail = [&](const std::string& what) { errs->push_back({sc.source + ": " + what}); };
+  auto num = [&](const std::string& sect, const std::string& key, const std::string& v, Dim d, double* dst) {
+    std::string e;
+    const auto r = parse_quantity(v, d, &e);
+    if (!r) {
+      fail("[" + sect + "] " + key + ": " + e);
+      return false;
+    }
+    *dst = *r;
+    return true;
+  };
+  auto flag = [&](const std::string& sect, const std::string& key, const std::string& v, bool* dst) {
+    if (v == "on" || v == "true" || v == "1" || v == "yes") { *dst = true; return; }
+    if (v == "off" || v == "false" || v == "0" || v == "no") { *dst = false; return; }
+    fail("[" + sect + "] " + key + ": expected on/off, got '" + v + "'");
+  };
+  // [scenario]
+  for (const auto& [k, v] : sc.scenario) {
+    if (k == "seed") {
+      double s = 0;
+      if (num("scenario", k, v, Dim::kNumber, &s)) {
+        if (s < 0 || s != std::floor(s)) fail("[scenario] seed must be a non-negative integer");
+        o->seed = static_cast<std::uint64_t>(s);
+      }
+    } else if (k == "kernel") {
+      if (!hil::parse_kernel_kind(v, &o->kernel)) fail("[scenario] kernel: expected float32 or q7.24, got '" + v + "'");
+    } else if (k != "name" && k != "title" && k != "duration_s" && k != "paper" && k != "primary" &&
+               k != "description") {
+      fail("[scenario] unknown key '" + k + "' (name, title, description, duration_s, kernel, seed, paper, primary)");
+    }
+  }
+  if (const auto it = sc.scenario.find("primary"); it != sc.scenario.end()) {
+    Axis p{};
+    if (!parse_axis(it->second, &p)) fail("[scenario] primary: unknown axis '" + it->second + "'");
+  }
+  // [plant]: a baseline first, then the single-value overrides.
+  if (const auto it = sc.plant.find("model"); it != sc.plant.end()) {
+    if (it->second == "ideal") o->plant = hil::PlantConfig::Ideal();
+    else if (it->second != "default") fail("[plant] model: expected default or ideal, got '" + it->second + "'");
+  }
+  for (const auto& [k, v] : sc.plant) {
+    auto& p = o->plant;
+    if (k == "model") continue;
+    if (k == "payload_kg") num("plant", k, v, Dim::kMass, &p.body.payload_kg);
+    else if (k == "current_noise_scale") num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_scale);
+    else if (k == "current_noise_density_A_per_rtHz")
+      num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_density_A_per_rtHz);
+    else if (k == "interferometer_noise_m") num("plant", k, v, Dim::kLength, &p.interferometer.noise_m);
+    else if (k == "displacement_noise_m") num("plant", k, v, Dim::kLength, &p.displacement.noise_m);
+    else if (k == "sensor_noise") flag("plant", k, v, &p.sensor_noise_enabled);
+    else if (k == "initial_x_m") num("plant", k, v, Dim::kLength, &p.initial.position_m[0]);
+    else if (k == "initial_y_m") num("plant", k, v, Dim::kLength, &p.initial.position_m[1]);
+    else if (k == "substeps_per_tick") {
+      double n = 0;
+      if (num("plant", k, v, Dim::kNumber, &n)) {
+        if (n < 1 || n > 64 || n != std::floor(n)) fail("[plant] substeps_per_tick must be an integer 1..64");
+        p.integration.substeps_per_tick = static_cast<int>(n);
+      }
+    } else {
+      fail("[plant] unknown key '" + k +
+           "' (model, payload_kg, current_noise_scale, current_noise_density_A_per_rtHz, interferometer_noise_m, displacement_noise_m, "
+           "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick)");
+    }
+  }
+  // [controller]: kernel config fields, SI. Per-axis gains as AXIS.FIELD.
+  for (const auto& [k, v] : sc.controller) {
+    auto& c = o->controller;
+    if (k == "payload_kg") {
+      double m = 0;
+      if (num("controller", k, v, Dim::kMass, &m)) c.payload_mass_kg = static_cast<float>(m);
+      continue;
+    }
+    const auto dot = k.find('.');
+    Axis p{};
+    if (dot == std::string::npos || !parse_axis(k.substr(0, dot), &p)) {
+      fail("[controller] unknown key '" + k + "' (payload_kg, or AXIS.kp|ki|kd|b|derivative_filter_Hz)");
+      continue;
+    }
+    const std::string field = k.substr(dot + 1);
+    double x = 0;
+    if (!num("controller", k, v, Dim::kNumber, &x)) continue;
+    auto& pid = c.axis[index(p)].pid;
+    const float xf = static_cast<float>(x);
+    if (field == "kp") pid.kp = xf;
+    else if (field == "ki") pid.ki = xf;
+    else if (field == "kd") pid.kd = xf;
+    else if (field == "b") pid.setpoint_weight_p = xf;
+    else if (field == "derivative_filter_Hz") pid.derivative_filter_hz = xf;
+    else fail("[controller] unknown field '" + field + "' in '" + k + "' (kp, ki, kd, b, derivative_filter_Hz)");
+  }
+  return errs->size() == before;
+}
+
+std::vector<ScenarioError> validate(const scenario::Scenario& sc) {
+  std::vector<ScenarioError> errs;
+  auto at = [&](int line, const std::string& m) { errs.push_back({sc.source + ":" + std::to_string(line) + ": " + m}); };
+  std::vector<TimelineAction> actions;
+  std::vector<std::string> timeline_errors;
+  if (!parse_timeline(sc, &actions, &timeline_errors)) {
+    for (auto& e : timeline_errors) errs.push_back({e});
+  }
+  for (const auto& m : sc.metrics) {
+    MetricSpec s;
+    std::string err;
+    if (!parse_metric(m, &s, &err)) at(m.line, err);
+    else if (s.t1 > sc.duration_s() + 1e-9) at(m.line, "metric window ends after duration_s");
+  }
+  Overrides o;
+  apply_overrides(sc, &o, &errs);
+  if (sc.duration_s() > 600.0) errs.push_back({sc.source + ": duration_s above 600 s"});
+  return errs;
+}
+
+}  // namespace maglev::bench

@@ -1,0 +1,99 @@
+#include "internal/run_common.hpp"
+
+#include "maglev/can_port/open_can_port.hpp"
+
+namespace maglev::bench::internal {
+
+bool resolve_overrides(const scenario::Scenario& sc, const RunOptions& opt, Overrides* ov,
+                       std::vector<ScenarioError>* errors) {
+  std::vector<ScenarioError> errs = validate(sc);
+  *ov = Overrides{};
+  if (errs.empty()) apply_overrides(sc, ov, &errs);
+  if (!errs.empty()) {
+    if (errors != nullptr) *errors = errs;
+    return false;
+  }
+  if (opt.kernel) ov->kernel = *opt.kernel;
+  if (opt.seed) ov->seed = *opt.seed;
+  return true;
+}
+
+RunResult new_result(const scenario::Scenario& sc, const Overrides& ov) {
+  RunResult R;
+  R.name = sc.name();
+  R.title = sc.scenario.count("title") ? sc.scenario.at("title") : R.name;
+  R.kernel = hil::to_string(ov.kernel);
+  R.seed = ov.seed;
+  R.paper = sc.paper;
+  return R;
+}
+
+Link open_link(const std::string& name, bool need_controller) {
+  Link l;
+  if (name == "virtual") {
+    // Not the process-wide named registry: runs in one process never hear
+    // each other and nothing outlives the run.
+    l.bus = std::make_shared<can::VirtualBus>("maglev-hil");
+    l.plant_port = l.bus->open_endpoint();
+    if (need_controller) l.ctrl_port = l.bus->open_endpoint();
+  } else {
+    l.plant_port = can::open_can_port(name, &l.error);
+    if (l.plant_port && need_controller) l.ctrl_port = can::open_can_port(name, &l.error);
+  }
+  return l;
+}
+
+double set_run_timing(RunResult* R, double wall_s, const can::BusLoadMeter& meter, double dt) {
+  R->wall_s = wall_s;
+  R->ticks = R->trace.size();
+  const double sim_s = static_cast<double>(R->ticks) * dt;
+  R->real_time_factor = R->wall_s > 0 ? sim_s / R->wall_s : 0.0;
+  R->bus_load_percent = sim_s > 0 ? 1e-4 * meter.load_ppm(static_cast<std::uint64_t>(sim_s * 1e9)) : 0.0;
+  return sim_s;
+}
+
+void add_run_metrics(RunResult* R, const can::BusLoadMeter& meter, double sim_s, const LinkTotals& l) {
+  auto& M = R->metrics;
+  M["real_time_factor"] = R->real_time_factor;
+  M["wall_time_per_tick_us"] = R->ticks > 0 ? 1e6 * R->wall_s / static_cast<double>(R->ticks) : 0.0;
+  M["bus_load_percent"] = R->bus_load_percent;
+  M["bus_frames"] = static_cast<double>(meter.frames());
+  M["ticks"] = static_cast<double>(R->ticks);
+  M["simulated_time_s"] = sim_s;
+  M["missed_actuator_frames"] = static_cast<double>(l.missed_actuator_frames);
+  M["controller_rx_rejected_frames"] = static_cast<double>(l.controller_rx_rejected);
+  M["plant_rx_rejected_frames"] = static_cast<double>(l.plant_rx_rejected);
+  M["final_sequencer_state"] = l.final_sequencer_state;
+  M["fault_code"] = l.fault_code;
+  M["completed"] = R->completed ? 1.0 : 0.0;
+}
+
+void add_realtime_metrics(const can::PeriodicTimer& timer, std::map<std::string, double>* M) {
+  const can::JitterHistogram& j = timer.jitter();
+  (*M)["realtime_deadline_misses"] = static_cast<double>(timer.deadline_misses());
+  (*M)["realtime_max_lateness_us"] = static_cast<double>(j.max_ns) * 1e-3;
+  (*M)["realtime_mean_lateness_us"] = j.samples > 0 ? j.sum_ns * 1e-3 / static_cast<double>(j.samples) : 0.0;
+  for (std::size_t b = 0; b < j.counts.size(); ++b) {
+    const std::string name = b < can::JitterHistogram::kEdges_us.size()
+                                 ? "realtime_lateness_le_" + std::to_string(can::JitterHistogram::kEdges_us[b]) + "us_ticks"
+                                 : "realtime_lateness_gt_" + std::to_string(can::JitterHistogram::kEdges_us.back()) + "us_ticks";
+    (*M)[name] = static_cast<double>(j.counts[b]);
+  }
+}
+
+void reserve(Trace* tr, std::size_t n) {
+  tr->t_s.reserve(n);
+  for (int i = 0; i < kAxes; ++i) {
+    tr->pose[i].reserve(n);
+    tr->reference[i].reserve(n);
+    tr->effort_A[i].reserve(n);
+    tr->disturbance_A[i].reserve(n);
+  }
+  for (int j = 0; j < 8; ++j) {
+    tr->current_cmd_A[j].reserve(n);
+    tr->current_A[j].reserve(n);
+  }
+  tr->state.reserve(n);
+}
+
+}  // namespace maglev::bench::internal
