@@ -20,7 +20,7 @@ echo "== in process, virtual bus (host)"
 
 echo "== two processes over vcan0 (VM)"
 T0=$(date +%s.%N)
-"$HERE/run-in-vm.sh" --share "$(dirname "$HIL")" --share "$HERE" --share "$WORK" --timeout 240 -- \
+"$HERE/run-in-vm.sh" --share "$(dirname "$HIL")" --share "$HERE" --share "$WORK" --share "$HERE/../../hil/profiles" --timeout 240 -- \
   sh "$HERE/two_process_guest.sh" "$HIL" "$SC" "$WORK/vm"
 RC=$?
 T1=$(date +%s.%N)

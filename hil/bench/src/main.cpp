@@ -5,6 +5,8 @@
 //                  [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet]
 //   maglev-hil suite --out DIR [same options]
 //   maglev-hil check NAME|FILE...             parse + validate only
+//   maglev-hil profiles                       the stage profiles (hil/profiles)
+//   maglev-hil check-profile NAME|FILE        what the controller makes of a profile
 //   maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S] [--levitate]
 //   maglev-hil plant NAME|FILE --can IFACE --out DIR [--controller-record FILE] [--mode lockstep|realtime]
 //                  [--seed N] [--no-plots] [--quiet]
@@ -15,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "maglev/bench/profile_check.hpp"
 #include "maglev/bench/runner.hpp"
 #include "maglev/bench/serve.hpp"
 #include "maglev/report/report.hpp"
@@ -51,6 +54,8 @@ void usage() {
       "                 [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet] [--scenarios DIR]\n"
       "  maglev-hil suite --out DIR [run options]\n"
       "  maglev-hil check NAME|FILE...\n"
+      "  maglev-hil profiles                  the stage profiles; run/suite take --profile NAME|FILE\n"
+      "  maglev-hil check-profile NAME|FILE   allocation, passive axes, loops, current headroom\n"
       "  maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S]\n"
       "                 [--levitate]       (runs until a shutdown host command, SIGTERM/SIGINT or --duration)\n"
       "  maglev-hil plant NAME|FILE --can IFACE --out DIR [--controller-record FILE]\n"
@@ -95,6 +100,8 @@ Args parse_args(int argc, char** argv) {
         else if (v == "realtime") a.run.mode = maglev::bench::Mode::kRealtime;
         else a.error = "--mode: expected lockstep or realtime, got '" + v + "'";
       }
+    } else if (s == "--profile") {
+      if (value(&v)) a.run.profile = v;
     } else if (s == "--seed") {
       if (value(&v)) {
         char* end = nullptr;
@@ -229,6 +236,14 @@ int main(int argc, char** argv) {
     }
     return 0;
   }
+  if (a.cmd == "profiles") return maglev::bench::list_profiles_main();
+  if (a.cmd == "check-profile") {
+    if (a.positional.size() != 1) {
+      std::fprintf(stderr, "maglev-hil check-profile: needs one profile NAME|FILE\n");
+      return 2;
+    }
+    return maglev::bench::check_profile_main(a.positional[0]);
+  }
   if (a.cmd == "check") {
     int bad = 0;
     for (const auto& p : a.positional) {
@@ -259,12 +274,16 @@ int main(int argc, char** argv) {
     };
     std::vector<Row> rows;
     double sim_total = 0, wall_total = 0;
+    const std::string suite_profile = a.run.profile ? *a.run.profile : maglev::bench::kDefaultProfile;
     for (const auto& f : scenario_files(a.scenarios)) {
       maglev::scenario::Scenario sc;
       if (!load(f.string(), a.scenarios, &sc)) {
         rows.push_back({f.stem().string(), "scenario error", 2, 0, 0, 0, 0});
         continue;
       }
+      // A profile's suite: the scenarios that name it, and -- for a stage of
+      // the default's family -- the ones that name none.
+      if (!maglev::bench::in_suite(sc, suite_profile)) continue;
       maglev::bench::RunResult r;
       const int rc = run_one(sc, a, (fs::path(a.out) / sc.name()).string(), &r);
       const double sim = static_cast<double>(r.ticks) / 2500.0;

@@ -6,6 +6,12 @@
 #include "maglev/bench/metrics_registry.hpp"
 #include "maglev/bench/timeline.hpp"
 #include "maglev/bench/units.hpp"
+#include "maglev/profile/profile_text.hpp"
+#include "maglev/stage_profile/apply_profile.hpp"
+
+#ifndef MAGLEV_PROFILE_DIR
+#define MAGLEV_PROFILE_DIR "hil/profiles"
+#endif
 
 namespace maglev::bench {
 
@@ -38,8 +44,9 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     } else if (k == "kernel") {
       if (!hil::parse_kernel_kind(v, &o->kernel)) fail("[scenario] kernel: expected float32 or q7.24, got '" + v + "'");
     } else if (k != "name" && k != "title" && k != "duration_s" && k != "paper" && k != "primary" &&
-               k != "description") {
-      fail("[scenario] unknown key '" + k + "' (name, title, description, duration_s, kernel, seed, paper, primary)");
+               k != "description" && k != "profile") {
+      fail("[scenario] unknown key '" + k +
+           "' (name, title, description, duration_s, kernel, seed, paper, primary, profile)");
     }
   }
   if (const auto it = sc.scenario.find("primary"); it != sc.scenario.end()) {
@@ -102,6 +109,72 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     else fail("[controller] unknown field '" + field + "' in '" + k + "' (kp, ki, kd, b, derivative_filter_Hz)");
   }
   return errs->size() == before;
+}
+
+std::string profile_dir() { return MAGLEV_PROFILE_DIR; }
+
+std::string profile_of(const scenario::Scenario& sc) {
+  const auto it = sc.scenario.find("profile");
+  return it == sc.scenario.end() ? kDefaultProfile : it->second;
+}
+
+bool plant_config_for(const stage_profile::StageProfile& p, const hil::PlantConfig& base, hil::PlantConfig* out,
+                      std::string* why) {
+  namespace sp = stage_profile;
+  if (p.family != sp::ActuatorFamily::kHalbachLorentz) {
+    *why = "the bench plant models the halbach_lorentz family only (profile family not built yet)";
+    return false;
+  }
+  hil::PlantConfig c = base;
+  switch (p.halbach.layout) {
+    case sp::ForcerLayout::kCross: c.body.layout = hil::BodyConfig::Layout::kCross; break;
+    case sp::ForcerLayout::kSquare: c.body.layout = hil::BodyConfig::Layout::kSquare; break;
+    default:
+      *why = "the bench plant models the cross and square layouts: the triangle's forcers thrust obliquely to the "
+             "Halbach arrays, whose per-coil-side field model is not built yet";
+      return false;
+  }
+  c.body.mass_kg = p.body.mass_kg;
+  for (int i = 0; i < 3; ++i) c.body.inertia_kgm2[i] = p.body.inertia_kgm2[i];
+  c.body.lever_arm_m = p.halbach.lever_arm_m;
+  c.body.gravity_m_per_s2 = p.body.gravity_m_per_s2;
+  c.field.pitch_m = p.halbach.pitch_m;
+  c.field.magnet_thickness_m = p.halbach.magnet_thickness_m;
+  c.field.coil_effective_length_m = p.halbach.coil_effective_length_m;
+  c.field.coil_side_width_m = p.halbach.coil_side_width_m;
+  c.field.coil_thickness_m = p.halbach.coil_thickness_m;
+  c.field.coil_turns = p.halbach.coil_turns;
+  c.field.rest_gap_m = p.halbach.rest_gap_m;
+  c.amplifier.current_limit_A = p.limits.hardware_current_A;
+  c.integration.servo_rate_Hz = p.servo_rate_Hz;
+  *out = c;
+  return true;
+}
+
+bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<ScenarioError>* errs) {
+  const profile::ProfileParse parsed = profile::find_profile(name_or_path, profile_dir());
+  if (!parsed.ok()) {
+    for (const auto& e : parsed.errors) errs->push_back({e});
+    return false;
+  }
+  kernel::KernelConfig kc{};
+  const stage_profile::ProfileCheck check = stage_profile::MakeKernelConfig(parsed.profile, &kc);
+  if (check.error != stage_profile::ProfileError::kOk) {
+    errs->push_back({name_or_path + ": the controller refuses this profile: " + stage_profile::to_string(check.error) +
+                     (check.axis >= 0 ? std::string(" (axis ") + axis_name(static_cast<Axis>(check.axis)) + ")" : "")});
+    return false;
+  }
+  std::string why;
+  hil::PlantConfig plant{};
+  if (!plant_config_for(parsed.profile, o->plant, &plant, &why)) {
+    errs->push_back({name_or_path + ": " + why});
+    return false;
+  }
+  o->profile_name = parsed.profile.name;
+  o->profile = parsed.profile;
+  o->controller = kc;
+  o->plant = plant;
+  return true;
 }
 
 std::vector<ScenarioError> validate(const scenario::Scenario& sc) {

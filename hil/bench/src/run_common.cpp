@@ -8,6 +8,9 @@ bool resolve_overrides(const scenario::Scenario& sc, const RunOptions& opt, Over
                        std::vector<ScenarioError>* errors) {
   std::vector<ScenarioError> errs = validate(sc);
   *ov = Overrides{};
+  // The stage first (kernel configuration and plant from its profile), then
+  // the scenario's own [plant]/[controller] keys on top.
+  if (errs.empty()) apply_profile(opt.profile ? *opt.profile : profile_of(sc), ov, &errs);
   if (errs.empty()) apply_overrides(sc, ov, &errs);
   if (!errs.empty()) {
     if (errors != nullptr) *errors = errs;
@@ -23,6 +26,7 @@ RunResult new_result(const scenario::Scenario& sc, const Overrides& ov) {
   R.name = sc.name();
   R.title = sc.scenario.count("title") ? sc.scenario.at("title") : R.name;
   R.kernel = hil::to_string(ov.kernel);
+  R.profile = ov.profile_name;
   R.seed = ov.seed;
   R.paper = sc.paper;
   return R;

@@ -234,7 +234,7 @@ bool controller_config_of(const scenario::Scenario& sc, kernel::KernelConfig* co
                           std::vector<ScenarioError>* errors) {
   std::vector<ScenarioError> errs;
   Overrides ov;
-  apply_overrides(sc, &ov, &errs);
+  if (apply_profile(profile_of(sc), &ov, &errs)) apply_overrides(sc, &ov, &errs);
   if (!errs.empty()) {
     if (errors != nullptr) *errors = errs;
     return false;

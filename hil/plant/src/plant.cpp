@@ -13,9 +13,19 @@ std::int16_t QuantizeAdc(double volts, double full_scale_V) {
   return static_cast<std::int16_t>(std::clamp(code, -32768.0, 32767.0));
 }
 
-// Forcer centres in the platen frame, eq (18): 1&2 at y = -l (Fx), 3&4 at
-// x = +l (Fy), 5&6 at y = +l (Fx), 7&8 at x = -l (Fy).
-Eigen::Vector2d ForcerCentre(int forcer, double l) {
+// Forcer centres in the platen frame. Cross, eq (18): 1&2 at y = -l (Fx),
+// 3&4 at x = +l (Fy), 5&6 at y = +l (Fx), 7&8 at x = -l (Fy). Square, paper
+// 003 eq (6): 1&2 at (l, l) (Fx), 3&4 at (-l, l) (Fy), 5&6 at (-l, -l) (Fx),
+// 7&8 at (l, -l) (Fy).
+Eigen::Vector2d ForcerCentre(int forcer, double l, BodyConfig::Layout layout) {
+  if (layout == BodyConfig::Layout::kSquare) {
+    switch (forcer) {
+      case 0: return {l, l};
+      case 1: return {-l, l};
+      case 2: return {-l, -l};
+      default: return {l, -l};
+    }
+  }
   switch (forcer) {
     case 0: return {0.0, -l};
     case 1: return {l, 0.0};
@@ -117,15 +127,17 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
       centre = (f < 2) ? pitch / 4.0 : -pitch / 4.0;
     }
     const Eigen::Vector3d u_ref = fx_coil ? Eigen::Vector3d(0.0, -1.0, 0.0) : Eigen::Vector3d(1.0, 0.0, 0.0);
-    const Eigen::Vector2d fc = ForcerCentre(f, l);
+    const Eigen::Vector2d fc = ForcerCentre(f, l, config.body.layout);
     const double alpha = config.forcer_errors.misalignment_rad[f];
     const Eigen::Matrix3d rot_alpha = Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     for (int side = 0; side < 2; ++side) {
       const double s = centre + (side == 0 ? -pitch / 4.0 : pitch / 4.0);
       const double half_pitches = std::nearbyint((s - s0) / (pitch / 2.0));
       const bool odd = std::fabs(std::fmod(half_pitches, 2.0)) > 0.5;
-      Eigen::Vector3d r = fx_coil ? Eigen::Vector3d(base + s, fc.y(), -com_arm_m_)
-                                  : Eigen::Vector3d(fc.x(), base + s, -com_arm_m_);
+      // Along its array the coil sits at the forcer centre's coordinate (0 in
+      // the cross layout) + the base point + s.
+      Eigen::Vector3d r = fx_coil ? Eigen::Vector3d(fc.x() + base + s, fc.y(), -com_arm_m_)
+                                  : Eigen::Vector3d(fc.x(), fc.y() + base + s, -com_arm_m_);
       // Misalignment: the pair turns by alpha about its centre (paper 003).
       const Eigen::Vector3d centre3(fc.x(), fc.y(), -com_arm_m_);
       r = centre3 + rot_alpha * (r - centre3);
@@ -387,7 +399,7 @@ void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
   const double c4 = config_.suspension.damping_Ns_per_m / 4.0;
   const double h0 = config_.suspension.neutral_height_m;
   for (int f = 0; f < kForcers; ++f) {
-    const Eigen::Vector2d fc = ForcerCentre(f, config_.body.lever_arm_m);
+    const Eigen::Vector2d fc = ForcerCentre(f, config_.body.lever_arm_m, config_.body.layout);
     const Eigen::Vector3d rb(fc.x(), fc.y(), -com_arm_m_);
     double rw[3];
     Rotate(k.r, rb, rw);

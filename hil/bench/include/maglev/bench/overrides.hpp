@@ -10,6 +10,7 @@
 #include "maglev/controller_node/controller_node.hpp"
 #include "maglev/hil/plant_config.hpp"
 #include "maglev/scenario/scenario.hpp"
+#include "maglev/stage_profile/stage_profile.hpp"
 
 namespace maglev::bench {
 
@@ -17,12 +18,29 @@ struct ScenarioError {
   std::string message;  // "file:line: what" (like the parser's errors)
 };
 
+// The stage every scenario runs on unless it (or --profile) names another.
+inline constexpr const char* kDefaultProfile = "nk2017-cross";
+// Where `--profile NAME` looks (hil/profiles of the source tree).
+std::string profile_dir();
+
 struct Overrides {
+  std::string profile_name = kDefaultProfile;
+  stage_profile::StageProfile profile{};
   hil::PlantConfig plant = hil::PlantConfig::Default();
   kernel::KernelConfig controller = kernel::default_kernel_config();
   std::uint64_t seed = 1;
   hil::KernelKind kernel = hil::KernelKind::kFloat32;
 };
+
+// Loads the profile NAME|FILE and builds the kernel configuration and the
+// plant from it (both from the one record). false: *errs says why, field by
+// field for a malformed profile.
+bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<ScenarioError>* errs);
+// The plant for a profile, on top of `base` (noise, errors, integration).
+bool plant_config_for(const stage_profile::StageProfile& p, const hil::PlantConfig& base, hil::PlantConfig* out,
+                      std::string* why);
+// The profile a scenario names ([scenario] profile), else the default.
+std::string profile_of(const scenario::Scenario& sc);
 
 // Applies the scenario's keys to *o; false: *errs says why (field by field).
 bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<ScenarioError>* errs);

@@ -35,6 +35,7 @@ struct RunOptions {
   std::string can = "virtual";            // "virtual" or a SocketCAN interface
   Mode mode = Mode::kLockstep;
   std::optional<std::uint64_t> seed;      // overrides the scenario's `seed`
+  std::optional<std::string> profile;     // overrides the scenario's `profile` (NAME or FILE)
   bool verbose = true;                    // print command results while running
 };
 
@@ -63,6 +64,7 @@ struct RunResult {
   std::string name;
   std::string title;
   std::string kernel;
+  std::string profile;
   std::uint64_t seed = 0;
   Trace trace;
   std::map<std::string, double> metrics;  // flat, SI units in the names

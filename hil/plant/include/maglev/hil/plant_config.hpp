@@ -45,6 +45,10 @@ struct BodyConfig {
   double payload_kg = 0.0;
   double payload_side_m = 0.10;
   double lever_arm_m = io::stage::kLeverArm_m;  // l of eq (18)
+  // Where the four forcers sit (paper 003 eqs (6)-(8)): cross (paper 000,
+  // forcers on the axes) or square (at the corners (+-l, +-l)). The coils of
+  // x-thrust forcers lie along the x array, of y-thrust forcers along y.
+  enum class Layout : std::uint8_t { kCross = 0, kSquare = 1 } layout = Layout::kCross;
   // (ours) height of the CoM above the coils' mid-plane. 0 = the paper's A
   // matrix (in-plane forces produce no tilt torque); > 0 adds the physical
   // tilt torque of in-plane thrust.

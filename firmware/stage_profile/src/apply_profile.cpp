@@ -1,0 +1,372 @@
+#include "maglev/stage_profile/apply_profile.hpp"
+
+#include <cmath>
+#include <cstddef>
+
+#include "maglev/axis_loops/defaults.hpp"
+#include "maglev/force_allocation/force_allocation.hpp"
+#include "maglev/io/stage_parameters.hpp"
+
+namespace maglev::stage_profile {
+
+const char* to_string(ProfileError e) {
+  switch (e) {
+    case ProfileError::kOk: return "ok";
+    case ProfileError::kBadName: return "bad name";
+    case ProfileError::kBadServoRate: return "servo rate outside 500..20000 Hz";
+    case ProfileError::kNoActiveAxis: return "no active axis";
+    case ProfileError::kAxisWithoutSensor: return "an active axis has no sensor that observes it";
+    case ProfileError::kAllocationRank: return "allocation rank-deficient on the active axes";
+    case ProfileError::kAllocationCondition: return "allocation ill-conditioned on the active axes";
+    case ProfileError::kLimitsOutsideHardware: return "limits outside the hardware";
+    case ProfileError::kBadBody: return "mass or inertia not positive";
+    case ProfileError::kUnsupportedFamily: return "actuator family not supported by this firmware";
+    case ProfileError::kUnsupportedController: return "controller structure not supported by this firmware";
+    case ProfileError::kBadStartup: return "start-up sequence not supported";
+    case ProfileError::kUnstableLoop: return "a default loop is unstable";
+    case ProfileError::kChecksum: return "checksum mismatch";
+    case ProfileError::kUnknownProfile: return "no such profile";
+    case ProfileError::kCount: break;
+  }
+  return "?";
+}
+
+namespace {
+
+constexpr int kA = kAxes;
+
+bool active(const StageProfile& p, int a) { return p.axis[a].mode == AxisMode::kActive; }
+
+// Eigenvalues of a symmetric n x n matrix (n <= 6), cyclic Jacobi; constant
+// work (a fixed number of sweeps), no heap.
+void symmetric_eigenvalues(double m[kA][kA], int n, double ev[kA]) {
+  for (int sweep = 0; sweep < 30; ++sweep) {
+    for (int p = 0; p < n; ++p) {
+      for (int q = p + 1; q < n; ++q) {
+        if (std::fabs(m[p][q]) < 1e-300) continue;
+        const double theta = (m[q][q] - m[p][p]) / (2.0 * m[p][q]);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
+        const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
+        for (int k = 0; k < n; ++k) {
+          const double mkp = m[k][p], mkq = m[k][q];
+          m[k][p] = c * mkp - s * mkq;
+          m[k][q] = s * mkp + c * mkq;
+        }
+        for (int k = 0; k < n; ++k) {
+          const double mpk = m[p][k], mqk = m[q][k];
+          m[p][k] = c * mpk - s * mqk;
+          m[q][k] = s * mpk + c * mqk;
+        }
+      }
+    }
+  }
+  for (int i = 0; i < n; ++i) ev[i] = m[i][i];
+}
+
+// rank and condition of the rows `use` of a (rows x cols), via the
+// eigenvalues of the Gram matrix G = A_use A_use^T.
+template <std::size_t Cols>
+void rank_condition(const double a[kA][Cols], const bool use[kA], int* rank, double* cond) {
+  int idx[kA];
+  int n = 0;
+  for (int r = 0; r < kA; ++r) {
+    if (use[r]) idx[n++] = r;
+  }
+  double g[kA][kA] = {};
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      double s = 0.0;
+      for (std::size_t c = 0; c < Cols; ++c) s += a[idx[i]][c] * a[idx[j]][c];
+      g[i][j] = s;
+    }
+  }
+  double ev[kA] = {};
+  symmetric_eigenvalues(g, n, ev);
+  double hi = 0.0, lo = 1e300;
+  for (int i = 0; i < n; ++i) hi = std::fmax(hi, ev[i]);
+  *rank = 0;
+  for (int i = 0; i < n; ++i) {
+    if (ev[i] > 1e-12 * hi) {
+      ++*rank;
+      lo = std::fmin(lo, ev[i]);
+    }
+  }
+  *cond = (*rank == n && n > 0) ? std::sqrt(hi / lo) : 1e300;  // "infinite": rank-deficient
+}
+
+// What each sensor observes of the small-motion pose (kernel Axis order).
+void observation_row(const Sensor& s, double row[kA]) {
+  for (int a = 0; a < kA; ++a) row[a] = 0.0;
+  switch (s.kind) {
+    case SensorKind::kInterferometer:
+    case SensorKind::kLinearEncoder: {
+      const double c = std::cos(s.direction_rad), sn = std::sin(s.direction_rad);
+      row[0] = c;
+      row[1] = sn;
+      row[2] = -s.y_m * c + s.x_m * sn;  // theta_z moves the point by theta x (-y, x)
+      break;
+    }
+    case SensorKind::kLaserDisplacement:
+    case SensorKind::kPsd:
+      row[3] = 1.0;       // z
+      row[4] = s.y_m;     // theta_x lifts +y
+      row[5] = -s.x_m;    // theta_y lowers +x
+      break;
+    case SensorKind::kHall:
+      break;  // homing only
+  }
+}
+
+kernel::ForceLayout kernel_layout(ForcerLayout l) {
+  switch (l) {
+    case ForcerLayout::kSquare: return kernel::ForceLayout::kSquare;
+    case ForcerLayout::kTriangle: return kernel::ForceLayout::kTriangular;
+    default: return kernel::ForceLayout::kCross;
+  }
+}
+
+// The allocation part of the kernel configuration for a Halbach profile.
+kernel::ForceAllocationConfig allocation_of(const StageProfile& p) {
+  kernel::ForceAllocationConfig c = kernel::DefaultForceAllocationConfig();
+  const HalbachParameters& h = p.halbach;
+  c.layout = kernel_layout(h.layout);
+  c.lever_arm_m = h.lever_arm_m;
+  if (h.layout == ForcerLayout::kTriangle) c.triangle_alpha_rad = h.triangle_alpha_rad;
+  c.pitch_m = h.pitch_m;
+  c.two_b_star_identified_N_per_A = h.two_b_star_N_per_A;
+  c.coil_effective_length_m = h.coil_effective_length_m;
+  c.coil_side_width_m = h.coil_side_width_m;
+  c.coil_thickness_m = h.coil_thickness_m;
+  c.coil_turns = h.coil_turns;
+  c.magnet_thickness_m = h.magnet_thickness_m;
+  c.nominal_gap_m = h.rest_gap_m;
+  // Commutation: a forcer whose centre sits off the platen origin along its
+  // thrust axis sees the array's phase shifted by gamma_1 * that offset (the
+  // cross layout's forcers sit on the axes: no shift).
+  if (h.layout == ForcerLayout::kSquare) {
+    const double g1 = 2.0 * io::stage::kPi / h.pitch_m;
+    const double along[kernel::kForcers] = {h.lever_arm_m, h.lever_arm_m, -h.lever_arm_m, -h.lever_arm_m};
+    for (int j = 0; j < io::kCoils; ++j) c.coil_phase_rad[j] += g1 * along[j / 2];
+  }
+  c.peak_current_A = p.limits.peak_current_A;
+  c.mass_kg = p.body.mass_kg;
+  c.gravity_m_per_s2 = p.body.gravity_m_per_s2;
+  return c;
+}
+
+kernel::BiquadConfig biquad_of(const Filter& f) {
+  kernel::BiquadConfig b{};
+  switch (f.kind) {
+    case FilterKind::kNone: b.type = kernel::BiquadType::kNone; break;
+    case FilterKind::kNotch: b.type = kernel::BiquadType::kNotch; break;
+    case FilterKind::kLowPass: b.type = kernel::BiquadType::kLowPass; break;
+    case FilterKind::kLeadLag: b.type = kernel::BiquadType::kLeadLag; break;
+    case FilterKind::kButterworth2: b.type = kernel::BiquadType::kLowPass; break;  // q = 1/sqrt(2)
+  }
+  b.frequency_Hz = static_cast<float>(f.frequency_Hz);
+  b.q = f.kind == FilterKind::kButterworth2 ? 0.7071f : static_cast<float>(f.q);
+  b.depth_dB = static_cast<float>(f.depth_dB);
+  b.pole_Hz = static_cast<float>(f.pole_Hz);
+  return b;
+}
+
+}  // namespace
+
+double AxisPlantGain(const StageProfile& p, int a) {
+  const double m_eff = p.body.effective_mass_kg[a];
+  double inertia = 0.0;
+  switch (a) {
+    case 0: case 1: case 3: inertia = p.body.mass_kg; break;
+    case 2: inertia = p.body.inertia_kgm2[2]; break;
+    case 4: inertia = p.body.inertia_kgm2[0]; break;
+    default: inertia = p.body.inertia_kgm2[1]; break;
+  }
+  if (m_eff > 0.0) inertia = m_eff;
+  return p.halbach.two_b_star_N_per_A / inertia;
+}
+
+LoopMargins AxisLoopMargins(const StageProfile& p, int a) {
+  LoopMargins m;
+  const AxisController& c = p.axis[a].controller;
+  const double g = AxisPlantGain(p, a);
+  const double k = p.axis[a].open_loop_stiffness_per_s2, d = p.axis[a].open_loop_damping_per_s;
+  const double T = 1.0 / p.servo_rate_Hz;
+  const double wf = 2.0 * io::stage::kPi * c.derivative_filter_Hz;
+  // |L(jw)| and arg L(jw) without complex types (target-friendly).
+  auto loop = [&](double w, double* mag, double* phase) {
+    // C = kp + ki/(jw) + kd jw / (1 + jw/wf)
+    const double den = 1.0 + (w / wf) * (w / wf);
+    const double d_re = c.kd * w * (w / wf) / den, d_im = c.kd * w / den;
+    const double c_re = c.kp + d_re, c_im = -c.ki / w + d_im;
+    // P = g / (k - w^2 + j d w)
+    const double p_re = k - w * w, p_im = d * w;
+    const double p_mag = g / std::sqrt(p_re * p_re + p_im * p_im);
+    const double p_ph = -std::atan2(p_im, p_re);
+    *mag = std::sqrt(c_re * c_re + c_im * c_im) * p_mag;
+    *phase = std::atan2(c_im, c_re) + p_ph - 0.5 * T * w;
+  };
+  const double f_lo = 0.1, f_hi = 0.5 * p.servo_rate_Hz;
+  constexpr int kSteps = 4000;
+  double prev_mag = 0.0, prev_f = f_lo;
+  for (int i = 0; i <= kSteps; ++i) {
+    const double f = f_lo * std::pow(f_hi / f_lo, static_cast<double>(i) / kSteps);
+    double mag = 0.0, ph = 0.0;
+    loop(2.0 * io::stage::kPi * f, &mag, &ph);
+    if (i > 0 && prev_mag >= 1.0 && mag < 1.0) {  // the last downward crossing wins below
+      // Interpolate log-linearly between the two samples.
+      const double t = std::log(prev_mag) / (std::log(prev_mag) - std::log(mag));
+      const double fc = prev_f * std::pow(f / prev_f, t);
+      double mc = 0.0, pc = 0.0;
+      loop(2.0 * io::stage::kPi * fc, &mc, &pc);
+      // Phase unwrapped into (-360, 0].
+      double deg = pc * 180.0 / io::stage::kPi;
+      while (deg > 0.0) deg -= 360.0;
+      while (deg <= -360.0) deg += 360.0;
+      m.crossover_found = true;
+      m.crossover_Hz = fc;
+      m.phase_margin_deg = 180.0 + deg;
+    }
+    prev_mag = mag;
+    prev_f = f;
+  }
+  return m;
+}
+
+ProfileCheck CheckStageProfile(const StageProfile& p) {
+  ProfileCheck r;
+  auto fail = [&](ProfileError e, int axis = -1) {
+    r.error = e;
+    r.axis = static_cast<std::int8_t>(axis);
+    return r;
+  };
+  if (p.name[0] == '\0' || p.name[kNameLength - 1] != '\0') return fail(ProfileError::kBadName);
+  if (!(p.servo_rate_Hz >= 500.0 && p.servo_rate_Hz <= 20000.0)) return fail(ProfileError::kBadServoRate);
+  if (!(p.body.mass_kg > 0.0) || !(p.body.inertia_kgm2[0] > 0.0) || !(p.body.inertia_kgm2[1] > 0.0) ||
+      !(p.body.inertia_kgm2[2] > 0.0)) {
+    return fail(ProfileError::kBadBody);
+  }
+  bool use[kA] = {};
+  int n_active = 0;
+  for (int a = 0; a < kA; ++a) {
+    use[a] = active(p, a);
+    n_active += use[a] ? 1 : 0;
+  }
+  if (n_active == 0) return fail(ProfileError::kNoActiveAxis);
+  // Every active axis observed: the active columns of the sensors'
+  // observation matrix have full rank, and none is empty.
+  double h[kMaxSensors][kA] = {};
+  for (int i = 0; i < p.sensor_count && i < kMaxSensors; ++i) observation_row(p.sensors[i], h[i]);
+  for (int a = 0; a < kA; ++a) {
+    if (!use[a]) continue;
+    bool seen = false;
+    for (int i = 0; i < p.sensor_count; ++i) seen = seen || std::fabs(h[i][a]) > 1e-12;
+    if (!seen) return fail(ProfileError::kAxisWithoutSensor, a);
+  }
+  {
+    double ht[kA][kMaxSensors] = {};
+    for (int i = 0; i < p.sensor_count; ++i) {
+      for (int a = 0; a < kA; ++a) ht[a][i] = h[i][a];
+    }
+    int rank = 0;
+    double cond = 0.0;
+    rank_condition<kMaxSensors>(ht, use, &rank, &cond);
+    if (rank < n_active) return fail(ProfileError::kAxisWithoutSensor);
+  }
+  // Limits: inside what the board's amplifiers and the profile's own hardware can do.
+  if (!(p.limits.peak_current_A > 0.0) || p.limits.peak_current_A > p.limits.hardware_current_A ||
+      p.limits.rms_current_A > p.limits.peak_current_A ||
+      p.limits.hardware_current_A > io::stage::kDacFullScale_V * io::stage::kAmplifierGain_A_per_V ||
+      !(p.limits.landing_speed_m_per_s > 0.0)) {
+    return fail(ProfileError::kLimitsOutsideHardware);
+  }
+  for (int a = 0; a < kA; ++a) {
+    if (use[a] && !(p.axis[a].max_velocity > 0.0 && p.axis[a].max_acceleration > 0.0)) {
+      return fail(ProfileError::kLimitsOutsideHardware, a);
+    }
+  }
+  // What this firmware can drive: the Halbach family, six active axes (the
+  // kernel's sequencer closes all six), PID or internal-model loops.
+  if (p.family != ActuatorFamily::kHalbachLorentz || p.halbach.layout == ForcerLayout::kCustom) {
+    return fail(ProfileError::kUnsupportedFamily);
+  }
+  for (int a = 0; a < kA; ++a) {
+    const ControllerKind k = p.axis[a].controller.kind;
+    if (!use[a]) return fail(ProfileError::kUnsupportedController, a);  // no passive axes in this kernel yet
+    if (k != ControllerKind::kPid2Dof && k != ControllerKind::kInternalModel) {
+      return fail(ProfileError::kUnsupportedController, a);
+    }
+    if (p.axis[a].controller.schedule_points != 0 || p.axis[a].controller.feedback_linearization) {
+      return fail(ProfileError::kUnsupportedController, a);
+    }
+  }
+  // The kernel's start-up is paper 000's Sec. V.
+  constexpr StartupStep kPaper000[] = {StartupStep::kCloseInPlane, StartupStep::kLiftFeedforward,
+                                       StartupStep::kCloseVertical, StartupStep::kCloseTilts, StartupStep::kReady};
+  for (int i = 0; i < 5; ++i) {
+    if (p.startup[i] != kPaper000[i]) return fail(ProfileError::kBadStartup);
+  }
+  // Allocation: A (6 x 8) of the layout, rank and condition on the active rows.
+  kernel::ForceAllocationTablesDouble t{};
+  if (kernel::ComputeForceAllocationTables(allocation_of(p), &t) != kernel::ForceAllocationError::kOk) {
+    return fail(ProfileError::kAllocationRank);
+  }
+  rank_condition<kernel::kForcerForces>(t.a, use, &r.allocation_rank, &r.allocation_condition);
+  if (r.allocation_rank < n_active) return fail(ProfileError::kAllocationRank);
+  if (r.allocation_condition > 1e3) return fail(ProfileError::kAllocationCondition);
+  // Every PID loop must cross over once with a positive phase margin.
+  for (int a = 0; a < kA; ++a) {
+    if (p.axis[a].controller.kind != ControllerKind::kPid2Dof) continue;
+    const LoopMargins lm = AxisLoopMargins(p, a);
+    if (!lm.crossover_found || !(lm.phase_margin_deg > 0.0)) return fail(ProfileError::kUnstableLoop, a);
+  }
+  return r;
+}
+
+ProfileCheck MakeKernelConfig(const StageProfile& p, kernel::KernelConfig* out) {
+  const ProfileCheck check = CheckStageProfile(p);
+  if (check.error != ProfileError::kOk) return check;
+  kernel::KernelConfig c = kernel::default_kernel_config();
+  c.servo_rate_Hz = static_cast<float>(p.servo_rate_Hz);
+  c.measurement.servo_rate_Hz = c.servo_rate_Hz;
+  c.allocation = allocation_of(p);
+  for (int a = 0; a < kA; ++a) {
+    const Axis& ax = p.axis[a];
+    const AxisController& k = ax.controller;
+    kernel::AxisLoopConfig& l = c.axis[a];
+    l.type = k.kind == ControllerKind::kInternalModel ? kernel::LoopType::kInternalModel : kernel::LoopType::kPid2Dof;
+    l.pid.kp = static_cast<float>(k.kp);
+    l.pid.ki = static_cast<float>(k.ki);
+    l.pid.kd = static_cast<float>(k.kd);
+    l.pid.derivative_filter_hz = static_cast<float>(k.derivative_filter_Hz);
+    l.pid.setpoint_weight_p = static_cast<float>(k.setpoint_weight_p);
+    l.pid.effort_limit_A = static_cast<float>(k.effort_limit_A);
+    l.imr.effort_limit_A = l.pid.effort_limit_A;
+    if (k.imr_omega0_rad_per_s > 0.0) l.imr.omega0_rad_s = static_cast<float>(k.imr_omega0_rad_per_s);
+    // Back-calculation time as the kernel's defaults derive it (sqrt(Ti Td), or Ti without D).
+    if (l.pid.ki > 0.0f && l.pid.kp > 0.0f) {
+      const double ti = static_cast<double>(l.pid.kp) / static_cast<double>(l.pid.ki);
+      const double td = static_cast<double>(l.pid.kd) / static_cast<double>(l.pid.kp);
+      l.pid.antiwindup_tracking_time_s = static_cast<float>(l.pid.kd > 0.0f ? std::sqrt(ti * td) : ti);
+    }
+    for (int f = 0; f < kernel::kMaxBiquadStages; ++f) {
+      l.filters[f] = f < k.filter_count && f < kMaxFilters ? biquad_of(k.filters[f]) : kernel::BiquadConfig{};
+    }
+    c.references.position_min[a] = static_cast<float>(ax.travel_min);
+    c.references.position_max[a] = static_cast<float>(ax.travel_max);
+    c.references.max_velocity[a] = static_cast<float>(ax.max_velocity);
+    c.references.max_acceleration[a] = static_cast<float>(ax.max_acceleration);
+  }
+  // The supervisor's travel window: 1 mm beyond the in-plane travel (a move
+  // to the end of travel must not trip on its small following error).
+  c.supervisor.x_min_m = -static_cast<float>(-p.axis[0].travel_min + 1e-3);
+  c.supervisor.x_max_m = static_cast<float>(p.axis[0].travel_max + 1e-3);
+  c.supervisor.y_min_m = -static_cast<float>(-p.axis[1].travel_min + 1e-3);
+  c.supervisor.y_max_m = static_cast<float>(p.axis[1].travel_max + 1e-3);
+  c.supervisor.peak_current_A = static_cast<float>(p.limits.peak_current_A);
+  c.supervisor.rms_current_A = static_cast<float>(p.limits.rms_current_A);
+  c.sequencer.nominal_height_m = static_cast<float>(p.limits.nominal_height_m);
+  *out = c;
+  return check;
+}
+
+}  // namespace maglev::stage_profile

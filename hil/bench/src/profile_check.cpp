@@ -1,0 +1,163 @@
+#include "maglev/bench/profile_check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+
+#include "maglev/bench/axes.hpp"
+#include "maglev/bench/overrides.hpp"
+#include "maglev/force_allocation/force_allocation.hpp"
+#include "maglev/profile/profile_text.hpp"
+#include "maglev/stage_profile/apply_profile.hpp"
+
+namespace maglev::bench {
+
+namespace sp = stage_profile;
+
+namespace {
+
+const char* mode_name(sp::AxisMode m) {
+  switch (m) {
+    case sp::AxisMode::kActive: return "active";
+    case sp::AxisMode::kPassive: return "passive";
+    case sp::AxisMode::kAbsent: return "absent";
+  }
+  return "?";
+}
+
+// Largest coil current over a grid of positions across one pitch, for an
+// effort vector, through the kernel's own allocation and commutation.
+double peak_coil_current(const kernel::KernelConfig& kc, const float effort[kAxes]) {
+  kernel::ForceAllocationState<float> st{};
+  if (kernel::ApplyForceAllocationConfig<float>(kc.allocation, &st) != kernel::ForceAllocationError::kOk) return -1.0;
+  double peak = 0.0;
+  const double pitch = kc.allocation.pitch_m;
+  for (int i = 0; i < 16; ++i) {
+    for (int j = 0; j < 16; ++j) {
+      const auto x = static_cast<std::int64_t>(std::llround(pitch * i / 16.0 * 1e12));
+      const auto y = static_cast<std::int64_t>(std::llround(pitch * j / 16.0 * 1e12));
+      kernel::AllocationOutput<float> out{};
+      kernel::AllocateCurrents<float>(effort, x, y, st, &out);
+      // Unlimited demand: undo the common scale factor k of the current limit.
+      const double k = static_cast<double>(out.scale_k) > 0.0 ? static_cast<double>(out.scale_k) : 1.0;
+      for (float c : out.current_A) peak = std::max(peak, std::fabs(static_cast<double>(c)) / k);
+    }
+  }
+  return peak;
+}
+
+}  // namespace
+
+int list_profiles_main() {
+  const auto names = profile::list_profiles(profile_dir());
+  if (names.empty()) {
+    std::fprintf(stderr, "maglev-hil: no .profile files in %s\n", profile_dir().c_str());
+    return 1;
+  }
+  int bad = 0;
+  for (const auto& n : names) {
+    const profile::ProfileParse p = profile::find_profile(n, profile_dir());
+    if (!p.ok()) {
+      std::printf("  %-20s (errors: %s)\n", n.c_str(), p.errors.front().c_str());
+      ++bad;
+      continue;
+    }
+    kernel::KernelConfig kc{};
+    const sp::ProfileCheck c = sp::MakeKernelConfig(p.profile, &kc);
+    std::printf("  %-20s %-9s %s\n", n.c_str(), c.error == sp::ProfileError::kOk ? "runs" : "REFUSED",
+                p.profile.title);
+  }
+  return bad == 0 ? 0 : 1;
+}
+
+int check_profile_main(const std::string& name_or_path) {
+  const profile::ProfileParse parsed = profile::find_profile(name_or_path, profile_dir());
+  if (!parsed.ok()) {
+    for (const auto& e : parsed.errors) std::fprintf(stderr, "%s\n", e.c_str());
+    return 2;
+  }
+  const sp::StageProfile& p = parsed.profile;
+  std::printf("profile %s: %s\n", p.name, p.title);
+  const sp::ProfileCheck check = sp::CheckStageProfile(p);
+
+  // 1. Allocation on the active axes.
+  std::printf("  allocation (active axes): rank %d, condition number %.4g\n", check.allocation_rank,
+              check.allocation_condition);
+  // 2. Passive axes: eigenvalues of y'' + c y' + k y = 0.
+  bool any_passive = false;
+  for (Axis a : kDisplayOrder) {
+    const sp::Axis& ax = p.axis[index(a)];
+    if (ax.mode != sp::AxisMode::kPassive) continue;
+    any_passive = true;
+    const std::complex<double> disc = std::sqrt(std::complex<double>(
+        ax.open_loop_damping_per_s * ax.open_loop_damping_per_s - 4.0 * ax.open_loop_stiffness_per_s2, 0.0));
+    const std::complex<double> l1 = (-ax.open_loop_damping_per_s + disc) / 2.0;
+    const std::complex<double> l2 = (-ax.open_loop_damping_per_s - disc) / 2.0;
+    const bool stable = l1.real() < 0.0 && l2.real() < 0.0;
+    const double wn = std::sqrt(std::fabs(ax.open_loop_stiffness_per_s2));
+    std::printf("  passive %-8s eigenvalues %.4g%+.4gi, %.4g%+.4gi  (f_n %.4g Hz, zeta %.4g): %s\n", axis_name(a),
+                l1.real(), l1.imag(), l2.real(), l2.imag(), wn / (2.0 * 3.14159265358979323846),
+                wn > 0 ? ax.open_loop_damping_per_s / (2.0 * wn) : 0.0, stable ? "passively stable" : "UNSTABLE");
+  }
+  if (!any_passive) std::printf("  passive axes: none (every degree of freedom is closed-loop)\n");
+  // 3. Loops with the profile's gains.
+  for (Axis a : kDisplayOrder) {
+    const sp::Axis& ax = p.axis[index(a)];
+    if (ax.mode != sp::AxisMode::kActive) {
+      std::printf("  loop %-8s %s\n", axis_name(a), mode_name(ax.mode));
+      continue;
+    }
+    const sp::LoopMargins lm = sp::AxisLoopMargins(p, index(a));
+    if (lm.crossover_found) {
+      std::printf("  loop %-8s crossover %7.2f Hz, phase margin %6.1f deg\n", axis_name(a), lm.crossover_Hz,
+                  lm.phase_margin_deg);
+    } else {
+      std::printf("  loop %-8s no crossover below the Nyquist rate\n", axis_name(a));
+    }
+  }
+  // 4. Current headroom: gravity alone, then gravity + the largest
+  // acceleration the profile allows on each axis.
+  kernel::KernelConfig kc{};
+  const sp::ProfileCheck made = sp::MakeKernelConfig(p, &kc);
+  if (made.error == sp::ProfileError::kOk) {
+    float effort[kAxes] = {};
+    effort[index(Axis::kZ)] = static_cast<float>(p.body.mass_kg * p.body.gravity_m_per_s2 / p.halbach.two_b_star_N_per_A);
+    const double gravity_A = peak_coil_current(kc, effort);
+    std::printf("  current: gravity alone needs %.3f A peak per coil of %.3f A (headroom %.3f A)\n", gravity_A,
+                p.limits.peak_current_A, p.limits.peak_current_A - gravity_A);
+    for (Axis a : kDisplayOrder) {
+      if (a == Axis::kZ || p.axis[index(a)].mode != sp::AxisMode::kActive) continue;
+      float e[kAxes] = {};
+      e[index(Axis::kZ)] = effort[index(Axis::kZ)];
+      e[index(a)] = static_cast<float>(p.axis[index(a)].max_acceleration / sp::AxisPlantGain(p, index(a)));
+      const double need = peak_coil_current(kc, e);
+      std::printf("  current: gravity + max acceleration on %-8s %.3f A (headroom %.3f A)%s\n", axis_name(a), need,
+                  p.limits.peak_current_A - need, need > p.limits.peak_current_A ? "  BEYOND THE LIMIT" : "");
+    }
+  }
+  // 5. Verdict, and whether the bench can build its plant.
+  if (check.error != sp::ProfileError::kOk) {
+    std::printf("  controller: REFUSES this profile: %s%s%s\n", sp::to_string(check.error),
+                check.axis >= 0 ? " on axis " : "", check.axis >= 0 ? axis_name(static_cast<Axis>(check.axis)) : "");
+    return 1;
+  }
+  hil::PlantConfig plant{};
+  std::string why;
+  if (!plant_config_for(p, hil::PlantConfig::Default(), &plant, &why)) {
+    std::printf("  controller: accepts this profile\n  bench: cannot build its plant yet: %s\n", why.c_str());
+    return 1;
+  }
+  std::printf("  controller: accepts this profile; bench: plant built from it\n");
+  return 0;
+}
+
+bool in_suite(const scenario::Scenario& sc, const std::string& profile) {
+  const auto it = sc.scenario.find("profile");
+  if (it != sc.scenario.end()) return it->second == profile;
+  const profile::ProfileParse mine = profile::find_profile(profile, profile_dir());
+  const profile::ProfileParse dflt = profile::find_profile(kDefaultProfile, profile_dir());
+  return mine.ok() && dflt.ok() && mine.profile.family == dflt.profile.family;
+}
+
+}  // namespace maglev::bench
