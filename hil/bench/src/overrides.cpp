@@ -6,6 +6,7 @@
 #include "maglev/bench/metrics_registry.hpp"
 #include "maglev/bench/timeline.hpp"
 #include "maglev/bench/units.hpp"
+#include "maglev/hil/plant_profile.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 
@@ -118,39 +119,6 @@ std::string profile_of(const scenario::Scenario& sc) {
   return it == sc.scenario.end() ? kDefaultProfile : it->second;
 }
 
-bool plant_config_for(const stage_profile::StageProfile& p, const hil::PlantConfig& base, hil::PlantConfig* out,
-                      std::string* why) {
-  namespace sp = stage_profile;
-  if (p.family != sp::ActuatorFamily::kHalbachLorentz) {
-    *why = "the bench plant models the halbach_lorentz family only (profile family not built yet)";
-    return false;
-  }
-  hil::PlantConfig c = base;
-  switch (p.halbach.layout) {
-    case sp::ForcerLayout::kCross: c.body.layout = hil::BodyConfig::Layout::kCross; break;
-    case sp::ForcerLayout::kSquare: c.body.layout = hil::BodyConfig::Layout::kSquare; break;
-    default:
-      *why = "the bench plant models the cross and square layouts: the triangle's forcers thrust obliquely to the "
-             "Halbach arrays, whose per-coil-side field model is not built yet";
-      return false;
-  }
-  c.body.mass_kg = p.body.mass_kg;
-  for (int i = 0; i < 3; ++i) c.body.inertia_kgm2[i] = p.body.inertia_kgm2[i];
-  c.body.lever_arm_m = p.halbach.lever_arm_m;
-  c.body.gravity_m_per_s2 = p.body.gravity_m_per_s2;
-  c.field.pitch_m = p.halbach.pitch_m;
-  c.field.magnet_thickness_m = p.halbach.magnet_thickness_m;
-  c.field.coil_effective_length_m = p.halbach.coil_effective_length_m;
-  c.field.coil_side_width_m = p.halbach.coil_side_width_m;
-  c.field.coil_thickness_m = p.halbach.coil_thickness_m;
-  c.field.coil_turns = p.halbach.coil_turns;
-  c.field.rest_gap_m = p.halbach.rest_gap_m;
-  c.amplifier.current_limit_A = p.limits.hardware_current_A;
-  c.integration.servo_rate_Hz = p.servo_rate_Hz;
-  *out = c;
-  return true;
-}
-
 bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<ScenarioError>* errs) {
   const profile::ProfileParse parsed = profile::find_profile(name_or_path, profile_dir());
   if (!parsed.ok()) {
@@ -166,7 +134,7 @@ bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<Sc
   }
   std::string why;
   hil::PlantConfig plant{};
-  if (!plant_config_for(parsed.profile, o->plant, &plant, &why)) {
+  if (!hil::PlantConfigForProfile(parsed.profile, o->plant, &plant, &why)) {
     errs->push_back({name_or_path + ": " + why});
     return false;
   }

@@ -8,6 +8,7 @@
 #include "maglev/bench/axes.hpp"
 #include "maglev/bench/overrides.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
+#include "maglev/hil/plant_profile.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 
@@ -144,7 +145,7 @@ int check_profile_main(const std::string& name_or_path) {
   }
   hil::PlantConfig plant{};
   std::string why;
-  if (!plant_config_for(p, hil::PlantConfig::Default(), &plant, &why)) {
+  if (!hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &plant, &why)) {
     std::printf("  controller: accepts this profile\n  bench: cannot build its plant yet: %s\n", why.c_str());
     return 1;
   }

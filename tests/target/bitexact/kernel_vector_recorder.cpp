@@ -12,6 +12,7 @@
 // usage: kernel-vector-recorder <vectors.bin> <host_outputs.bin>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -20,7 +21,10 @@
 #include "maglev/controller/controller.hpp"
 #include "maglev/hil/plant.hpp"
 #include "maglev/hil/plant_config.hpp"
+#include "maglev/hil/plant_profile.hpp"
 #include "maglev/kernel_replay/replay_format.hpp"
+#include "maglev/profile/profile_text.hpp"
+#include "maglev/stage_profile/apply_profile.hpp"
 
 namespace {
 
@@ -103,22 +107,48 @@ double reference_si(const kernel::ControllerStatus& st, Axis axis) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 3) {
-    std::fprintf(stderr, "usage: %s <vectors.bin> <host_outputs.bin>\n", argv[0]);
+  if (argc != 3 && !(argc == 5 && std::string(argv[3]) == "--profile")) {
+    std::fprintf(stderr, "usage: %s <vectors.bin> <host_outputs.bin> [--profile FILE]\n", argv[0]);
     return 2;
   }
-  maglev::hil::Plant plant(maglev::hil::PlantConfig::Default(), kSeed);
+  // With --profile: the stage's kernel configuration and plant both from the
+  // profile, and the profile itself travels in the vectors file so the M7
+  // image builds its configuration through the firmware's own profile code.
+  kernel::KernelConfig config = kernel::default_kernel_config();
+  maglev::hil::PlantConfig plant_config = maglev::hil::PlantConfig::Default();
+  std::vector<std::uint8_t> profile_bytes;
+  if (argc == 5) {
+    const auto parsed = maglev::profile::load_profile_file(argv[4]);
+    if (!parsed.ok()) {
+      for (const auto& e : parsed.errors) std::fprintf(stderr, "%s\n", e.c_str());
+      return 2;
+    }
+    const auto check = maglev::stage_profile::MakeKernelConfig(parsed.profile, &config);
+    std::string why;
+    if (check.error != maglev::stage_profile::ProfileError::kOk ||
+        !maglev::hil::PlantConfigForProfile(parsed.profile, plant_config, &plant_config, &why)) {
+      std::fprintf(stderr, "recorder: profile %s cannot run: %s%s\n", argv[4],
+                   maglev::stage_profile::to_string(check.error), why.c_str());
+      return 2;
+    }
+    profile_bytes.resize(sizeof parsed.profile);
+    std::memcpy(profile_bytes.data(), &parsed.profile, sizeof parsed.profile);
+    std::printf("recorder: stage profile %s\n", parsed.profile.name);
+  }
+  maglev::hil::Plant plant(plant_config, kSeed);
   auto controller = std::make_unique<kernel::Controller<float>>();
-  if (controller->apply_config(kernel::default_kernel_config()) != kernel::ConfigError::kOk) {
-    std::fprintf(stderr, "recorder: default_kernel_config() refused\n");
+  if (controller->apply_config(config) != kernel::ConfigError::kOk) {
+    std::fprintf(stderr, "recorder: the kernel configuration was refused\n");
     return 1;
   }
   const std::vector<Scheduled> plan = schedule();
   std::size_t next = 0;
 
   std::vector<std::uint8_t> inputs(kr::kHeaderBytes);
+  inputs.insert(inputs.end(), profile_bytes.begin(), profile_bytes.end());
   std::vector<std::uint8_t> outputs;
   kr::InputHeader header;
+  header.profile_bytes = static_cast<std::uint32_t>(profile_bytes.size());
   bool ok = true;
   std::int64_t ready_tick = -1;
   std::uint32_t end_tick = kMaxStartupTicks;

@@ -1,6 +1,6 @@
 # cmake -DRECORDER=<kernel-vector-recorder> -DCOMPARE=<kernel-bitexact-compare>
 #       -DQEMU=<qemu-system-arm> -DELF=<maglev-qemu-kernel-replay.elf>
-#       -DWORKDIR=<dir> -DTIMEOUT=<s> [-DICOUNT_SHIFT=<n>] -P run-bitexact.cmake
+#       -DWORKDIR=<dir> -DTIMEOUT=<s> [-DICOUNT_SHIFT=<n>] [-DPROFILE=<file.profile>] -P run-bitexact.cmake
 #
 # 1. record: plant + host Controller<float> -> vectors.bin, host_outputs.bin
 # 2. replay: the same vectors through Controller<float> on QEMU's Cortex-M7
@@ -24,7 +24,11 @@ set(_host ${WORKDIR}/host_outputs.bin)
 set(_target ${WORKDIR}/target_outputs.bin)
 file(REMOVE ${_target})
 
-execute_process(COMMAND ${RECORDER} ${_vectors} ${_host} RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _out)
+set(_profile_args)
+if(DEFINED PROFILE)
+  set(_profile_args --profile ${PROFILE})
+endif()
+execute_process(COMMAND ${RECORDER} ${_vectors} ${_host} ${_profile_args} RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _out)
 message("${_out}")
 if(NOT _rc EQUAL 0)
   message(FATAL_ERROR "kernel-bitexact: the recorder failed (${_rc})")

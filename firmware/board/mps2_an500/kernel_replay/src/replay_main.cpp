@@ -18,12 +18,14 @@
 #include "maglev/controller/controller.hpp"
 #include "maglev/kernel_replay/replay_format.hpp"
 #include "maglev/kernel_replay/semihost_file.hpp"
+#include "maglev/stage_profile/apply_profile.hpp"
 
 namespace {
 
 namespace hw = maglev::board::mps2_an500;
 namespace kr = maglev::kernel_replay;
 namespace kernel = maglev::kernel;
+namespace stage_profile = maglev::stage_profile;
 
 enum ExitCode : int {
   kOk = 0,
@@ -157,6 +159,7 @@ constexpr std::size_t kChunkTicks = 64;
 std::uint8_t g_input[kChunkTicks * kr::kInputRecordBytes];
 std::uint8_t g_output[kChunkTicks * kr::kOutputRecordBytes];
 kernel::Controller<float> g_controller;
+stage_profile::StageProfile g_profile{};  // static: ~2 kB, not on the stack
 
 int fail(const char* message, int code) {
   hw::semihost_write("kernel-replay: ");
@@ -189,17 +192,38 @@ int main() {
   if (!kr::decode_header(header_bytes, &header)) {
     return fail("bad header (magic, version or record sizes differ from this image)", kBadHeader);
   }
-  const auto expected_length =
-      static_cast<long>(kr::kHeaderBytes + static_cast<std::size_t>(header.tick_count) * kr::kInputRecordBytes);
+  if (header.profile_bytes != 0U && header.profile_bytes != sizeof(g_profile)) {
+    return fail("the stage profile's size differs from this image's StageProfile", kBadHeader);
+  }
+  const auto expected_length = static_cast<long>(kr::kHeaderBytes + header.profile_bytes +
+                                                 static_cast<std::size_t>(header.tick_count) * kr::kInputRecordBytes);
   if (length != expected_length) return fail("vectors file length does not match its header", kBadHeader);
+  // The kernel configuration: the firmware's own profile path (check +
+  // MakeKernelConfig) on the recorded profile, or the default.
+  kernel::KernelConfig config = kernel::default_kernel_config();
+  if (header.profile_bytes != 0U) {
+    if (!kr::semihost_read(in, reinterpret_cast<std::uint8_t*>(&g_profile), sizeof(g_profile))) {
+      return fail("cannot read the stage profile", kCannotRead);
+    }
+    const stage_profile::ProfileCheck check = stage_profile::MakeKernelConfig(g_profile, &config);
+    if (check.error != stage_profile::ProfileError::kOk) {
+      hw::semihost_write("kernel-replay: profile refused: ");
+      hw::semihost_write(stage_profile::to_string(check.error));
+      hw::semihost_write("\n");
+      return fail("the stage profile was refused", kConfigRefused);
+    }
+    hw::semihost_write("kernel-replay: stage profile ");
+    hw::semihost_write(g_profile.name);
+    hw::semihost_write("\n");
+  }
 
   const int out = kr::semihost_open(outputs_path, kr::OpenMode::kWriteBinary);
   if (out < 0) return fail("cannot open the outputs file", kCannotWrite);
 
-  // The recorder runs default_kernel_config() too; apply it explicitly so a
+  // The recorder applies the same configuration; apply it explicitly so a
   // refused config is visible here as well.
-  if (g_controller.apply_config(kernel::default_kernel_config()) != kernel::ConfigError::kOk) {
-    return fail("apply_config(default_kernel_config()) refused", kConfigRefused);
+  if (g_controller.apply_config(config) != kernel::ConfigError::kOk) {
+    return fail("apply_config refused", kConfigRefused);
   }
 
   systick_start();

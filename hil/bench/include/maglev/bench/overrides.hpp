@@ -36,9 +36,6 @@ struct Overrides {
 // plant from it (both from the one record). false: *errs says why, field by
 // field for a malformed profile.
 bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<ScenarioError>* errs);
-// The plant for a profile, on top of `base` (noise, errors, integration).
-bool plant_config_for(const stage_profile::StageProfile& p, const hil::PlantConfig& base, hil::PlantConfig* out,
-                      std::string* why);
 // The profile a scenario names ([scenario] profile), else the default.
 std::string profile_of(const scenario::Scenario& sc);
 

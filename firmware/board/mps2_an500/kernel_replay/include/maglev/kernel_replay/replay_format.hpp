@@ -4,7 +4,8 @@
 // functions, field by field, little-endian, so struct padding and ABI never
 // enter the bytes that are compared.
 //
-// Input file  (recorder -> image):  InputHeader, then tick_count InputRecords.
+// Input file  (recorder -> image):  InputHeader, the stage profile
+//                                    (profile_bytes), then tick_count InputRecords.
 // Output file (recorder and image): tick_count OutputRecords, nothing else.
 // Two output files are bit-identical iff the two kernels produced the same
 // bits on every tick (commands' results, DAC codes, status floats, poses).
@@ -23,7 +24,9 @@
 namespace maglev::kernel_replay {
 
 inline constexpr char kMagic[8] = {'M', 'G', 'L', 'V', 'R', 'P', 'L', '1'};
-inline constexpr std::uint32_t kFormatVersion = 1;
+// v2: the header's last word is the size of the stage profile that follows
+// it (0: the kernel's default configuration).
+inline constexpr std::uint32_t kFormatVersion = 2;
 
 // --- byte-level little-endian helpers (both targets are little-endian; the
 // memcpy keeps it alignment- and aliasing-safe) ------------------------------
@@ -48,6 +51,10 @@ struct InputHeader {
   std::uint32_t input_record_bytes = 0;
   std::uint32_t output_record_bytes = 0;
   std::uint32_t command_count = 0;
+  // Bytes of the stage_profile::StageProfile after the header (its in-memory
+  // image: plain data, natural alignment, identical on x86-64 and AAPCS; the
+  // size check catches a layout that differs). 0: default_kernel_config().
+  std::uint32_t profile_bytes = 0;
 };
 
 // --- input record: one servo tick's inputs --------------------------------------
@@ -138,7 +145,7 @@ inline void encode_header(const InputHeader& h, std::uint8_t* out) {
   put<std::uint32_t>(p, h.input_record_bytes);
   put<std::uint32_t>(p, h.output_record_bytes);
   put<std::uint32_t>(p, h.command_count);
-  put<std::uint32_t>(p, 0U);
+  put<std::uint32_t>(p, h.profile_bytes);
 }
 
 // False if the magic, version or record sizes do not match this build.
@@ -152,6 +159,7 @@ inline bool decode_header(const std::uint8_t* in, InputHeader* h) {
   h->input_record_bytes = get<std::uint32_t>(p);
   h->output_record_bytes = get<std::uint32_t>(p);
   h->command_count = get<std::uint32_t>(p);
+  h->profile_bytes = get<std::uint32_t>(p);
   return h->version == kFormatVersion && h->input_record_bytes == kInputRecordBytes &&
          h->output_record_bytes == kOutputRecordBytes;
 }
