@@ -4,8 +4,8 @@
 # area label (kernel, drivers, hil, can, socketcan-vm, modbus, target).
 # CppUTest's main is tests/support/cpputest_main.cpp so every runner prints
 # the same summary and returns non-zero on any failure.
-# An issue's label (bench, profiles, paper-001, ...) may be added beside the area:
-# LABEL "hil;bench".
+# An issue's labels (bench, profiles, paper-001, ...) may follow the area:
+# LABEL hil bench.
 set(MAGLEV_TEST_LABELS kernel drivers hil can socketcan-vm modbus target
     bench profiles paper-001 paper-002 fidelity faults tools)
 
@@ -21,7 +21,7 @@ function(_maglev_check_labels fn name labels)
 endfunction()
 
 function(maglev_add_cpputest)
-  cmake_parse_arguments(T "" "NAME;LABEL;TIMEOUT" "SOURCES;LIBS;ARGS" ${ARGN})
+  cmake_parse_arguments(T "" "NAME;TIMEOUT" "LABEL;SOURCES;LIBS;ARGS" ${ARGN})
   _maglev_check_labels(maglev_add_cpputest ${T_NAME} "${T_LABEL}")
   add_executable(${T_NAME} ${T_SOURCES} ${PROJECT_SOURCE_DIR}/tests/support/cpputest_main.cpp)
   target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} PkgConfig::CPPUTEST)
@@ -38,7 +38,7 @@ endfunction()
 # maglev_add_script_test(NAME <name> LABEL <area> COMMAND ... [TIMEOUT s])
 # For tests that are programs or scripts (VM tests, drift checks, QEMU runs).
 function(maglev_add_script_test)
-  cmake_parse_arguments(T "" "NAME;LABEL;TIMEOUT;WORKING_DIRECTORY" "COMMAND" ${ARGN})
+  cmake_parse_arguments(T "" "NAME;TIMEOUT;WORKING_DIRECTORY" "LABEL;COMMAND" ${ARGN})
   _maglev_check_labels(maglev_add_script_test ${T_NAME} "${T_LABEL}")
   if(NOT T_WORKING_DIRECTORY)
     set(T_WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})

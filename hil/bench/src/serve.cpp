@@ -32,6 +32,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
@@ -190,7 +191,15 @@ bool parse(int argc, char** argv, ServeOptions* o) {
       o->seed = static_cast<std::uint64_t>(std::strtoull(v.c_str(), nullptr, 10));
       o->seed_given = true;
     } else if (a == "--duration") {
-      o->duration_s = std::atof(v.c_str());
+      // A number of seconds, 0 = until a signal; NaN, inf, negative or
+      // trailing text are refused (a NaN once ran forever).
+      char* end = nullptr;
+      const double d = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !std::isfinite(d) || d < 0.0 || d > 1e7) {
+        std::fprintf(stderr, "maglev-hil serve: --duration needs seconds >= 0, got '%s'\n", v.c_str());
+        return false;
+      }
+      o->duration_s = d;
     } else if (a == "--rt-priority") {
       o->rt_priority = std::atoi(v.c_str());
     } else {

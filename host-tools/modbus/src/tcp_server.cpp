@@ -1,7 +1,7 @@
 #include "maglev/modbus_tcp/tcp_server.hpp"
 
 #include <arpa/inet.h>
-#include <modbus/modbus.h>
+#include <fcntl.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -13,17 +13,17 @@
 
 namespace maglev::modbus_tcp {
 
+namespace {
+bool set_nonblocking(int fd) {
+  const int flags = ::fcntl(fd, F_GETFL, 0);
+  return flags >= 0 && ::fcntl(fd, F_SETFL, flags | O_NONBLOCK) == 0;
+}
+constexpr std::size_t kMbap = 7;  // transaction(2) protocol(2) length(2) unit(1)
+}  // namespace
+
 TcpServer::TcpServer(maglev::modbus::RegisterServer& registers, const std::string& host, int port,
-                     std::uint8_t unit_id, int max_clients)
-    : registers_(registers), unit_id_(unit_id), max_clients_(max_clients) {
-  // libmodbus' modbus_tcp_listen() does not report the bound port, and port 0
-  // (ephemeral) is what tests need; so the listen socket is ours and libmodbus
-  // receives on the accepted sockets (modbus_set_socket + modbus_receive).
-  ctx_ = modbus_new_tcp(host.c_str(), port);
-  if (ctx_ == nullptr) {
-    error_ = "modbus_new_tcp failed";
-    return;
-  }
+                     std::uint8_t unit_id, TcpServerLimits limits)
+    : registers_(registers), unit_id_(unit_id), limits_(limits) {
   listen_fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
   if (listen_fd_ < 0) {
     error_ = std::strerror(errno);
@@ -35,7 +35,8 @@ TcpServer::TcpServer(maglev::modbus::RegisterServer& registers, const std::strin
   addr.sin_family = AF_INET;
   addr.sin_port = htons(static_cast<std::uint16_t>(port));
   if (::inet_pton(AF_INET, host.c_str(), &addr.sin_addr) != 1 ||
-      ::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(listen_fd_, 4) != 0) {
+      ::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(listen_fd_, 16) != 0 ||
+      !set_nonblocking(listen_fd_)) {
     error_ = "cannot listen on " + host + ":" + std::to_string(port) + ": " + std::strerror(errno);
     ::close(listen_fd_);
     listen_fd_ = -1;
@@ -44,95 +45,130 @@ TcpServer::TcpServer(maglev::modbus::RegisterServer& registers, const std::strin
   socklen_t len = sizeof addr;
   ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
   port_ = ntohs(addr.sin_port);
+  clients_.reserve(static_cast<std::size_t>(std::max(1, limits_.max_clients)));
 }
 
 TcpServer::~TcpServer() {
-  for (int fd : clients_) ::close(fd);
+  for (const Client& c : clients_) ::close(c.fd);
   if (listen_fd_ >= 0) ::close(listen_fd_);
-  if (ctx_ != nullptr) modbus_free(ctx_);
 }
 
-namespace {
-// Function codes whose request length libmodbus 3.1.6 derives correctly; for
-// any other code modbus_receive() reads only MBAP + function code and leaves
-// the rest in the socket, so those are framed by the MBAP length instead.
-bool libmodbus_frames(std::uint8_t fc) {
-  return (fc >= 0x01 && fc <= 0x06) || fc == 0x0F || fc == 0x10 || fc == 0x11 || fc == 0x16 || fc == 0x17;
-}
-bool read_all(int fd, std::uint8_t* p, std::size_t n) {
-  while (n > 0) {
-    const ssize_t r = ::recv(fd, p, n, 0);
-    if (r <= 0) return false;
-    p += r;
-    n -= static_cast<std::size_t>(r);
+void TcpServer::accept_new(Clock::time_point now) {
+  // At most a few accepts per call: a connection storm cannot take the tick.
+  for (int i = 0; i < 4; ++i) {
+    const int fd = ::accept(listen_fd_, nullptr, nullptr);
+    if (fd < 0) return;  // EAGAIN: none waiting
+    if (!set_nonblocking(fd)) {
+      ::close(fd);
+      continue;
+    }
+    if (static_cast<int>(clients_.size()) >= limits_.max_clients) {
+      // Full: evict the longest-silent client if it has been silent long
+      // enough, else refuse the newcomer (idle connections never lock out a
+      // live operator for longer than evict_after).
+      auto oldest = clients_.end();
+      for (auto it = clients_.begin(); it != clients_.end(); ++it) {
+        if (it->answered == 0 && (oldest == clients_.end() || it->last_activity < oldest->last_activity)) oldest = it;
+      }
+      if (oldest != clients_.end() && now - oldest->last_activity >= limits_.evict_after) {
+        ::close(oldest->fd);
+        clients_.erase(oldest);
+        ++stats_.evicted;
+      } else {
+        ::close(fd);
+        ++stats_.refused;
+        continue;
+      }
+    }
+    Client c;
+    c.fd = fd;
+    c.last_activity = now;
+    clients_.push_back(c);
+    ++stats_.accepted;
   }
-  return true;
 }
-}  // namespace
 
-bool TcpServer::serve_one(int fd) {
-  std::uint8_t query[MODBUS_TCP_MAX_ADU_LENGTH];
-  std::uint8_t peek[8];
-  if (::recv(fd, peek, sizeof peek, MSG_PEEK | MSG_DONTWAIT) <= 0) return false;
-  int rc = 0;
-  if (libmodbus_frames(peek[7])) {
-    modbus_set_socket(ctx_, fd);
-    rc = modbus_receive(ctx_, query);
-  } else {
-    // MBAP: transaction(2) protocol(2) length(2) unit(1); length counts unit + PDU.
-    if (!read_all(fd, query, 7)) return false;
-    const std::size_t len = static_cast<std::size_t>((query[4] << 8) | query[5]);
-    if (len < 2 || len > MODBUS_TCP_MAX_ADU_LENGTH - 6u || !read_all(fd, query + 7, len - 1)) return false;
-    rc = static_cast<int>(6 + len);
+bool TcpServer::answer(Client& c, std::size_t frame_len) {
+  const std::uint8_t* q = c.buf;
+  const std::uint8_t unit = q[6];
+  if (unit != unit_id_ && unit != 0xFF && unit != 0) {
+    ++stats_.other_unit;
+    return true;
   }
-  if (rc <= 0) return rc == 0;  // 0: ignored (other unit, per libmodbus); -1: connection closed or bad frame
-  const int header = modbus_get_header_length(ctx_);  // 7: MBAP incl. unit id
-  const std::uint8_t unit = query[header - 1];
-  if (unit != unit_id_ && unit != 0xFF && unit != 0) return true;
-  std::uint8_t reply[MODBUS_TCP_MAX_ADU_LENGTH];
-  const std::size_t pdu =
-      registers_.handle_pdu(query + header, static_cast<std::size_t>(rc - header), reply + header, unit == 0);
+  std::uint8_t reply[kMaxAdu];
+  // Modbus/TCP has no broadcast: unit 0 is answered like our own unit.
+  const std::size_t pdu = registers_.handle_pdu(q + kMbap, frame_len - kMbap, reply + kMbap, false);
   if (pdu == 0) return true;
-  std::memcpy(reply, query, 4);  // transaction id, protocol id
+  std::memcpy(reply, q, 4);  // transaction id, protocol id
   const std::size_t len = pdu + 1;
   reply[4] = static_cast<std::uint8_t>(len >> 8);
   reply[5] = static_cast<std::uint8_t>(len & 0xFF);
   reply[6] = unit;
-  const std::size_t total = static_cast<std::size_t>(header) + pdu;
-  return ::send(fd, reply, total, MSG_NOSIGNAL) == static_cast<ssize_t>(total);
+  const std::size_t total = kMbap + pdu;
+  ++stats_.requests;
+  // Non-blocking: a client that does not read its replies is dropped.
+  return ::send(c.fd, reply, total, MSG_NOSIGNAL | MSG_DONTWAIT) == static_cast<ssize_t>(total);
+}
+
+bool TcpServer::serve(Client& c, Clock::time_point now, int* answered) {
+  // One bounded read: whatever fits in the frame buffer.
+  if (c.used < sizeof c.buf) {
+    const ssize_t r = ::recv(c.fd, c.buf + c.used, sizeof c.buf - c.used, MSG_DONTWAIT);
+    if (r == 0) return false;  // closed by the client
+    if (r < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) return false;
+    if (r > 0) {
+      if (c.used == 0) c.frame_started = now;
+      c.used += static_cast<std::size_t>(r);
+      c.last_activity = now;
+    }
+  }
+  for (int n = 0; n < kMaxFramesPerClient && c.used >= kMbap; ++n) {
+    const std::uint16_t protocol = static_cast<std::uint16_t>((c.buf[2] << 8) | c.buf[3]);
+    const std::size_t len = static_cast<std::size_t>((c.buf[4] << 8) | c.buf[5]);  // unit + PDU
+    if (protocol != 0 || len < 2 || len > kMaxAdu - 6) {
+      ++stats_.bad_frames;
+      return false;
+    }
+    const std::size_t frame = 6 + len;
+    if (c.used < frame) break;  // wait for the rest (bounded by frame_timeout)
+    if (!answer(c, frame)) return false;
+    ++*answered;
+    ++c.answered;
+    std::memmove(c.buf, c.buf + frame, c.used - frame);
+    c.used -= frame;
+    c.frame_started = now;
+  }
+  if (c.used > 0 && now - c.frame_started > limits_.frame_timeout) {
+    ++stats_.slow_closed;
+    return false;
+  }
+  if (now - c.last_activity > limits_.idle_timeout) {
+    ++stats_.idle_closed;
+    return false;
+  }
+  return true;
 }
 
 int TcpServer::poll(int timeout_ms) {
   if (listen_fd_ < 0) return 0;
-  std::vector<pollfd> fds;
-  fds.push_back({listen_fd_, POLLIN, 0});
-  for (int fd : clients_) fds.push_back({fd, POLLIN, 0});
-  if (::poll(fds.data(), fds.size(), timeout_ms) <= 0) return 0;
-  int served = 0;
-  std::vector<int> closed;
-  for (std::size_t i = 1; i < fds.size(); ++i) {
-    if ((fds[i].revents & (POLLIN | POLLHUP | POLLERR)) == 0) continue;
-    if (serve_one(fds[i].fd)) {
-      ++served;
+  pollfd fds[1 + 64];
+  const std::size_t n = std::min<std::size_t>(clients_.size(), 64);
+  fds[0] = {listen_fd_, POLLIN, 0};
+  for (std::size_t i = 0; i < n; ++i) fds[1 + i] = {clients_[i].fd, POLLIN, 0};
+  (void)::poll(fds, 1 + n, timeout_ms);
+  const Clock::time_point now = Clock::now();
+  int answered = 0;
+  // Every client is visited each call (timeouts apply to silent ones too).
+  for (std::size_t i = 0; i < clients_.size();) {
+    if (serve(clients_[i], now, &answered)) {
+      ++i;
     } else {
-      closed.push_back(fds[i].fd);
+      ::close(clients_[i].fd);
+      clients_.erase(clients_.begin() + static_cast<std::ptrdiff_t>(i));
     }
   }
-  for (int fd : closed) {
-    ::close(fd);
-    clients_.erase(std::remove(clients_.begin(), clients_.end(), fd), clients_.end());
-  }
-  if ((fds[0].revents & POLLIN) != 0) {
-    const int fd = ::accept(listen_fd_, nullptr, nullptr);
-    if (fd >= 0) {
-      if (static_cast<int>(clients_.size()) >= max_clients_) {
-        ::close(fd);
-      } else {
-        clients_.push_back(fd);
-      }
-    }
-  }
-  return served;
+  if ((fds[0].revents & POLLIN) != 0) accept_new(now);
+  return answered;
 }
 
 }  // namespace maglev::modbus_tcp
