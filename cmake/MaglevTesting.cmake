@@ -4,7 +4,7 @@
 # area label (kernel, drivers, hil, can, socketcan-vm, modbus, target).
 # CppUTest's main is tests/support/cpputest_main.cpp so every runner prints
 # the same summary and returns non-zero on any failure.
-set(MAGLEV_TEST_LABELS kernel drivers hil can socketcan-vm modbus target)
+set(MAGLEV_TEST_LABELS kernel drivers hil can socketcan-vm modbus target paper-001 paper-002)
 
 function(maglev_add_cpputest)
   cmake_parse_arguments(T "" "NAME;LABEL;TIMEOUT" "SOURCES;LIBS;ARGS" ${ARGN})
