@@ -34,3 +34,36 @@ void CheckTableIII(double start_m, double step_m) {
 
 TEST(Paper002Sim, SevenMillimetreStepUp) { CheckTableIII(20e-3, 7e-3); }
 TEST(Paper002Sim, SevenMillimetreStepDown) { CheckTableIII(30e-3, -7e-3); }
+
+namespace {
+GapStepResult ThetaStep(double start_rad, double step_rad) {
+  AxisStepScenario s;  // gap held at 25 mm by the y loop, as in Fig. 5
+  s.axis = Axis::kTheta;
+  s.start = {25e-3, 0, 0, 0, start_rad};
+  s.step = step_rad;
+  const GapStepResult r = RunAxisStep(s, MakePaperConfig());
+  std::printf("theta %.0f -> %.0f mrad: overshoot %.2f %% (paper 22 %% on 10 mrad), t_s %.3f s, t_enc %.3f s\n",
+              start_rad * 1e3, (start_rad + step_rad) * 1e3, 100 * r.overshoot_fraction, r.settling_time_s,
+              r.encoder_time_s);
+  CHECK_FALSE(r.hit_stop);
+  CHECK(r.final_error_m < 20e-6);
+  return r;
+}
+}  // namespace
+
+TEST(Paper002Sim, FiveMilliradianThetaStepMeetsTableIII) {
+  // Table III, Z-axis rotation, 5 mrad steps: %OS < 30 %, t_s < 3 s, t_enc < 10 s.
+  const GapStepResult r = ThetaStep(0.0, 5e-3);
+  CHECK(r.overshoot_fraction < 0.30);
+  CHECK(r.settling_time_s < 3.0);
+  CHECK(r.encoder_time_s < 10.0);
+}
+
+TEST(Paper002Sim, TenMilliradianThetaStepMeetsTableIII) {
+  // Table III, 10 mrad steps: %OS < 30 %, t_s 3 to 5 s on the rig (here at
+  // most 5 s is asserted), t_enc < 10 s.
+  const GapStepResult r = ThetaStep(-5e-3, 10e-3);
+  CHECK(r.overshoot_fraction < 0.30);
+  CHECK(r.settling_time_s < 5.0);
+  CHECK(r.encoder_time_s < 10.0);
+}

@@ -12,7 +12,6 @@ struct GapStepScenario {
   double duration_after_s = 10.0;
   bool rotation_loops_enabled = false;  // as in the paper's 3-DOF test
   bool quantize_encoders = true;
-  double rk4_substeps = 1.0;       // plant RK4 steps per servo period
 };
 
 struct GapStepResult {
@@ -26,5 +25,19 @@ struct GapStepResult {
 };
 
 GapStepResult RunGapStep(const GapStepScenario& s, const Paper002ControllerConfig& c);
+
+// A step on any axis from a base set-point (Fig. 5 is theta from a 25 mm
+// gap). Thresholds: 0.1 mm / 10 um on translations, 0.1 mrad / 20 urad on
+// rotations (Section IV-A (3), (4)). The result's fields carry the axis's units.
+struct AxisStepScenario {
+  Axis axis = Axis::kTheta;
+  std::array<double, 5> start{25e-3, 0, 0, 0, 0};
+  double step = 5e-3;
+  double hold_before_s = 1.0;
+  double duration_after_s = 10.0;
+  bool rotation_loops_enabled = true;
+  bool quantize_encoders = true;
+};
+GapStepResult RunAxisStep(const AxisStepScenario& s, const Paper002ControllerConfig& c);
 
 }  // namespace maglev::control_design
