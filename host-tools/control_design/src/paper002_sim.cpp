@@ -72,4 +72,45 @@ GapStepResult RunAxisStep(const AxisStepScenario& s, const Paper002ControllerCon
   return r;
 }
 
+TrackingResult RunTracking(const TrackingScenario& s, const Paper002ControllerConfig& cfg) {
+  Paper002ControllerConfig c = cfg;
+  c.rotation_loops_enabled = s.four_dof;
+  Paper002Controller ctl(c);
+  pmlsm_plant::Plant plant(c.model);
+  const double w = c.omega0_rad_per_s;
+  const double half_pi = 1.5707963267948966;
+  auto ref = [&](double t) {
+    return std::array<double, 5>{5e-3 * std::sin(w * t - half_pi) + 25e-3, 30e-3 * std::sin(w * t - half_pi),
+                                 30e-3 * std::sin(w * t), 0.0, s.four_dof ? 10e-3 * std::sin(w * t) : 0.0};
+  };
+  constexpr std::array<std::size_t, 5> kStateOf{0, 2, 4, 6, 8};
+  pmlsm_plant::State x0{};
+  const auto r0 = ref(0.0);
+  for (std::size_t a = 0; a < 5; ++a) x0[kStateOf[a]] = r0[a];
+  plant.Reset(x0);
+  TrackingResult out;
+  const double T = c.period_s;
+  const auto settle = static_cast<long>(std::lround(s.settle_s / T));
+  const auto total = settle + static_cast<long>(std::lround(s.measure_s / T));
+  for (long k = 0; k < total; ++k) {
+    const double t = static_cast<double>(k) * T;
+    ctl.SetReference(ref(t));
+    std::array<double, 5> y{};
+    if (s.quantize_encoders) {
+      y = plant.Measure().y;
+    } else {
+      for (std::size_t a = 0; a < 5; ++a) y[a] = plant.state()[kStateOf[a]];
+    }
+    plant.Step(ctl.Step(y), T);
+    const double gap = plant.state()[0];
+    if (gap <= c.model.gap_min_m || gap >= c.model.gap_max_m) out.hit_stop = true;
+    if (k >= settle) {
+      const auto r = ref(t + T);  // state after the step is at t + T
+      for (std::size_t a = 0; a < 5; ++a) out.mean_abs_error[a] += std::abs(plant.state()[kStateOf[a]] - r[a]);
+    }
+  }
+  for (double& e : out.mean_abs_error) e /= static_cast<double>(total - settle);
+  return out;
+}
+
 }  // namespace maglev::control_design

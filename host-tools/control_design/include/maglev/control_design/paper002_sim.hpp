@@ -40,4 +40,20 @@ struct AxisStepScenario {
 };
 GapStepResult RunAxisStep(const AxisStepScenario& s, const Paper002ControllerConfig& c);
 
+// Sinusoidal tracking of Section IV-B at omega_0 = 1.5 pi rad/s:
+//   x1 = 5 mm sin(w t - pi/2) + 25 mm, x3 = 30 mm sin(w t - pi/2), x5 = 30 mm sin(w t)
+// (the 3-DOF ellipse, Fig. 6), plus x9 = 10 mrad sin(w t) with the rotation
+// loops on in the 4-DOF run (Figs. 7, 8; the paper's second "x7" is x5).
+struct TrackingScenario {
+  bool four_dof = false;
+  double settle_s = 10.0;   // transient left out of the average
+  double measure_s = 60.0;  // the paper averages over 60 s
+  bool quantize_encoders = true;
+};
+struct TrackingResult {
+  std::array<double, 5> mean_abs_error{};  // y order: x1, x3, x5 [m], x7, x9 [rad]
+  bool hit_stop = false;
+};
+TrackingResult RunTracking(const TrackingScenario& s, const Paper002ControllerConfig& c);
+
 }  // namespace maglev::control_design
