@@ -107,13 +107,18 @@ TEST(Paper002Sim, SinusoidalTrackingExactWhenTheModelIsExact) {
   // omega_0 is tracked to well below one encoder count.
   Paper002ControllerConfig c = MakePaperConfig();
   c.model.motor.kv3_scale = 0.0;
-  TrackingScenario s;
-  s.quantize_encoders = false;
-  const TrackingResult r = RunTracking(s, c);
-  std::printf("3-DOF ellipse, exact model: mean |e| y %.3f um, x %.3f um, z %.3f um\n", r.mean_abs_error[0] * 1e6,
-              r.mean_abs_error[1] * 1e6, r.mean_abs_error[2] * 1e6);
-  for (std::size_t a = 0; a < 3; ++a) CHECK(r.mean_abs_error[a] < 2e-6);
-  CHECK_FALSE(r.hit_stop);
+  for (bool four : {false, true}) {
+    TrackingScenario s;
+    s.four_dof = four;
+    s.quantize_encoders = false;
+    const TrackingResult r = RunTracking(s, c);
+    std::printf("%s ellipse, exact model: mean |e| y %.3f um, x %.3f um, z %.3f um, theta %.2f urad\n",
+                four ? "4-DOF" : "3-DOF", r.mean_abs_error[0] * 1e6, r.mean_abs_error[1] * 1e6,
+                r.mean_abs_error[2] * 1e6, r.mean_abs_error[4] * 1e6);
+    for (std::size_t a = 0; a < 3; ++a) CHECK(r.mean_abs_error[a] < 2e-6);
+    CHECK(r.mean_abs_error[4] < 20e-6);  // below one 20 urad count
+    CHECK_FALSE(r.hit_stop);
+  }
 }
 
 TEST(Paper002Sim, SinusoidalTrackingOnTheBench) {
