@@ -16,6 +16,8 @@
 #include <thread>
 #include <vector>
 
+#include "maglev/axis_loops/axis.hpp"
+#include "maglev/controller/controller.hpp"
 #include "maglev/modbus/register_map.hpp"
 
 namespace {
@@ -257,9 +259,10 @@ class Client {
   static inline Client* self_ = nullptr;
 };
 
-const char* const kStateNames[] = {"idle", "homing", "in-plane lock", "lift", "z lock",
-                                   "tilt lock", "ready", "landing", "fault"};
-const char* const kAxisNames[] = {"x", "y", "theta_z", "z", "theta_x", "theta_y"};  // kernel Axis order
+using maglev::kernel::kAxisNames;  // the one axis vocabulary, kernel Axis order
+const char* state_name(std::uint16_t s) {
+  return s <= 255 ? maglev::kernel::to_string(static_cast<maglev::kernel::SequencerState>(s)) : "?";
+}
 const RegId kPoseReg[] = {RegId::status_x, RegId::status_y, RegId::status_theta_z,
                           RegId::status_z, RegId::status_theta_x, RegId::status_theta_y};
 
@@ -294,16 +297,15 @@ int wait_state(Client& c, std::uint16_t want, double seconds) {
     if (state == 8) die(kCommandRejected, "stage faulted (status.fault = " + fmt(c.read(def(RegId::status_fault))) + ")");
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  die(kTimeout, std::string("timed out waiting for state '") + kStateNames[want] + "'");
+  die(kTimeout, std::string("timed out waiting for state '") + state_name(want) + "'");
 }
 
 int run_command(Client& c, CommandCode code, std::uint16_t axis, float value, const Options& o) {
   const std::uint16_t r = c.command(code, axis, value);
   if (r != 0) {
-    static const char* const kResult[] = {"accepted", "already there", "busy", "not levitated", "fault latched",
-                                          "not faulted", "fault still active", "not ready (levitate first)",
-                                          "target out of range", "bad profile", "unsupported"};
-    die(kCommandRejected, std::string("command rejected: ") + (r < 11 ? kResult[r] : "code " + std::to_string(r)));
+    die(kCommandRejected, std::string("command rejected: ") +
+                              (r <= 255 ? maglev::kernel::to_string(static_cast<maglev::kernel::CommandResult>(r))
+                                        : "code " + std::to_string(r)));
   }
   if (o.wait_s <= 0.0) return kOk;
   switch (code) {
@@ -324,7 +326,7 @@ int run_command(Client& c, CommandCode code, std::uint16_t axis, float value, co
 
 int do_status(Client& c) {
   const auto state = static_cast<std::uint16_t>(c.read(def(RegId::status_state)));
-  std::cout << "state      = " << (state < 9 ? kStateNames[state] : "?") << " (" << state << ")\n";
+  std::cout << "state      = " << state_name(state) << " (" << state << ")\n";
   std::cout << "fault      = " << fmt(c.read(def(RegId::status_fault))) << "\n";
   std::cout << "saturation = " << fmt(c.read(def(RegId::status_saturation))) << "  scale_k = "
             << fmt(c.read(def(RegId::status_scale_k))) << "\n";

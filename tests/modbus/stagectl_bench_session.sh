@@ -69,7 +69,7 @@ sleep 0.2  # settle (the loop's tracking error after the profile end)
 x1=$(val status.x)
 within "$x1 - $x0" 1e-3 1e-6 && pass "x moved 1 mm +-1 um: $x0 -> $x1" || fail "x moved $x0 -> $x1, not 1 mm +-1 um"
 S status >"$WORK/status.txt"; rc=$?
-[ "$rc" = 0 ] && grep -q "state      = ready" "$WORK/status.txt" && pass "status says ready" ||
+[ "$rc" = 0 ] && grep -q "state      = Ready" "$WORK/status.txt" && pass "status says ready" ||
   fail "status (exit $rc): $(cat "$WORK/status.txt")"
 # Not moving any more: the same save is allowed.
 expect 0 "save after the move" --engineer save

@@ -43,7 +43,7 @@ contains "$WORK/out" "max_velocity.x = 0.119999997  # m/s" "mm/s converted"
 expect 0 "set um" -- --engineer set following_error.z 12 um
 contains "$WORK/out" "following_error.z = 1.20000004e-05  # m" "um converted"
 expect 0 "status" -- status
-contains "$WORK/out" "state      = idle (0)" "status state"
+contains "$WORK/out" "state      = Idle (0)" "status state"
 contains "$WORK/out" "[unsaved changes]" "unsaved flag"
 expect 0 "dump" -- dump
 contains "$WORK/out" "gain.theta_y.effort_limit = 4  # A" "dump has the last axis"
@@ -113,7 +113,7 @@ rtu 3 "range over RTU" -- --engineer set gain.x.derivative_filter 2kHz
 contains "$WORK/err" "gain.x.derivative_filter: value 2kHz is out of range [1, 1250] Hz" "RTU range message"
 rtu 7 "move over RTU" -- move y 1mm
 rtu 0 "status over RTU" -- status
-contains "$WORK/out" "state      = idle (0)" "RTU status"
+contains "$WORK/out" "state      = Idle (0)" "RTU status"
 stop_server
 
 # --- cannot connect --------------------------------------------------------------

@@ -3,16 +3,14 @@
 namespace maglev::bench {
 
 namespace {
-// Names indexed by the kernel's Axis order.
-constexpr const char* kNames[kAxes] = {"x", "y", "theta_z", "z", "theta_x", "theta_y"};
+using kernel::kAxisNames;
+// Short forms accepted in scenario files, indexed by the kernel's Axis order.
 constexpr const char* kShort[kAxes][2] = {{"x", "x"}, {"y", "y"}, {"thz", "tz"}, {"z", "z"}, {"thx", "tx"}, {"thy", "ty"}};
 }  // namespace
 
-const char* axis_name(Axis a) { return kNames[index(a)]; }
-
 bool parse_axis(const std::string& s, Axis* out) {
   for (Axis a : kernel::kAllAxes) {
-    if (s == kNames[index(a)] || s == kShort[index(a)][0] || s == kShort[index(a)][1]) {
+    if (s == kAxisNames[index(a)] || s == kShort[index(a)][0] || s == kShort[index(a)][1]) {
       *out = a;
       return true;
     }

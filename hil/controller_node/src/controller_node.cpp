@@ -246,39 +246,4 @@ kernel::ConfigError ControllerNode::apply_config(const kernel::KernelConfig& c) 
 const kernel::KernelConfig& ControllerNode::config() const { return kernel_->config(); }
 const kernel::ControllerStatus& ControllerNode::status() const { return kernel_->status(); }
 
-const char* to_string(kernel::CommandResult r) {
-  using R = kernel::CommandResult;
-  switch (r) {
-    case R::kAccepted: return "accepted";
-    case R::kAlreadyThere: return "already there";
-    case R::kRefusedBusy: return "refused: busy";
-    case R::kRefusedNotLevitated: return "refused: not levitated";
-    case R::kRefusedFaultLatched: return "refused: fault latched";
-    case R::kRefusedNotFaulted: return "refused: not faulted";
-    case R::kRefusedFaultActive: return "refused: fault active";
-    case R::kRefusedNotReady: return "refused: not ready";
-    case R::kRefusedOutOfRange: return "refused: out of range";
-    case R::kRefusedBadProfile: return "refused: bad profile";
-    case R::kUnsupported: return "unsupported by this kernel build";
-    default: break;
-  }
-  return "?";
-}
-
-const char* to_string(kernel::SequencerState s) {
-  using S = kernel::SequencerState;
-  switch (s) {
-    case S::kIdle: return "Idle";
-    case S::kHoming: return "Homing";
-    case S::kInPlaneLock: return "InPlaneLock";
-    case S::kLift: return "Lift";
-    case S::kZLock: return "ZLock";
-    case S::kTiltLock: return "TiltLock";
-    case S::kReady: return "Ready";
-    case S::kLanding: return "Landing";
-    case S::kFault: return "Fault";
-  }
-  return "?";
-}
-
 }  // namespace maglev::hil

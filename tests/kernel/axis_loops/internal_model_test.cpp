@@ -15,7 +15,6 @@ using loops_test::kT;
 
 namespace {
 
-const char* kAxisNames[] = {"x", "y", "thz", "z", "thx", "thy"};
 
 struct TrackResult {
   double max_err_first;  // max |e| in [1 s, 3 s]

@@ -50,7 +50,6 @@ cplx measure_pid(const Pid2DofConfig& cfg, double f, double amp) {
       f, amp, 2500, 2500);
 }
 
-const char* kAxisNames[] = {"x", "y", "thz", "z", "thx", "thy"};
 
 }  // namespace
 

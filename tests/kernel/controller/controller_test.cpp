@@ -230,3 +230,35 @@ TEST(Controller, HugeErrorHitsTheCurrentLimitNeverExceedsPeak) {
   CHECK(saturated);
 }
 
+
+// Issue 11: every enum that crosses a wire or a register has explicit values
+// and ONE name table (an X-macro list); every value has a name ("?" only for
+// values outside the list) -- kRefusedExcitation once printed "?".
+TEST_GROUP(EnumNames){};
+
+namespace {
+template <typename E>
+void check_names(int count) {
+  for (int v = 0; v < count; ++v) {
+    const char* n = maglev::kernel::to_string(static_cast<E>(v));
+    CHECK_TEXT(std::strcmp(n, "?") != 0, "an enumerator without a name");
+    CHECK_TRUE(std::strlen(n) > 0);
+  }
+  STRCMP_EQUAL("?", maglev::kernel::to_string(static_cast<E>(count)));
+}
+#define MAGLEV_COUNT(name, value, text) +1
+}  // namespace
+
+TEST(EnumNames, EveryValueOfEveryWireEnumHasItsName) {
+  using namespace maglev::kernel;
+  check_names<CommandResult>(0 MAGLEV_COMMAND_RESULTS(MAGLEV_COUNT));
+  check_names<ConfigError>(0 MAGLEV_CONFIG_ERRORS(MAGLEV_COUNT));
+  check_names<SequencerState>(0 MAGLEV_SEQUENCER_STATES(MAGLEV_COUNT));
+  check_names<TransitionReason>(0 MAGLEV_TRANSITION_REASONS(MAGLEV_COUNT));
+  check_names<FaultCode>(0 MAGLEV_FAULT_CODES(MAGLEV_COUNT));
+  STRCMP_CONTAINS("excitation", to_string(CommandResult::kRefusedExcitation));
+  // Pinned values (they cross CAN and Modbus).
+  LONGS_EQUAL(11, static_cast<int>(CommandResult::kRefusedExcitation));
+  LONGS_EQUAL(6, static_cast<int>(SequencerState::kReady));
+  LONGS_EQUAL(16, static_cast<int>(FaultCode::kCurrentMonitorOutOfRange));
+}

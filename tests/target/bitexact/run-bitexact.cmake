@@ -61,9 +61,9 @@ if(NOT _rc EQUAL 0)
 endif()
 
 # Instruction budget (only meaningful under -icount): the image prints
-#   step_instructions ready: ticks=N min=A mean=B max=C (tick T)
+#   step_instructions Ready: ticks=N min=A mean=B max=C (tick T)
 if(DEFINED MAX_READY_INSTRUCTIONS)
-  if(NOT _qemu_out MATCHES "step_instructions ready: ticks=([0-9]+) min=([0-9]+) mean=([0-9.]+) max=([0-9]+)")
+  if(NOT _qemu_out MATCHES "step_instructions Ready: ticks=([0-9]+) min=([0-9]+) mean=([0-9.]+) max=([0-9]+)")
     message(FATAL_ERROR "kernel-bitexact: the image printed no Ready step_instructions line")
   endif()
   set(_ready_ticks ${CMAKE_MATCH_1})

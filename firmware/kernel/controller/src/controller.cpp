@@ -48,6 +48,10 @@ Scalar table_sin(std::uint32_t phase) {
 
 }  // namespace
 
+MAGLEV_ENUM_TO_STRING(CommandResult, MAGLEV_COMMAND_RESULTS)
+
+MAGLEV_ENUM_TO_STRING(ConfigError, MAGLEV_CONFIG_ERRORS)
+
 KernelConfig default_kernel_config() {
   KernelConfig c{};
   c.servo_rate_Hz = static_cast<float>(stage::kServoRate_Hz);

@@ -341,49 +341,8 @@ void Sequencer::update_outputs() {
   out_.motion_allowed = out_.state == S::kReady;
 }
 
-const char* to_string(SequencerState s) {
-  switch (s) {
-    case SequencerState::kIdle: return "Idle";
-    case SequencerState::kHoming: return "Homing";
-    case SequencerState::kInPlaneLock: return "InPlaneLock";
-    case SequencerState::kLift: return "Lift";
-    case SequencerState::kZLock: return "ZLock";
-    case SequencerState::kTiltLock: return "TiltLock";
-    case SequencerState::kReady: return "Ready";
-    case SequencerState::kLanding: return "Landing";
-    case SequencerState::kFault: return "Fault";
-  }
-  return "?";
-}
+MAGLEV_ENUM_TO_STRING(SequencerState, MAGLEV_SEQUENCER_STATES)
 
-const char* to_string(TransitionReason r) {
-  switch (r) {
-    case TransitionReason::kNone: return "None";
-    case TransitionReason::kPowerOn: return "PowerOn";
-    case TransitionReason::kHomeCommand: return "HomeCommand";
-    case TransitionReason::kLevitateCommand: return "LevitateCommand";
-    case TransitionReason::kHomingDone: return "HomingDone";
-    case TransitionReason::kHomingFailed: return "HomingFailed";
-    case TransitionReason::kHomingTimeout: return "HomingTimeout";
-    case TransitionReason::kInPlaneSettled: return "InPlaneSettled";
-    case TransitionReason::kInPlaneTimeout: return "InPlaneTimeout";
-    case TransitionReason::kNominalHeightReached: return "NominalHeightReached";
-    case TransitionReason::kLiftTimeout: return "LiftTimeout";
-    case TransitionReason::kNoLiftOff: return "NoLiftOff";
-    case TransitionReason::kZSettled: return "ZSettled";
-    case TransitionReason::kZLockTimeout: return "ZLockTimeout";
-    case TransitionReason::kTiltSettled: return "TiltSettled";
-    case TransitionReason::kTiltLockTimeout: return "TiltLockTimeout";
-    case TransitionReason::kLandCommand: return "LandCommand";
-    case TransitionReason::kStopCommand: return "StopCommand";
-    case TransitionReason::kTouchdown: return "Touchdown";
-    case TransitionReason::kLandingTimeout: return "LandingTimeout";
-    case TransitionReason::kFaultLanding: return "FaultLanding";
-    case TransitionReason::kFaultCurrentsOff: return "FaultCurrentsOff";
-    case TransitionReason::kFaultLatched: return "FaultLatched";
-    case TransitionReason::kFaultCleared: return "FaultCleared";
-  }
-  return "?";
-}
+MAGLEV_ENUM_TO_STRING(TransitionReason, MAGLEV_TRANSITION_REASONS)
 
 }  // namespace maglev::kernel

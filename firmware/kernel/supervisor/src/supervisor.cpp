@@ -197,27 +197,6 @@ bool Supervisor::clear_fault() {
   return true;
 }
 
-const char* to_string(FaultCode c) {
-  switch (c) {
-    case FaultCode::kNone: return "None";
-    case FaultCode::kTravelX: return "TravelX";
-    case FaultCode::kTravelY: return "TravelY";
-    case FaultCode::kTravelThetaZ: return "TravelThetaZ";
-    case FaultCode::kZEnvelope: return "ZEnvelope";
-    case FaultCode::kTiltEnvelope: return "TiltEnvelope";
-    case FaultCode::kFollowingError: return "FollowingError";
-    case FaultCode::kPeakCurrentCommanded: return "PeakCurrentCommanded";
-    case FaultCode::kPeakCurrentMeasured: return "PeakCurrentMeasured";
-    case FaultCode::kRmsCurrent: return "RmsCurrent";
-    case FaultCode::kTickOverrun: return "TickOverrun";
-    case FaultCode::kBeamLoss: return "BeamLoss";
-    case FaultCode::kCounterJump: return "CounterJump";
-    case FaultCode::kStaleFrames: return "StaleFrames";
-    case FaultCode::kDisplacementOutOfRange: return "DisplacementOutOfRange";
-    case FaultCode::kAdcFault: return "AdcFault";
-    case FaultCode::kCurrentMonitorOutOfRange: return "CurrentMonitorOutOfRange";
-  }
-  return "?";
-}
+MAGLEV_ENUM_TO_STRING(FaultCode, MAGLEV_FAULT_CODES)
 
 }  // namespace maglev::kernel

@@ -282,11 +282,8 @@ int main() {
   hw::semihost_write_unsigned(cal.nop_counts);
   hw::semihost_write(" counts\n");
   print_stats("all", all, cal);
-  static constexpr const char* kStateNames[kStates] = {"idle",     "homing", "in_plane_lock",
-                                                      "lift",     "z_lock", "tilt_lock",
-                                                      "ready",    "landing", "fault"};
   for (int i = 0; i < kStates; ++i) {
-    if (per_state[i].count > 0U) print_stats(kStateNames[i], per_state[i], cal);
+    if (per_state[i].count > 0U) print_stats(kernel::to_string(static_cast<kernel::SequencerState>(i)), per_state[i], cal);
   }
   return kOk;
 }

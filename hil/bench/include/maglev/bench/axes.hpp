@@ -23,8 +23,8 @@ inline constexpr std::array<Axis, kAxes> kDisplayOrder{Axis::kX,      Axis::kY, 
 constexpr int index(Axis a) { return kernel::axis_index(a); }
 using kernel::is_rotation;
 
-// "x", "y", "theta_z", "z", "theta_x", "theta_y".
-const char* axis_name(Axis a);
+// "x", "y", "theta_z", "z", "theta_x", "theta_y": the kernel's one table.
+using kernel::axis_name;
 // "m" or "rad".
 inline const char* si_unit(Axis a) { return is_rotation(a) ? "rad" : "m"; }
 // Accepts the names above and the short forms thx/tx, thy/ty, thz/tz.

@@ -202,7 +202,7 @@ class ControllerNode {
 // The MotionCommand a host command means: app::to_motion_command
 // (firmware/app host_command.hpp), the same mapping the HIL board's
 // app::Application executes.
-const char* to_string(kernel::CommandResult r);
-const char* to_string(kernel::SequencerState s);
+// Names of the kernel enums: kernel::to_string (one table next to each enum).
+using kernel::to_string;
 
 }  // namespace maglev::hil

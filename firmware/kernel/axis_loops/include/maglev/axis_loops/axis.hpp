@@ -19,4 +19,9 @@ constexpr bool is_rotation(Axis a) { return a == Axis::kThetaZ || a == Axis::kTh
 
 inline constexpr Axis kAllAxes[kAxisCount] = {Axis::kX, Axis::kY, Axis::kThetaZ, Axis::kZ, Axis::kThetaX, Axis::kThetaY};
 
+// The axes' names, indexed by Axis: THE axis vocabulary of registers, CAN,
+// scenarios, traces and tools.
+inline constexpr const char* kAxisNames[kAxisCount] = {"x", "y", "theta_z", "z", "theta_x", "theta_y"};
+constexpr const char* axis_name(Axis a) { return kAxisNames[axis_index(a)]; }
+
 }  // namespace maglev::kernel

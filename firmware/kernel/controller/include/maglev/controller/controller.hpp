@@ -11,6 +11,8 @@
 // (homing's one-off Hall solve is the documented exception, docs/KERNEL.md).
 #pragma once
 
+#include "maglev/io/enum_names.hpp"
+
 #include <cstdint>
 
 #include "maglev/axis_loops/axis.hpp"
@@ -81,20 +83,28 @@ struct KernelConfig {
 
 KernelConfig default_kernel_config();
 
+// ConfigError: value and name of every enumerator, defined once (the enum and
+// to_string() are generated from it). Values cross a wire or a register:
+// never renumber, only append.
+#define MAGLEV_CONFIG_ERRORS(X) \
+  X(kOk, 0, "Ok") \
+  X(kBadServoRate, 1, "BadServoRate") \
+  X(kMeasurement, 2, "Measurement")  /* sensors_to_pose refused its part */ \
+  X(kAxisLoop, 3, "AxisLoop")  /* an axis loop design failed (see status().config_axis) */ \
+  X(kUnsupportedLoopType, 4, "UnsupportedLoopType") \
+  X(kAllocation, 5, "Allocation")  /* force_allocation refused its part */ \
+  X(kReferenceLimits, 6, "ReferenceLimits")  /* limits outside the supervisor window / non-positive rates */ \
+  X(kSequencer, 7, "Sequencer") \
+  X(kSupervisor, 8, "Supervisor") \
+  X(kPayload, 9, "Payload") \
+  X(kLockedWhileLevitated, 10, "LockedWhileLevitated")  /* an unsafe-to-change field differs while not on rest */ \
+  X(kGainsLockedWhileLevitated, 11, "GainsLockedWhileLevitated")  /* gains differ while levitated and live_tuning is off */
+
 enum class ConfigError : std::uint8_t {
-  kOk = 0,
-  kBadServoRate,
-  kMeasurement,        // sensors_to_pose refused its part
-  kAxisLoop,           // an axis loop design failed (see status().config_axis)
-  kUnsupportedLoopType,
-  kAllocation,         // force_allocation refused its part
-  kReferenceLimits,    // limits outside the supervisor window / non-positive rates
-  kSequencer,
-  kSupervisor,
-  kPayload,
-  kLockedWhileLevitated,  // an unsafe-to-change field differs while not on rest
-  kGainsLockedWhileLevitated,  // gains differ while levitated and live_tuning is off
+  MAGLEV_CONFIG_ERRORS(MAGLEV_ENUMERATOR)
 };
+
+const char* to_string(ConfigError e);
 
 enum class MotionType : std::uint8_t {
   kHome = 0, kLevitate, kLand, kStop, kClearFault,
@@ -127,20 +137,27 @@ struct MotionCommand {
   std::uint8_t harmonics = 1;   // kExcite
 };
 
+// CommandResult: value and name of every enumerator, defined once (the enum and
+// to_string() are generated from it). Values cross a wire or a register:
+// never renumber, only append.
+#define MAGLEV_COMMAND_RESULTS(X) \
+  X(kAccepted, 0, "accepted") \
+  X(kAlreadyThere, 1, "already there") \
+  X(kRefusedBusy, 2, "refused: busy") \
+  X(kRefusedNotLevitated, 3, "refused: not levitated") \
+  X(kRefusedFaultLatched, 4, "refused: fault latched") \
+  X(kRefusedNotFaulted, 5, "refused: not faulted") \
+  X(kRefusedFaultActive, 6, "refused: fault active") \
+  X(kRefusedNotReady, 7, "refused: not ready")  /* motion commands need Ready */ \
+  X(kRefusedOutOfRange, 8, "refused: out of range")  /* target / step beyond ReferenceLimits */ \
+  X(kRefusedBadProfile, 9, "refused: bad profile")  /* v, a, jerk <= 0 or beyond the limits */ \
+  X(kUnsupported, 10, "unsupported by this kernel build")  /* profile type not available in this build */ \
+  X(kRefusedExcitation, 11, "refused: excitation beyond its limits")  /* amplitude / frequency / duration / harmonics beyond ExcitationLimits */
+
 enum class CommandResult : std::uint8_t {
-  kAccepted = 0,
-  kAlreadyThere,
-  kRefusedBusy,
-  kRefusedNotLevitated,
-  kRefusedFaultLatched,
-  kRefusedNotFaulted,
-  kRefusedFaultActive,
-  kRefusedNotReady,       // motion commands need Ready
-  kRefusedOutOfRange,     // target / step beyond ReferenceLimits
-  kRefusedBadProfile,     // v, a, jerk <= 0 or beyond the limits
-  kUnsupported,           // profile type not available in this build
-  kRefusedExcitation,     // amplitude / frequency / duration / harmonics beyond ExcitationLimits
+  MAGLEV_COMMAND_RESULTS(MAGLEV_ENUMERATOR)
 };
+const char* to_string(CommandResult r);
 
 struct ControllerStatus {
   Pose64 pose{};

@@ -15,6 +15,8 @@
 // its decisions are identical in the float and the Q7.24 kernel.
 #pragma once
 
+#include "maglev/io/enum_names.hpp"
+
 #include <cstdint>
 
 namespace maglev::kernel {
@@ -32,44 +34,56 @@ inline constexpr std::uint8_t kAxisMaskTilt = kAxisBitThetaX | kAxisBitThetaY;
 inline constexpr std::uint8_t kAxisMaskAll = kAxisMaskInPlane | kAxisBitZ | kAxisMaskTilt;
 inline constexpr int kSequencedAxes = 6;
 
+// SequencerState: value and name of every enumerator, defined once (the enum and
+// to_string() are generated from it). Values cross a wire or a register:
+// never renumber, only append.
+#define MAGLEV_SEQUENCER_STATES(X) \
+  X(kIdle, 0, "Idle") \
+  X(kHoming, 1, "Homing") \
+  X(kInPlaneLock, 2, "InPlaneLock") \
+  X(kLift, 3, "Lift") \
+  X(kZLock, 4, "ZLock") \
+  X(kTiltLock, 5, "TiltLock") \
+  X(kReady, 6, "Ready") \
+  X(kLanding, 7, "Landing") \
+  X(kFault, 8, "Fault")  /* latched by the supervisor's currents-off reaction (or a landing after a fault) */
+
 enum class SequencerState : std::uint8_t {
-  kIdle = 0,
-  kHoming,
-  kInPlaneLock,
-  kLift,
-  kZLock,
-  kTiltLock,
-  kReady,
-  kLanding,
-  kFault,  // latched by the supervisor's currents-off reaction (or a landing after a fault)
+  MAGLEV_SEQUENCER_STATES(MAGLEV_ENUMERATOR)
 };
 
 // Why the last transition happened. Stored with the state; CAN/Modbus report it.
+// TransitionReason: value and name of every enumerator, defined once (the enum and
+// to_string() are generated from it). Values cross a wire or a register:
+// never renumber, only append.
+#define MAGLEV_TRANSITION_REASONS(X) \
+  X(kNone, 0, "None") \
+  X(kPowerOn, 1, "PowerOn") \
+  X(kHomeCommand, 2, "HomeCommand") \
+  X(kLevitateCommand, 3, "LevitateCommand")  /* Idle -> InPlaneLock (already homed) or Idle -> Homing */ \
+  X(kHomingDone, 4, "HomingDone")  /* Homing -> Idle (home only) or -> InPlaneLock (levitate pending) */ \
+  X(kHomingFailed, 5, "HomingFailed")  /* Homing -> Idle: Hall phase implausible */ \
+  X(kHomingTimeout, 6, "HomingTimeout")  /* Homing -> Idle */ \
+  X(kInPlaneSettled, 7, "InPlaneSettled")  /* InPlaneLock -> Lift */ \
+  X(kInPlaneTimeout, 8, "InPlaneTimeout")  /* InPlaneLock -> Idle */ \
+  X(kNominalHeightReached, 9, "NominalHeightReached")  /* Lift -> ZLock */ \
+  X(kLiftTimeout, 10, "LiftTimeout")  /* Lift -> Landing (platen lifted off but never captured) */ \
+  X(kNoLiftOff, 11, "NoLiftOff")  /* Lift -> Landing (feed-forward at its cap, platen still on rest) */ \
+  X(kZSettled, 12, "ZSettled")  /* ZLock -> TiltLock */ \
+  X(kZLockTimeout, 13, "ZLockTimeout")  /* ZLock -> Landing */ \
+  X(kTiltSettled, 14, "TiltSettled")  /* TiltLock -> Ready */ \
+  X(kTiltLockTimeout, 15, "TiltLockTimeout")  /* TiltLock -> Landing */ \
+  X(kLandCommand, 16, "LandCommand")  /* levitated -> Landing */ \
+  X(kStopCommand, 17, "StopCommand")  /* levitated -> Landing, or Homing/InPlaneLock -> Idle */ \
+  X(kTouchdown, 18, "Touchdown")  /* Landing -> Idle */ \
+  X(kLandingTimeout, 19, "LandingTimeout")  /* Landing -> Idle (currents off; the platen is on rest or close to it) */ \
+  X(kFaultLanding, 20, "FaultLanding")  /* levitated -> Landing, supervisor chose a controlled landing */ \
+  X(kFaultCurrentsOff, 21, "FaultCurrentsOff")  /* any -> Fault, supervisor chose currents off */ \
+  X(kFaultLatched, 22, "FaultLatched")  /* Landing (after a fault) -> Fault on touchdown/timeout */ \
+  X(kFaultCleared, 23, "FaultCleared")  /* Fault -> Idle */
+
 enum class TransitionReason : std::uint8_t {
-  kNone = 0,
-  kPowerOn,
-  kHomeCommand,
-  kLevitateCommand,     // Idle -> InPlaneLock (already homed) or Idle -> Homing
-  kHomingDone,          // Homing -> Idle (home only) or -> InPlaneLock (levitate pending)
-  kHomingFailed,        // Homing -> Idle: Hall phase implausible
-  kHomingTimeout,       // Homing -> Idle
-  kInPlaneSettled,      // InPlaneLock -> Lift
-  kInPlaneTimeout,      // InPlaneLock -> Idle
-  kNominalHeightReached,  // Lift -> ZLock
-  kLiftTimeout,         // Lift -> Landing (platen lifted off but never captured)
-  kNoLiftOff,           // Lift -> Landing (feed-forward at its cap, platen still on rest)
-  kZSettled,            // ZLock -> TiltLock
-  kZLockTimeout,        // ZLock -> Landing
-  kTiltSettled,         // TiltLock -> Ready
-  kTiltLockTimeout,     // TiltLock -> Landing
-  kLandCommand,         // levitated -> Landing
-  kStopCommand,         // levitated -> Landing, or Homing/InPlaneLock -> Idle
-  kTouchdown,           // Landing -> Idle
-  kLandingTimeout,      // Landing -> Idle (currents off; the platen is on rest or close to it)
-  kFaultLanding,        // levitated -> Landing, supervisor chose a controlled landing
-  kFaultCurrentsOff,    // any -> Fault, supervisor chose currents off
-  kFaultLatched,        // Landing (after a fault) -> Fault on touchdown/timeout
-  kFaultCleared,        // Fault -> Idle
+  MAGLEV_TRANSITION_REASONS(MAGLEV_ENUMERATOR)
 };
 
 enum class SequencerCommand : std::uint8_t { kHome = 0, kLevitate, kLand, kStop, kClearFault };

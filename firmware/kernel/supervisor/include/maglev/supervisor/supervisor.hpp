@@ -9,6 +9,8 @@
 // (land -> currents off), never relax, until clear_fault().
 #pragma once
 
+#include "maglev/io/enum_names.hpp"
+
 #include <cstdint>
 
 #include "maglev/io/sensor_sample.hpp"
@@ -17,24 +19,30 @@
 
 namespace maglev::kernel {
 
+// FaultCode: value and name of every enumerator, defined once (the enum and
+// to_string() are generated from it). Values cross a wire or a register:
+// never renumber, only append.
+#define MAGLEV_FAULT_CODES(X) \
+  X(kNone, 0, "None") \
+  X(kTravelX, 1, "TravelX")  /* x outside the travel window */ \
+  X(kTravelY, 2, "TravelY") \
+  X(kTravelThetaZ, 3, "TravelThetaZ") \
+  X(kZEnvelope, 4, "ZEnvelope")  /* z outside [z_min, z_max] while z is closed */ \
+  X(kTiltEnvelope, 5, "TiltEnvelope")  /* |theta_x| or |theta_y| beyond the envelope while z is closed */ \
+  X(kFollowingError, 6, "FollowingError")  /* |reference - measured| of a closed axis beyond its limit */ \
+  X(kPeakCurrentCommanded, 7, "PeakCurrentCommanded")  /* defensive: the allocation's limiter should make this impossible */ \
+  X(kPeakCurrentMeasured, 8, "PeakCurrentMeasured")  /* amplifier monitor beyond peak + margin: actuator not following */ \
+  X(kRmsCurrent, 9, "RmsCurrent")  /* thermal: first-order filtered i^2 beyond rms^2 */ \
+  X(kTickOverrun, 10, "TickOverrun")  /* more consecutive servo overruns than allowed */ \
+  X(kBeamLoss, 11, "BeamLoss")  /* interferometer signal loss (status bit) */ \
+  X(kCounterJump, 12, "CounterJump")  /* interferometer count step beyond the plausible speed */ \
+  X(kStaleFrames, 13, "StaleFrames")  /* more consecutive stale samples than allowed */ \
+  X(kDisplacementOutOfRange, 14, "DisplacementOutOfRange")  /* laser displacement sensor: status bit or ADC at a rail */ \
+  X(kAdcFault, 15, "AdcFault")  /* AD7606 conversion fault */ \
+  X(kCurrentMonitorOutOfRange, 16, "CurrentMonitorOutOfRange")  /* coil current monitor ADC at a rail */
+
 enum class FaultCode : std::uint8_t {
-  kNone = 0,
-  kTravelX,                  // x outside the travel window
-  kTravelY,
-  kTravelThetaZ,
-  kZEnvelope,                // z outside [z_min, z_max] while z is closed
-  kTiltEnvelope,             // |theta_x| or |theta_y| beyond the envelope while z is closed
-  kFollowingError,           // |reference - measured| of a closed axis beyond its limit
-  kPeakCurrentCommanded,     // defensive: the allocation's limiter should make this impossible
-  kPeakCurrentMeasured,      // amplifier monitor beyond peak + margin: actuator not following
-  kRmsCurrent,               // thermal: first-order filtered i^2 beyond rms^2
-  kTickOverrun,              // more consecutive servo overruns than allowed
-  kBeamLoss,                 // interferometer signal loss (status bit)
-  kCounterJump,              // interferometer count step beyond the plausible speed
-  kStaleFrames,              // more consecutive stale samples than allowed
-  kDisplacementOutOfRange,   // laser displacement sensor: status bit or ADC at a rail
-  kAdcFault,                 // AD7606 conversion fault
-  kCurrentMonitorOutOfRange, // coil current monitor ADC at a rail
+  MAGLEV_FAULT_CODES(MAGLEV_ENUMERATOR)
 };
 
 inline constexpr std::uint8_t kNoAxis = 0xFF;
