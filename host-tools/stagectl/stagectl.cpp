@@ -1,6 +1,6 @@
 // stagectl: the maglev stage controller's Modbus client (libmodbus).
 // The register names, types, units and ranges come from the same
-// registers.def the firmware serves (maglev/modbus/register_map.hpp).
+// registers.def the firmware serves (maglev/register_schema/register_map.hpp).
 #include <modbus/modbus.h>
 
 #include <cerrno>
@@ -18,7 +18,7 @@
 
 #include "maglev/axis_loops/axis.hpp"
 #include "maglev/controller/controller.hpp"
-#include "maglev/modbus/register_map.hpp"
+#include "maglev/register_schema/register_map.hpp"
 
 namespace {
 

@@ -14,7 +14,7 @@
 #include "maglev/can_link/receiver.hpp"
 #include "maglev/can_link/watchdog.hpp"
 #include "maglev/controller_node/controller_node.hpp"
-#include "maglev/hil/plant.hpp"
+#include "maglev/plant/plant.hpp"
 #include "maglev/virtual_can/virtual_can.hpp"
 
 // CppUTest last: its leak-detector macros clash with STL headers.

@@ -74,6 +74,16 @@ TEST_GROUP(HostileTcp) {
   std::atomic<long long> max_poll_us{0};      // wall time of one poll(): a blocking read shows here
   std::atomic<long long> max_poll_cpu_us{0};  // its CPU time: the work it did (preemption excluded)
   std::thread thread;
+  modbus_t* contexts[8] = {};  // freed in teardown, even when a check fails
+  int context_count = 0;
+  modbus_t* client(int unit, int timeout_us) {
+    modbus_t* c = modbus_new_tcp("127.0.0.1", tcp->port());
+    contexts[context_count++] = c;
+    modbus_set_slave(c, unit);
+    modbus_set_response_timeout(c, 0, static_cast<std::uint32_t>(timeout_us));
+    LONGS_EQUAL(0, modbus_connect(c));
+    return c;
+  }
   void setup() override {
     MemoryLeakWarningPlugin::saveAndDisableNewDeleteOverloads();
     dev = new test::ProtocolDevice();
@@ -104,6 +114,10 @@ TEST_GROUP(HostileTcp) {
     });
   }
   void teardown() override {
+    for (int i = 0; i < context_count; ++i) {
+      modbus_close(contexts[i]);
+      modbus_free(contexts[i]);
+    }
     stop = true;
     thread.join();
     delete tcp;
@@ -126,10 +140,7 @@ TEST_GROUP(HostileTcp) {
 };
 
 TEST(HostileTcp, NoClientStallsTheLoopOrAGoodClient) {
-  modbus_t* good = modbus_new_tcp("127.0.0.1", tcp->port());
-  modbus_set_slave(good, 1);
-  modbus_set_response_timeout(good, 0, 50000);  // 50 ms: a slower answer fails the read
-  LONGS_EQUAL(0, modbus_connect(good));
+  modbus_t* good = client(1, 50000);  // 50 ms: a slower answer fails the read
   std::uint16_t axis = 0;
   LONGS_EQUAL(1, modbus_read_registers(good, addr(RegId::cmd_axis), 1, &axis));
   ConfigImage before{};
@@ -184,15 +195,10 @@ TEST(HostileTcp, NoClientStallsTheLoopOrAGoodClient) {
     CHECK_TRUE(tcp->stats().slow_closed >= 4);  // partial, short body, one byte at a time, 0x11's extra bytes
   }
   for (int fd : {partial, short_body, extra, garbage, slow}) ::close(fd);
-  modbus_close(good);
-  modbus_free(good);
 }
 
 TEST(HostileTcp, AHundredConnectionsNeitherLockOutNorStall) {
-  modbus_t* good = modbus_new_tcp("127.0.0.1", tcp->port());
-  modbus_set_slave(good, 1);
-  modbus_set_response_timeout(good, 0, 50000);
-  LONGS_EQUAL(0, modbus_connect(good));
+  modbus_t* good = client(1, 50000);
   std::uint16_t first = 0;  // an operator at work: one request answered
   LONGS_EQUAL(1, modbus_read_registers(good, addr(RegId::cmd_axis), 1, &first));
   std::vector<int> flood;
@@ -200,10 +206,7 @@ TEST(HostileTcp, AHundredConnectionsNeitherLockOutNorStall) {
   const double worst_ms = good_client_worst_ms(good, 40);
   // A new operator gets in once the silent connections are past evict_after.
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  modbus_t* late = modbus_new_tcp("127.0.0.1", tcp->port());
-  modbus_set_slave(late, 1);
-  modbus_set_response_timeout(late, 0, 50000);
-  LONGS_EQUAL(0, modbus_connect(late));
+  modbus_t* late = client(1, 50000);
   std::uint16_t v = 0;
   LONGS_EQUAL(1, modbus_read_registers(late, addr(RegId::cmd_axis), 1, &v));
   std::printf("\n[measured] 100 connections: good client worst %.2f ms, worst poll() %lld us wall / %lld us CPU,"
@@ -213,24 +216,15 @@ TEST(HostileTcp, AHundredConnectionsNeitherLockOutNorStall) {
   CHECK_TRUE(max_poll_cpu_us.load() < 2000);
   CHECK_TRUE(tcp->clients() <= 8);
   for (int fd : flood) ::close(fd);
-  modbus_close(late);
-  modbus_free(late);
-  modbus_close(good);
-  modbus_free(good);
 }
 
 TEST(HostileTcp, AWriteToUnitZeroIsAnsweredAndIdleClientsAreClosed) {
-  modbus_t* c = modbus_new_tcp("127.0.0.1", tcp->port());
-  modbus_set_slave(c, 0);
-  modbus_set_response_timeout(c, 0, 200000);
-  LONGS_EQUAL(0, modbus_connect(c));
+  modbus_t* c = client(0, 200000);
   // Modbus/TCP has no broadcast: unit 0 gets its reply like unit 1.
   LONGS_EQUAL(1, modbus_write_register(c, addr(RegId::cmd_axis), 3));
   std::uint16_t v = 0;
   LONGS_EQUAL(1, modbus_read_registers(c, addr(RegId::cmd_axis), 1, &v));
   LONGS_EQUAL(3, v);
-  modbus_close(c);
-  modbus_free(c);
   // An idle connection is closed after idle_timeout (2 s here).
   const int idle = connect_raw(tcp->port());
   CHECK_TRUE(closed_by_server(idle, 4000));

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <memory>
 
-#include "maglev/hil/plant.hpp"
+#include "maglev/plant/plant.hpp"
 #include "maglev/modbus/controller_binding.hpp"
 #include "maglev/persistence/flash.hpp"
 

@@ -8,7 +8,7 @@
 #include <unistd.h>
 
 #include "maglev/persistence/config_store.hpp"
-#include "maglev/persistence/file_flash.hpp"
+#include "maglev/file_flash/file_flash.hpp"
 
 using namespace maglev;
 using modbus::ConfigImage;

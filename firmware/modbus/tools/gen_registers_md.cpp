@@ -8,7 +8,7 @@
 #include <sstream>
 #include <string>
 
-#include "maglev/modbus/register_map.hpp"
+#include "maglev/register_schema/register_map.hpp"
 
 namespace {
 

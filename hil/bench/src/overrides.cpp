@@ -6,7 +6,7 @@
 #include "maglev/bench/metrics_registry.hpp"
 #include "maglev/bench/timeline.hpp"
 #include "maglev/bench/units.hpp"
-#include "maglev/hil/plant_profile.hpp"
+#include "maglev/plant/plant_profile.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 

@@ -8,7 +8,7 @@
 #include "maglev/bench/axes.hpp"
 #include "maglev/bench/overrides.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
-#include "maglev/hil/plant_profile.hpp"
+#include "maglev/plant/plant_profile.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 

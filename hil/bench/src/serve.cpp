@@ -50,7 +50,7 @@
 #include "maglev/can_link/receiver.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/controller_node/controller_node.hpp"
-#include "maglev/hil/plant.hpp"
+#include "maglev/plant/plant.hpp"
 #include "maglev/io/stage_parameters.hpp"
 #include "maglev/modbus_tcp/bench_server.hpp"
 #include "maglev/scenario/scenario.hpp"

@@ -12,7 +12,7 @@
 #include "maglev/bench/metrics_registry.hpp"
 #include "maglev/bench/runner.hpp"
 #include "maglev/bench/timeline.hpp"
-#include "maglev/hil/plant.hpp"
+#include "maglev/plant/plant.hpp"
 #include "maglev/lockstep/plant_endpoint.hpp"
 
 namespace maglev::bench {

@@ -1,9 +1,9 @@
-#include "maglev/hil/amplifier.hpp"
+#include "maglev/plant/amplifier.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "maglev/hil/rng.hpp"
+#include "maglev/plant/rng.hpp"
 
 namespace maglev::hil {
 namespace {

@@ -1,4 +1,4 @@
-#include "maglev/hil/halbach_field.hpp"
+#include "maglev/plant/halbach_field.hpp"
 
 #include <cmath>
 

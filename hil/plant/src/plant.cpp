@@ -1,4 +1,4 @@
-#include "maglev/hil/plant.hpp"
+#include "maglev/plant/plant.hpp"
 
 #include <algorithm>
 #include <cmath>

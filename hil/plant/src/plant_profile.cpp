@@ -1,4 +1,4 @@
-#include "maglev/hil/plant_profile.hpp"
+#include "maglev/plant/plant_profile.hpp"
 
 namespace maglev::hil {
 

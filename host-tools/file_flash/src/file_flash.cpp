@@ -1,4 +1,4 @@
-#include "maglev/persistence/file_flash.hpp"
+#include "maglev/file_flash/file_flash.hpp"
 
 #include <vector>
 

@@ -2,6 +2,7 @@
 // complement, channel map, CONVST timer registers.
 #include <CppUTest/TestHarness.h>
 
+#include "maglev/board/stm32h743/amplifier_board_io.hpp"
 #include "maglev/drivers/ad7606.hpp"
 #include "maglev/drivers/ad7606_model.hpp"
 #include "maglev/drivers/convst_timer.hpp"
@@ -77,7 +78,7 @@ TEST(Ad7606, ChannelMapFillsTheSensorSample) {
   ad7606::Codes codes{};
   adc.read(codes);
   maglev::io::SensorSample s{};
-  ad7606::map_to_sample(codes, s);
+  maglev::board::stm32h743::map_to_sample(codes, s);
   LONGS_EQUAL(1, s.displacement_adc[0]);
   LONGS_EQUAL(3, s.displacement_adc[2]);
   LONGS_EQUAL(4, s.hall_adc[0]);  // A.Bx on ADC0 V4

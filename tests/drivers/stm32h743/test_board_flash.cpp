@@ -8,7 +8,7 @@
 
 #include "maglev/board/stm32h743/board_flash.hpp"
 #include "maglev/drivers/flash.hpp"
-#include "maglev/modbus/register_map.hpp"
+#include "maglev/register_schema/register_map.hpp"
 #include "maglev/persistence/config_store.hpp"
 
 #include <CppUTest/TestHarness.h>

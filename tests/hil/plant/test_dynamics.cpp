@@ -5,7 +5,7 @@
 #include <cstdio>
 
 #include "allocation_copy.hpp"
-#include "maglev/hil/plant.hpp"
+#include "maglev/plant/plant.hpp"
 
 // CppUTest last: its leak-checking operator new macros break STL headers.
 #include <CppUTest/TestHarness.h>

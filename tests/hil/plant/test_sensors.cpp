@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "maglev/hil/plant.hpp"
+#include "maglev/plant/plant.hpp"
 
 // CppUTest last: its leak-checking operator new macros break STL headers.
 #include <CppUTest/TestHarness.h>

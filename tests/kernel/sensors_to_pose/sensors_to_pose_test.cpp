@@ -12,7 +12,7 @@
 #include "maglev/numeric/fixed.hpp"
 #include "maglev/sensors_to_pose/pose_error.hpp"
 #include "maglev/sensors_to_pose/sensors_to_pose.hpp"
-#include "maglev/sensors_to_pose/wide_math.hpp"
+#include "maglev/sensors_to_pose/internal/wide_math.hpp"
 
 namespace {
 

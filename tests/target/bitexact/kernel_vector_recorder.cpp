@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "maglev/controller/controller.hpp"
-#include "maglev/hil/plant.hpp"
-#include "maglev/hil/plant_config.hpp"
-#include "maglev/hil/plant_profile.hpp"
+#include "maglev/plant/plant.hpp"
+#include "maglev/plant/plant_config.hpp"
+#include "maglev/plant/plant_profile.hpp"
 #include "maglev/kernel_replay/replay_format.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"

@@ -4,7 +4,7 @@
 #include <cstdint>
 
 #include "maglev/io/stage_parameters.hpp"
-#include "maglev/sensors_to_pose/wide_math.hpp"
+#include "maglev/sensors_to_pose/internal/wide_math.hpp"
 
 namespace maglev::kernel {
 namespace {

@@ -12,7 +12,7 @@ float* config_field(kernel::KernelConfig& cfg, RegId id) {
 #define MAGLEV_BIND_CONTROL(id, field)
 #define MAGLEV_REG(id, name, address, type, unit, min, max, def, access, when, persist, kind, field, desc) \
   MAGLEV_BIND_##kind(id, field)
-#include "maglev/modbus/registers.def"
+#include "maglev/register_schema/registers.def"
 #undef MAGLEV_REG
 #undef MAGLEV_BIND_CONFIG
 #undef MAGLEV_BIND_IDENT

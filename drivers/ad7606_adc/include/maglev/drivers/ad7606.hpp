@@ -29,7 +29,6 @@
 #include <cstdint>
 
 #include "maglev/drivers/bus.hpp"
-#include "maglev/io/sensor_sample.hpp"
 
 namespace maglev::drivers::ad7606 {
 
@@ -92,13 +91,6 @@ class Adc {
   std::uint8_t cs_[kDevices]{};
   State state_{};
 };
-
-// The channel map above, as code.
-inline void map_to_sample(const Codes& codes, io::SensorSample& sample) {
-  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kDisplacementSensors); ++i) sample.displacement_adc[i] = codes.channel[0][i];
-  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kHallChannels); ++i) sample.hall_adc[i] = codes.channel[0][3 + i];
-  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kCoils); ++i) sample.coil_current_adc[i] = codes.channel[1][i];
-}
 
 // Volts at the ADC input for a code (+-10 V range).
 constexpr double code_to_V(std::int16_t code) { return 10.0 * code / 32768.0; }

@@ -20,7 +20,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "maglev/modbus/register_map.hpp"
+#include "maglev/register_schema/register_map.hpp"
 
 namespace maglev::modbus {
 
@@ -37,12 +37,6 @@ enum class Activity : std::uint8_t {
   kIdle,     // landed / not levitating: everything may be written
   kHolding,  // levitating, no reference running
   kMoving,   // a reference (move, step, circle, ...) is running
-};
-
-struct PersistStatus {
-  std::uint16_t flags = 0;   // PersistFlag bits
-  std::uint16_t reason = 0;  // persistence::Reason
-  std::uint32_t sequence = 0;
 };
 
 // What the register map needs from the stage. Implemented by the controller

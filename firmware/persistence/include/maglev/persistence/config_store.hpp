@@ -18,8 +18,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "maglev/modbus/register_map.hpp"
-#include "maglev/modbus/register_server.hpp"
+#include "maglev/register_schema/register_map.hpp"
 #include "maglev/persistence/flash.hpp"
 
 namespace maglev::persistence {

@@ -8,7 +8,7 @@
 
 #include "maglev/controller/controller.hpp"
 #include "maglev/controller_node/controller_node.hpp"
-#include "maglev/hil/plant_config.hpp"
+#include "maglev/plant/plant_config.hpp"
 #include "maglev/scenario/scenario.hpp"
 #include "maglev/stage_profile/stage_profile.hpp"
 

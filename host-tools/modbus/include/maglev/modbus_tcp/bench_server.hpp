@@ -14,7 +14,7 @@
 
 #include "maglev/modbus/controller_binding.hpp"
 #include "maglev/modbus_tcp/tcp_server.hpp"
-#include "maglev/persistence/file_flash.hpp"
+#include "maglev/file_flash/file_flash.hpp"
 
 namespace maglev::modbus_tcp {
 

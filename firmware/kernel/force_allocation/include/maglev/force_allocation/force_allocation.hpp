@@ -168,4 +168,4 @@ Scalar MonitorCodeToCurrent_A(std::int16_t code, const ForceAllocationState<Scal
 
 }  // namespace maglev::kernel
 
-#include "maglev/force_allocation/force_allocation_impl.hpp"
+#include "maglev/force_allocation/internal/force_allocation_impl.hpp"

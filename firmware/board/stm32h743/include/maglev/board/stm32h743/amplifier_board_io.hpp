@@ -14,6 +14,15 @@
 
 namespace maglev::board::stm32h743 {
 
+// The amplifier board's ADC wiring (drivers/ad7606_adc README): ADC0 V1-V3
+// the laser displacement sensors, V4-V7 the Hall channels; ADC1 V1-V8 the
+// coil current monitors. The driver knows codes; the board knows what they mean.
+inline void map_to_sample(const drivers::ad7606::Codes& codes, io::SensorSample& sample) {
+  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kDisplacementSensors); ++i) sample.displacement_adc[i] = codes.channel[0][i];
+  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kHallChannels); ++i) sample.hall_adc[i] = codes.channel[0][3 + i];
+  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kCoils); ++i) sample.coil_current_adc[i] = codes.channel[1][i];
+}
+
 template <typename Encoder>
 class AmplifierBoardSensors final : public app::SensorSource {
  public:
@@ -29,7 +38,7 @@ class AmplifierBoardSensors final : public app::SensorSource {
     drivers::ad7606::Codes codes{};
     const bool adc_ok = adc_.read(codes) == drivers::ad7606::Status::kOk;
     if (adc_ok) {
-      drivers::ad7606::map_to_sample(codes, s);
+      map_to_sample(codes, s);
       // A laser sensor with no target rails its output: treat full scale as out of range.
       for (std::size_t i = 0; i < static_cast<std::size_t>(io::kDisplacementSensors); ++i) {
         if (s.displacement_adc[i] == INT16_MAX || s.displacement_adc[i] == INT16_MIN) {

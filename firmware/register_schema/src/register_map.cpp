@@ -1,4 +1,4 @@
-#include "maglev/modbus/register_map.hpp"
+#include "maglev/register_schema/register_map.hpp"
 
 #include <bit>
 #include <cmath>

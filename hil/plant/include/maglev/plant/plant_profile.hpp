@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "maglev/hil/plant_config.hpp"
+#include "maglev/plant/plant_config.hpp"
 #include "maglev/stage_profile/stage_profile.hpp"
 
 namespace maglev::hil {

@@ -13,7 +13,7 @@
 //   c_n(z)    = 2 sqrt2 mu0 M0 / (pi n) (1 - e^{-gamma_n Delta}) e^{-gamma_n z}   eq (3)
 #pragma once
 
-#include "maglev/hil/plant_config.hpp"
+#include "maglev/plant/plant_config.hpp"
 
 namespace maglev::hil {
 

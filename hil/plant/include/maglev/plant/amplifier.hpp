@@ -16,7 +16,7 @@
 
 #include <cstdint>
 
-#include "maglev/hil/plant_config.hpp"
+#include "maglev/plant/plant_config.hpp"
 #include "maglev/io/actuator_command.hpp"
 
 namespace maglev::hil {

@@ -22,10 +22,10 @@
 #include <array>
 #include <cstdint>
 
-#include "maglev/hil/amplifier.hpp"
-#include "maglev/hil/halbach_field.hpp"
-#include "maglev/hil/plant_config.hpp"
-#include "maglev/hil/rng.hpp"
+#include "maglev/plant/amplifier.hpp"
+#include "maglev/plant/halbach_field.hpp"
+#include "maglev/plant/plant_config.hpp"
+#include "maglev/plant/rng.hpp"
 #include "maglev/io/actuator_command.hpp"
 #include "maglev/io/sensor_sample.hpp"
 

@@ -23,7 +23,7 @@ enum class Kind : std::uint8_t { kIdent, kStatus, kConfig, kControl };
 // Stable identifiers, in table order.
 enum class RegId : std::uint16_t {
 #define MAGLEV_REG(id, ...) id,
-#include "maglev/modbus/registers.def"
+#include "maglev/register_schema/registers.def"
 #undef MAGLEV_REG
   kCount
 };
@@ -67,7 +67,7 @@ inline constexpr RegisterDef kTable[] = {
 #define MAGLEV_REG(id, name, address, type, unit, min, max, def, access, when, persist, kind, field, desc) \
   {RegId::id, name, static_cast<std::uint16_t>(address), type, unit, static_cast<double>(min),            \
    static_cast<double>(max), static_cast<double>(def), access, when, persist, kind, desc},
-#include "maglev/modbus/registers.def"
+#include "maglev/register_schema/registers.def"
 #undef MAGLEV_REG
 };
 }  // namespace detail
@@ -222,6 +222,14 @@ bool value_in_range(const RegisterDef& d, double value);
 
 // The configuration as the register map sees it: one raw 32-bit word per
 // persisted entry (U16 in the low half, I32 two's complement, F32 IEEE bits).
+// What the persistence layer reports about the stored configuration
+// (persist.* registers).
+struct PersistStatus {
+  std::uint16_t flags = 0;   // PersistFlag bits
+  std::uint16_t reason = 0;  // persistence::Reason
+  std::uint32_t sequence = 0;
+};
+
 struct ConfigImage {
   std::uint32_t raw[kPersistedCount];
 
