@@ -33,19 +33,6 @@ bool same_bytes(const T& a, const T& b) {
 
 bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
 
-// sin(2 pi phase / 2^32) from the kernel's table, sine only (the excitation
-// needs no cosine): identical table values in both Scalars.
-template <typename Scalar>
-Scalar table_sin(std::uint32_t phase) {
-  using Traits = numeric::ScalarTraits<Scalar>;
-  const std::int32_t q30 = numeric::sin_q30(phase);
-  if constexpr (Traits::kIsFixed) {
-    return Scalar::from_raw(static_cast<std::int32_t>(numeric::detail::shift_round(q30, 30 - Scalar::kFracBits)));
-  } else {
-    return static_cast<float>(q30) * (1.0f / 1073741824.0f);
-  }
-}
-
 }  // namespace
 
 MAGLEV_ENUM_TO_STRING(CommandResult, MAGLEV_COMMAND_RESULTS)
@@ -409,52 +396,40 @@ CommandResult Controller<Scalar>::start_excitation(const MotionCommand& cmd) {
 }
 
 template <typename Scalar>
-Scalar Controller<Scalar>::loop_update(int a, Scalar e_um, Scalar step_um, Scalar ff_A) {
+AxisLoop<Scalar> Controller<Scalar>::loop(int a) {
   const Applied& ap = applied_[active_];
-  if (ap.type[a] == LoopType::kInternalModel) {
-    return InternalModelRegulator<Scalar>(&ap.imr[a], &imr_state_[a]).update(e_um, step_um, ff_A);
-  }
-  return Pid2Dof<Scalar>(&ap.pid[a], &pid_state_[a]).update(e_um, step_um, ff_A);
-}
-
-template <typename Scalar>
-Scalar Controller<Scalar>::loop_saturate(int a, Scalar v) const {
-  const Applied& ap = applied_[active_];
-  return numeric::clamp_abs(v, ap.type[a] == LoopType::kInternalModel ? ap.imr[a].effort_limit
-                                                                      : ap.pid[a].effort_limit);
-}
-
-template <typename Scalar>
-void Controller<Scalar>::loop_apply_limit(int a, Scalar applied_A) {
-  const Applied& ap = applied_[active_];
-  if (ap.type[a] == LoopType::kInternalModel) {
-    InternalModelRegulator<Scalar>(&ap.imr[a], &imr_state_[a]).apply_limit(applied_A);
-  } else {
-    Pid2Dof<Scalar>(&ap.pid[a], &pid_state_[a]).apply_limit(applied_A);
-  }
-}
-
-template <typename Scalar>
-void Controller<Scalar>::loop_reset(int a, Scalar e_um) {
-  const Applied& ap = applied_[active_];
-  if (ap.type[a] == LoopType::kInternalModel) {
-    InternalModelRegulator<Scalar>(&ap.imr[a], &imr_state_[a]).reset(e_um);
-  } else {
-    Pid2Dof<Scalar>(&ap.pid[a], &pid_state_[a]).reset(Traits::zero(), e_um);
-  }
+  return AxisLoop<Scalar>(ap.type[a], &ap.pid[a], &pid_state_[a], &ap.imr[a], &imr_state_[a]);
 }
 
 template <typename Scalar>
 io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, bool tick_overrun) {
-  const Applied& ap = applied_[active_];
   ++status_.tick;
+  Tick t;
+  measure_pose(sample, t);
+  supervise(sample, tick_overrun, t);
+  home(sample, t);
+  sequence(t);
+  advance_references(t);
+  excite(t);
+  run_axis_loops(t);
+  allocate_forces(t);
+  const io::ActuatorCommand cmd = coil_currents_to_dac(t);
+  publish_status(t, cmd.amplifier_enable);
+  return cmd;
+}
 
-  // --- 1. sensors -> pose (integer, constant work) ---------------------------------
-  PoseMeasurement m = SensorsToPoseStep(sample, &s2p_);
-  pose_to_axes(m.pose, measured_pm_);
+// 1. sensors -> pose (integer, constant work).
+template <typename Scalar>
+void Controller<Scalar>::measure_pose(const io::SensorSample& sample, Tick& t) {
+  t.m = SensorsToPoseStep(sample, &s2p_);
+  pose_to_axes(t.m.pose, measured_pm_);
+}
 
-  // --- 2. supervisor: checks on this sample and last tick's commands --------------
-  SupervisorInputs si;
+// 2. supervisor: checks on this sample and last tick's commands.
+template <typename Scalar>
+void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_overrun, Tick& t) {
+  const Applied& ap = applied_[active_];
+  SupervisorInputs& si = t.si;
   si.sample = &sample;
   si.tick_overrun = tick_overrun;
   si.tick = status_.tick;
@@ -462,54 +437,61 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   si.positions_valid = prev.homed;
   si.envelope_active = (prev.closed_axes & kAxisBitZ) != 0;
   si.closed_axes = prev.closed_axes;
-  float abs_err[kAxisCount];
   for (int a = 0; a < kAxisCount; ++a) {
     si.pose[a] = pico_to_si(measured_pm_[a]);
     si.following_error[a] = pico_to_si(reference_pm_[a] - measured_pm_[a]);
-    abs_err[a] = std::fabs(si.following_error[a]);
+    t.abs_err[a] = std::fabs(si.following_error[a]);
   }
   for (int j = 0; j < io::kCoils; ++j) {
     si.coil_current_cmd_A[j] = last_current_A_[j];
     si.coil_current_measured_A[j] =
         Traits::to_float(MonitorCodeToCurrent_A<Scalar>(sample.coil_current_adc[j], ap.allocation));
   }
-  const SupervisorStatus& sup = supervisor_.step(si);
+  t.sup = &supervisor_.step(si);
+}
 
-  // --- 3. homing (Hall phase + interferometer zero) --------------------------------
-  SequencerInputs qi;
-  if (prev.homing_active) {
-    if (homing_ticks_ == 0) ReseedInterferometers(&s2p_);
-    ++homing_ticks_;
-    if (homing_ticks_ >= homing_needed_ticks_) {
-      // One-off double solve at the end of the averaging window (not per tick).
-      const HallPhase h = HallToPhase(sample, s2p_);
-      if (h.plausible) {
-        SetHomingOffsets(ComputeHomingOffsets(h, m.pose_unhomed, s2p_), &s2p_);
-        // Re-evaluate this sample with the new zero (same raw counts: no
-        // counter motion) so that references start from the homed pose.
-        m = SensorsToPoseStep(sample, &s2p_);
-        pose_to_axes(m.pose, measured_pm_);
-        qi.homing_done = true;
-      } else {
-        qi.homing_failed = true;
-      }
-    }
-  } else {
+// 3. homing (Hall phase + interferometer zero).
+template <typename Scalar>
+void Controller<Scalar>::home(const io::SensorSample& sample, Tick& t) {
+  if (!sequencer_.output().homing_active) {
     homing_ticks_ = 0;
+    return;
   }
+  if (homing_ticks_ == 0) ReseedInterferometers(&s2p_);
+  ++homing_ticks_;
+  if (homing_ticks_ < homing_needed_ticks_) return;
+  // One-off double solve at the end of the averaging window (not per tick).
+  const HallPhase h = HallToPhase(sample, s2p_);
+  if (h.plausible) {
+    SetHomingOffsets(ComputeHomingOffsets(h, t.m.pose_unhomed, s2p_), &s2p_);
+    // Re-evaluate this sample with the new zero (same raw counts: no
+    // counter motion) so that references start from the homed pose.
+    t.m = SensorsToPoseStep(sample, &s2p_);
+    pose_to_axes(t.m.pose, measured_pm_);
+    t.qi.homing_done = true;
+  } else {
+    t.qi.homing_failed = true;
+  }
+}
 
-  // --- 4. sequencer ----------------------------------------------------------------
-  qi.z_valid = sup.z_sensors_valid && (m.valid_axes & kPoseValidZ) != 0;
+// 4. sequencer.
+template <typename Scalar>
+void Controller<Scalar>::sequence(Tick& t) {
+  SequencerInputs& qi = t.qi;
+  qi.z_valid = t.sup->z_sensors_valid && (t.m.valid_axes & kPoseValidZ) != 0;
   qi.z_m = pico_to_si(measured_pm_[3]);
-  for (int a = 0; a < kAxisCount; ++a) qi.abs_error[a] = abs_err[a];
-  qi.fault_reaction = sup.reaction;
-  const SequencerOutput& so = sequencer_.step(qi);
+  for (int a = 0; a < kAxisCount; ++a) qi.abs_error[a] = t.abs_err[a];
+  qi.fault_reaction = t.sup->reaction;
+  t.so = &sequencer_.step(qi);
+}
 
-  // --- 5. references (int64) -------------------------------------------------------
-  // Open axes: reference = measurement (bumpless closing). Profiles advance
-  // only while motion is allowed; z follows the sequencer until Ready.
-  Scalar accel_ff[kAxisCount];
-  std::int64_t step_pm[kAxisCount];
+// 5. references (int64). Open axes: reference = measurement (bumpless
+// closing). Profiles advance only while motion is allowed; z follows the
+// sequencer until Ready.
+template <typename Scalar>
+void Controller<Scalar>::advance_references(Tick& t) {
+  const Applied& ap = applied_[active_];
+  const SequencerOutput& so = *t.so;
   for (int a = 0; a < kAxisCount; ++a) {
     const bool closed = (so.closed_axes & (1u << a)) != 0;
     Profile& p = profile_[a];
@@ -555,10 +537,10 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
       reference_pm_[a] = r.position_pico;
       acc_now = static_cast<double>(r.acceleration);
     }
-    step_pm[a] = closed ? pending_step_pm_[a] : 0;
-    reference_pm_[a] += step_pm[a];
+    t.step_pm[a] = closed ? pending_step_pm_[a] : 0;
+    reference_pm_[a] += t.step_pm[a];
     pending_step_pm_[a] = 0;
-    const bool newly_closed = closed && (si.closed_axes & (1u << a)) == 0;
+    const bool newly_closed = closed && (t.si.closed_axes & (1u << a)) == 0;
     if (!closed || newly_closed) {
       reference_pm_[a] = measured_pm_[a];  // bumpless: close on the present position
     } else if (a == axis_index(Axis::kZ) && !so.motion_allowed) {
@@ -567,82 +549,98 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
     profile_accel_[a] = acc_now;
     // u_ff = (m or I) a / (2 b*) in double (a in SI, up to 1.5e6 um/s^2 would
     // not fit a Scalar), one rounding to A.
-    accel_ff[a] = config_.acceleration_feedforward ? Traits::from_double(acc_now * ap.inertia_over_two_b_star[a])
-                                                   : Traits::zero();
+    t.accel_ff[a] = config_.acceleration_feedforward ? Traits::from_double(acc_now * ap.inertia_over_two_b_star[a])
+                                                     : Traits::zero();
   }
+}
 
-  // --- 5b. excitation d (constant work: every harmonic slot runs) ------------------
+// 5b. excitation d (constant work: every harmonic slot runs).
+template <typename Scalar>
+void Controller<Scalar>::excite(Tick& t) {
   Excitation& ex = excitation_;
-  if (ex.active && (!so.motion_allowed || (ex.duration_ticks != 0 && ex.tick >= ex.duration_ticks))) {
+  if (ex.active && (!t.so->motion_allowed || (ex.duration_ticks != 0 && ex.tick >= ex.duration_ticks))) {
     ex.active = false;
   }
   Scalar d_sum = Traits::zero();
   for (int k = 0; k < kMaxExcitationHarmonics; ++k) {
-    d_sum += ex.amplitude[k] * table_sin<Scalar>(ex.phase[k]);
+    d_sum += ex.amplitude[k] * Traits::sin_cos(ex.phase[k]).sin;  // the kernel's table
     ex.phase[k] += ex.increment[k];  // uint32 wrap = one turn
   }
-  Scalar excitation[kAxisCount];
-  for (int a = 0; a < kAxisCount; ++a) excitation[a] = (ex.active && a == ex.axis) ? d_sum : Traits::zero();
+  for (int a = 0; a < kAxisCount; ++a) t.excitation[a] = (ex.active && a == ex.axis) ? d_sum : Traits::zero();
   ex.tick += ex.active ? 1u : 0u;
+}
 
-  // --- 6. axis loops (all run; outputs selected by the closed mask) ----------------
+// 6. axis loops (all run; outputs selected by the closed mask).
+template <typename Scalar>
+void Controller<Scalar>::run_axis_loops(Tick& t) {
+  const Applied& ap = applied_[active_];
+  const SequencerOutput& so = *t.so;
   const Scalar ff_fraction = Traits::from_float(so.feedforward_fraction);
   // The sequencer's fraction may exceed 1 (cable stiffness, payload margin),
   // so it scales the full lift effort precomputed at apply time
   // (GravityFeedForward_A would clamp the ramp to [0, 1]).
   const Scalar gravity_A = ff_fraction * ap.allocation.gravity_effort_A;
-  Scalar effort[kAxisCount];
-  Scalar loop_out[kAxisCount];
-  Scalar aw_offset[kAxisCount];  // loop output before the biquads minus after them
   for (int a = 0; a < kAxisCount; ++a) {
+    AxisLoop<Scalar> l = loop(a);
     // Only the error (and this tick's explicit step) become Scalar: +-128 um.
     const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_pm_[a] - measured_pm_[a]);
-    const Scalar dr_um = numeric::pico_to_micro<Scalar>(step_pm[a]);
-    const Scalar ff = a == axis_index(Axis::kZ) ? gravity_A + accel_ff[a] : accel_ff[a];
-    const Scalar v_loop = loop_update(a, e_um, dr_um, ff);
+    const Scalar dr_um = numeric::pico_to_micro<Scalar>(t.step_pm[a]);
+    const Scalar ff = a == axis_index(Axis::kZ) ? gravity_A + t.accel_ff[a] : t.accel_ff[a];
+    const Scalar v_loop = l.update(e_um, dr_um, ff);
     Scalar v = v_loop;
     for (int f = 0; f < kMaxBiquadStages; ++f) v = biquad_update(ap.filter[a][f], filter_state_[a][f], v);
-    aw_offset[a] = v_loop - v;
-    loop_out[a] = loop_saturate(a, v);
+    t.aw_offset[a] = v_loop - v;
+    t.loop_out[a] = l.saturate(v);
     const bool closed = (so.closed_axes & (1u << a)) != 0;
     // Open axis: no feedback, only the feed-forward (the gravity lift of z).
     // Closed axis: the loop plus the excitation d (zero unless kExcite runs).
-    effort[a] = closed ? loop_out[a] + excitation[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
-    if (!closed) loop_reset(a, e_um);
+    t.effort[a] = closed ? t.loop_out[a] + t.excitation[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
+    if (!closed) l.reset(e_um);
   }
+}
 
-  // --- 7. force allocation with the whole-vector current limit ----------------------
-  AllocationOutput<Scalar> out;
-  AllocateCurrents<Scalar>(effort, measured_pm_[0], measured_pm_[1], ap.allocation, &out);
-
-  // --- 8. anti-windup: the loops learn what was really applied (k U) ----------------
-  // The loop's share of k U is k U - d; the comparison is against the signal
-  // that entered the clamp (after the biquads), so the back-calculation sees
-  // exactly the clamp + current-limit loss: pass (k U - d) + (v_loop - v_filtered).
+// 7. force allocation with the whole-vector current limit, then 8. the
+// anti-windup: the loops learn what was really applied (k U). The loop's
+// share of k U is k U - d; the comparison is against the signal that entered
+// the clamp (after the biquads), so the back-calculation sees exactly the
+// clamp + current-limit loss: pass (k U - d) + (v_loop - v_filtered).
+template <typename Scalar>
+void Controller<Scalar>::allocate_forces(Tick& t) {
+  const Applied& ap = applied_[active_];
+  AllocateCurrents<Scalar>(t.effort, measured_pm_[0], measured_pm_[1], ap.allocation, &t.out);
   for (int a = 0; a < kAxisCount; ++a) {
-    const bool closed = (so.closed_axes & (1u << a)) != 0;
-    const Scalar last = ap.type[a] == LoopType::kInternalModel ? imr_state_[a].last_output
-                                                                : pid_state_[a].last_output;
-    const Scalar applied_loop = out.applied_effort_A[a] - excitation[a] + aw_offset[a];
+    AxisLoop<Scalar> l = loop(a);
+    const bool closed = (t.so->closed_axes & (1u << a)) != 0;
+    const Scalar applied_loop = t.out.applied_effort_A[a] - t.excitation[a] + t.aw_offset[a];
     // Open axes (state reset) and anti-windup off: no correction.
-    loop_apply_limit(a, (closed && config_.antiwindup) ? applied_loop : last);
+    l.apply_limit((closed && config_.antiwindup) ? applied_loop : l.last_output());
   }
+}
 
-  // --- 9. DAC codes; amplifiers only when the sequencer says so ---------------------
+// 9. coil currents -> DAC codes; amplifiers only when the sequencer says so.
+template <typename Scalar>
+io::ActuatorCommand Controller<Scalar>::coil_currents_to_dac(const Tick& t) {
+  const Applied& ap = applied_[active_];
   io::ActuatorCommand cmd = io::kSafeActuatorCommand;
-  const bool enable = so.amplifier_enable;
+  const bool enable = t.so->amplifier_enable;
   for (int j = 0; j < io::kCoils; ++j) {
-    const std::int16_t code = CurrentToDacCode<Scalar>(out.current_A[j], ap.allocation);
+    const std::int16_t code = CurrentToDacCode<Scalar>(t.out.current_A[j], ap.allocation);
     cmd.dac_code[j] = enable ? code : std::int16_t{0};
-    last_current_A_[j] = enable ? Traits::to_float(out.current_A[j]) : 0.0f;
+    last_current_A_[j] = enable ? Traits::to_float(t.out.current_A[j]) : 0.0f;
     status_.coil_current_A[j] = last_current_A_[j];
   }
   cmd.amplifier_enable = enable;
+  return cmd;
+}
 
-  // --- 10. status ------------------------------------------------------------------------
-  status_.pose = m.pose;
+// 10. status.
+template <typename Scalar>
+void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
+  const SequencerOutput& so = *t.so;
+  const SupervisorStatus& sup = *t.sup;
+  status_.pose = t.m.pose;
   status_.reference = axes_to_pose(reference_pm_);
-  status_.pose_valid = m.valid_axes;
+  status_.pose_valid = t.m.valid_axes;
   status_.state = so.state;
   status_.last_reason = so.last_reason;
   status_.closed_axes = so.closed_axes;
@@ -650,20 +648,19 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   status_.fault = sup.first_fault.code;
   status_.first_fault = sup.first_fault;
   status_.reaction = sup.reaction;
-  status_.saturated = out.saturated;
-  status_.scale_k = Traits::to_float(out.scale_k);
+  status_.saturated = t.out.saturated;
+  status_.scale_k = Traits::to_float(t.out.scale_k);
   for (int a = 0; a < kAxisCount; ++a) {
-    status_.effort_A[a] = enable ? Traits::to_float(effort[a]) : 0.0f;
+    status_.effort_A[a] = enable ? Traits::to_float(t.effort[a]) : 0.0f;
     status_.total_effort_A[a] = status_.effort_A[a];
-    status_.loop_effort_A[a] = enable ? Traits::to_float(loop_out[a]) : 0.0f;
-    status_.applied_effort_A[a] = enable ? Traits::to_float(out.applied_effort_A[a]) : 0.0f;
-    status_.excitation_A[a] = Traits::to_float(excitation[a]);
+    status_.loop_effort_A[a] = enable ? Traits::to_float(t.loop_out[a]) : 0.0f;
+    status_.applied_effort_A[a] = enable ? Traits::to_float(t.out.applied_effort_A[a]) : 0.0f;
+    status_.excitation_A[a] = Traits::to_float(t.excitation[a]);
     status_.reference_acceleration[a] = profile_accel_[a];
   }
-  status_.excitation_active = ex.active;
-  status_.excitation_tick = ex.tick;
+  status_.excitation_active = excitation_.active;
+  status_.excitation_tick = excitation_.tick;
   status_.motion_active = motion_active();
-  return cmd;
 }
 
 template <typename Scalar>

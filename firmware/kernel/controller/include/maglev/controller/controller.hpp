@@ -16,6 +16,7 @@
 #include <cstdint>
 
 #include "maglev/axis_loops/axis.hpp"
+#include "maglev/axis_loops/axis_loop.hpp"
 #include "maglev/axis_loops/defaults.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
 #include "maglev/io/actuator_command.hpp"
@@ -240,11 +241,38 @@ class Controller {
     std::uint32_t tick = 0;
     std::uint32_t duration_ticks = 0;  // 0: until stopped
   };
-  // One loop tick of axis a, whichever type the config selected.
-  Scalar loop_update(int a, Scalar e_um, Scalar step_um, Scalar ff_A);
-  Scalar loop_saturate(int a, Scalar v) const;
-  void loop_apply_limit(int a, Scalar applied_A);
-  void loop_reset(int a, Scalar e_um);
+  // Axis a's loop, whichever type the config selected (AxisLoop dispatches).
+  AxisLoop<Scalar> loop(int a);
+
+  // The locals of one step(), handed from stage to stage of the data path.
+  struct Tick {
+    PoseMeasurement m{};
+    SupervisorInputs si{};
+    const SupervisorStatus* sup = nullptr;
+    const SequencerOutput* so = nullptr;
+    SequencerInputs qi{};
+    float abs_err[kAxisCount] = {};
+    Scalar accel_ff[kAxisCount] = {};
+    std::int64_t step_pm[kAxisCount] = {};
+    Scalar excitation[kAxisCount] = {};
+    Scalar effort[kAxisCount] = {};
+    Scalar loop_out[kAxisCount] = {};
+    Scalar aw_offset[kAxisCount] = {};  // loop output before the biquads minus after them
+    AllocationOutput<Scalar> out{};
+  };
+  // step(), stage by stage: sensors -> pose -> supervision -> homing ->
+  // sequencer -> references -> excitation -> axis loops -> force allocation
+  // (+ anti-windup) -> coil currents -> DAC -> status.
+  void measure_pose(const io::SensorSample& sample, Tick& t);
+  void supervise(const io::SensorSample& sample, bool tick_overrun, Tick& t);
+  void home(const io::SensorSample& sample, Tick& t);
+  void sequence(Tick& t);
+  void advance_references(Tick& t);
+  void excite(Tick& t);
+  void run_axis_loops(Tick& t);
+  void allocate_forces(Tick& t);
+  io::ActuatorCommand coil_currents_to_dac(const Tick& t);
+  void publish_status(const Tick& t, bool amplifiers_enabled);
 
   bool levitated_or_busy() const;
   AxisReferenceLimits axis_limits(int a) const;
