@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "maglev/axis_loops/axis.hpp"
+#include "maglev/io/axis.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/register_schema/register_map.hpp"
 

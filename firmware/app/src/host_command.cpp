@@ -6,8 +6,7 @@
 namespace maglev::app {
 
 double reference_si(const kernel::Pose64& r, int a) {
-  const std::int64_t v[6] = {r.x_pm, r.y_pm, r.theta_z_prad, r.z_pm, r.theta_x_prad, r.theta_y_prad};
-  return static_cast<double>(v[a < 0 || a > 5 ? 0 : a]) * 1e-12;
+  return static_cast<double>(r.pico[a < 0 || a >= kernel::kAxisCount ? 0 : a]) * 1e-12;
 }
 
 bool to_motion_command(const can::HostCommandFrame& h, const kernel::Pose64& reference, kernel::MotionCommand* out) {

@@ -27,12 +27,12 @@ float magnitude(float v) { return v < 0.0f ? -v : v; }
 
 can::ControllerStatusFrame to_status_frame(const kernel::ControllerStatus& s) {
   can::ControllerStatusFrame f{};
-  f.pose_nm_nrad[0] = pico_to_nano(s.pose.x_pm);
-  f.pose_nm_nrad[1] = pico_to_nano(s.pose.y_pm);
-  f.pose_nm_nrad[2] = pico_to_nano(s.pose.z_pm);
-  f.pose_nm_nrad[3] = pico_to_nano(s.pose.theta_x_prad);
-  f.pose_nm_nrad[4] = pico_to_nano(s.pose.theta_y_prad);
-  f.pose_nm_nrad[5] = pico_to_nano(s.pose.theta_z_prad);
+  f.pose_nm_nrad[0] = pico_to_nano(s.pose[maglev::kernel::Axis::kX]);
+  f.pose_nm_nrad[1] = pico_to_nano(s.pose[maglev::kernel::Axis::kY]);
+  f.pose_nm_nrad[2] = pico_to_nano(s.pose[maglev::kernel::Axis::kZ]);
+  f.pose_nm_nrad[3] = pico_to_nano(s.pose[maglev::kernel::Axis::kThetaX]);
+  f.pose_nm_nrad[4] = pico_to_nano(s.pose[maglev::kernel::Axis::kThetaY]);
+  f.pose_nm_nrad[5] = pico_to_nano(s.pose[maglev::kernel::Axis::kThetaZ]);
   f.sequencer_state = static_cast<std::uint8_t>(static_cast<std::uint8_t>(s.state) & 0x0Fu);
   f.fault_code = static_cast<std::uint16_t>(s.fault);
   float peak = 0.0f;

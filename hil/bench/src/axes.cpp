@@ -24,16 +24,6 @@ std::string axis_name_list() {
   return l;
 }
 
-double pose_si(const kernel::Pose64& p, Axis a) {
-  switch (a) {
-    case Axis::kX: return static_cast<double>(p.x_pm) * 1e-12;
-    case Axis::kY: return static_cast<double>(p.y_pm) * 1e-12;
-    case Axis::kThetaZ: return static_cast<double>(p.theta_z_prad) * 1e-12;
-    case Axis::kZ: return static_cast<double>(p.z_pm) * 1e-12;
-    case Axis::kThetaX: return static_cast<double>(p.theta_x_prad) * 1e-12;
-    case Axis::kThetaY: return static_cast<double>(p.theta_y_prad) * 1e-12;
-  }
-  return 0.0;
-}
+double pose_si(const kernel::Pose64& p, Axis a) { return static_cast<double>(p[a]) * 1e-12; }
 
 }  // namespace maglev::bench

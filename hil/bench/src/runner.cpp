@@ -33,7 +33,7 @@ class DisturbanceInjector {
     float e[kAxes] = {};
     e[index(axis)] = static_cast<float>(effort);
     kernel::AllocationOutput<float> out{};
-    kernel::AllocateCurrents<float>(e, st.pose.x_pm, st.pose.y_pm, alloc_, &out);
+    kernel::AllocateCurrents<float>(e, st.pose[maglev::kernel::Axis::kX], st.pose[maglev::kernel::Axis::kY], alloc_, &out);
     for (int j = 0; j < 8; ++j) {
       const double code = static_cast<double>(applied->dac_code[j]) +
                           static_cast<double>(out.current_A[j]) * alloc_.dac_codes_per_A;

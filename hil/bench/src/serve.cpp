@@ -324,8 +324,8 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
                    "t=%8.1f s  state=%-9s fault=%u moving=%d  x=%+.9f y=%+.9f z=%+.9f m  "
                    "misses=%llu resyncs=%llu max_tick=%lld us  modbus=%llu\n",
                    t + dt, hil::to_string(st.state), static_cast<unsigned>(st.fault), st.motion_active ? 1 : 0,
-                   static_cast<double>(st.pose.x_pm) * 1e-12, static_cast<double>(st.pose.y_pm) * 1e-12,
-                   static_cast<double>(st.pose.z_pm) * 1e-12, static_cast<unsigned long long>(c.deadline_misses),
+                   static_cast<double>(st.pose[maglev::kernel::Axis::kX]) * 1e-12, static_cast<double>(st.pose[maglev::kernel::Axis::kY]) * 1e-12,
+                   static_cast<double>(st.pose[maglev::kernel::Axis::kZ]) * 1e-12, static_cast<unsigned long long>(c.deadline_misses),
                    static_cast<unsigned long long>(c.resyncs), static_cast<long long>(c.max_work_ns / 1000),
                    static_cast<unsigned long long>(c.modbus_requests));
     }

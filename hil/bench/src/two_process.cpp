@@ -303,7 +303,7 @@ int run_controller_process(const ControllerProcessOptions& o) {
               "rx rejected %u, host commands %u\n",
               why, static_cast<unsigned long long>(node.ticks()),
               active_s > 0 ? static_cast<double>(node.ticks()) / active_s : 0.0, hil::to_string(st.state),
-              static_cast<double>(st.pose.z_pm) * 1e-6, static_cast<int>(st.fault), cio.rx_stats().rejected_total(),
+              static_cast<double>(st.pose[maglev::kernel::Axis::kZ]) * 1e-6, static_cast<int>(st.fault), cio.rx_stats().rejected_total(),
               node.link_stats().host_commands);
   if (!o.out_dir.empty()) {
     std::error_code ec;

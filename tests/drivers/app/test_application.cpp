@@ -182,10 +182,10 @@ TEST(Application, TelemetryAtTheCatalogRateWithTheKernelStatus) {
 
 TEST(Application, StatusFrameConversion) {
   kernel::ControllerStatus st{};
-  st.pose.x_pm = 1'234'567;        // 1234.567 nm -> 1235
-  st.pose.y_pm = -1'234'500;       // -1234.5 nm -> -1235 (half away from zero)
-  st.pose.z_pm = 20'000'000;       // 20 um
-  st.pose.theta_z_prad = -4'000'000'000'000'000;  // saturates
+  st.pose[maglev::kernel::Axis::kX] = 1'234'567;        // 1234.567 nm -> 1235
+  st.pose[maglev::kernel::Axis::kY] = -1'234'500;       // -1234.5 nm -> -1235 (half away from zero)
+  st.pose[maglev::kernel::Axis::kZ] = 20'000'000;       // 20 um
+  st.pose[maglev::kernel::Axis::kThetaZ] = -4'000'000'000'000'000;  // saturates
   st.state = kernel::SequencerState::kReady;
   st.fault = kernel::FaultCode::kStaleFrames;
   st.saturated = true;
@@ -434,8 +434,8 @@ std::vector<can::HostCommandAckFrame> drain_acks(can::CanPort& plant) {
 
 TEST(Application, HostCommandMappingIsTheBenchOne) {
   kernel::Pose64 ref{};
-  ref.x_pm = 1'500'000;        // 1.5 um
-  ref.theta_z_prad = -250'000; // -0.25 urad
+  ref[maglev::kernel::Axis::kX] = 1'500'000;        // 1.5 um
+  ref[maglev::kernel::Axis::kThetaZ] = -250'000; // -0.25 urad
   can::HostCommandFrame h = can::make_host_command(0, 0, can::MoveByArgs{2e-6, 1e-3, 0.5});
   kernel::MotionCommand c{};
   CHECK(app::to_motion_command(h, ref, &c));

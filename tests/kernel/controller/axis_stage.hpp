@@ -108,7 +108,7 @@ class AxisStage {
   template <typename Scalar>
   io::ActuatorCommand tick(Controller<Scalar>& c) {
     const io::ActuatorCommand cmd = c.step(sample(), false);
-    advance(cmd, c.status().pose.x_pm, c.status().pose.y_pm);
+    advance(cmd, c.status().pose[maglev::kernel::Axis::kX], c.status().pose[maglev::kernel::Axis::kY]);
     return cmd;
   }
 

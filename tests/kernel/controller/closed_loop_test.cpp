@@ -91,9 +91,9 @@ TEST(ClosedLoop, FloatAndQ7_24AgreeOver100kTicks) {
       const Pose64& r = cf.status().reference;
       const Pose64& p = cf.status().pose;
       const double e[kAxisCount] = {
-          static_cast<double>(r.x_pm - p.x_pm) * 1e-6,           static_cast<double>(r.y_pm - p.y_pm) * 1e-6,
-          static_cast<double>(r.theta_z_prad - p.theta_z_prad) * 1e-6, static_cast<double>(r.z_pm - p.z_pm) * 1e-6,
-          static_cast<double>(r.theta_x_prad - p.theta_x_prad) * 1e-6, static_cast<double>(r.theta_y_prad - p.theta_y_prad) * 1e-6};
+          static_cast<double>(r[maglev::kernel::Axis::kX] - p[maglev::kernel::Axis::kX]) * 1e-6,           static_cast<double>(r[maglev::kernel::Axis::kY] - p[maglev::kernel::Axis::kY]) * 1e-6,
+          static_cast<double>(r[maglev::kernel::Axis::kThetaZ] - p[maglev::kernel::Axis::kThetaZ]) * 1e-6, static_cast<double>(r[maglev::kernel::Axis::kZ] - p[maglev::kernel::Axis::kZ]) * 1e-6,
+          static_cast<double>(r[maglev::kernel::Axis::kThetaX] - p[maglev::kernel::Axis::kThetaX]) * 1e-6, static_cast<double>(r[maglev::kernel::Axis::kThetaY] - p[maglev::kernel::Axis::kThetaY]) * 1e-6};
       for (int a = 0; a < kAxisCount; ++a) {
         const bool closed = (cf.status().closed_axes & (1u << a)) != 0;
         sum_e[a] = closed ? sum_e[a] + e[a] + prev_e[a] : 0.0;  // open axes are reset
@@ -102,7 +102,7 @@ TEST(ClosedLoop, FloatAndQ7_24AgreeOver100kTicks) {
         max_sum_e[a] = std::fmax(max_sum_e[a], std::fabs(sum_e[a]));
       }
     }
-    s.advance(out_f[static_cast<std::size_t>(n)], cf.status().pose.x_pm, cf.status().pose.y_pm);
+    s.advance(out_f[static_cast<std::size_t>(n)], cf.status().pose[maglev::kernel::Axis::kX], cf.status().pose[maglev::kernel::Axis::kY]);
   }
   LONGS_EQUAL(6, accepted_f);
   CHECK(cf.status().state == SequencerState::kReady);
@@ -213,7 +213,7 @@ TEST(ClosedLoop, FloatAndQ7_24EachInItsOwnLoop) {
 
 namespace {
 
-double error_x_um(const ControllerStatus& s) { return static_cast<double>(s.reference.x_pm - s.pose.x_pm) * 1e-6; }
+double error_x_um(const ControllerStatus& s) { return static_cast<double>(s.reference[maglev::kernel::Axis::kX] - s.pose[maglev::kernel::Axis::kX]) * 1e-6; }
 
 struct SaturationRun {
   bool saturated = false;
@@ -385,8 +385,8 @@ MotionCommand move_cmd(MotionType type, Axis a, double target, double v, double 
   return m;
 }
 
-double x_m(const Pose64& p) { return static_cast<double>(p.x_pm) * 1e-12; }
-double y_m(const Pose64& p) { return static_cast<double>(p.y_pm) * 1e-12; }
+double x_m(const Pose64& p) { return static_cast<double>(p[maglev::kernel::Axis::kX]) * 1e-12; }
+double y_m(const Pose64& p) { return static_cast<double>(p[maglev::kernel::Axis::kY]) * 1e-12; }
 
 // Paper 000 Fig. 10(a): 12 mm in x at 60 mm/s and 0.6 m/s^2, with and without
 // the acceleration feed-forward m a / (2 b*). Returns the peak |e_x| (um).
@@ -501,7 +501,7 @@ TEST(ClosedLoop, SixMillimetreCircleOfPaper000Fig8) {
     max_radius_dev = std::fmax(max_radius_dev, std::fabs(std::hypot(dx, dy) - 3e-3));
     max_y = std::fmax(max_y, dy);
     max_e = std::fmax(max_e, std::fmax(std::fabs(error_x_um(c.status())),
-                                       std::fabs(static_cast<double>(c.status().reference.y_pm - c.status().pose.y_pm)) * 1e-6));
+                                       std::fabs(static_cast<double>(c.status().reference[maglev::kernel::Axis::kY] - c.status().pose[maglev::kernel::Axis::kY])) * 1e-6));
   }
   std::printf("\n6 mm circle x2: %d ticks (%.2f s), reference radius error %.3g m, peak |e_xy| %.3f um\n", n, n / kFs,
               max_radius_dev, max_e);

@@ -196,7 +196,7 @@ TEST(Controller, HugeErrorHitsTheCurrentLimitNeverExceedsPeak) {
   // The platen "jumps" 100 um in x: kp alone asks 3.6 A, the D kick far more;
   // together with the lift the coil currents would exceed 4 A.
   r.tick();
-  const std::int64_t x0 = r.c.status().pose.x_pm;
+  const std::int64_t x0 = r.c.status().pose[maglev::kernel::Axis::kX];
   r.stage.x_m = 100e-6;
   bool saturated = false;
   for (int n = 0; n < 200; ++n) {
@@ -218,13 +218,13 @@ TEST(Controller, HugeErrorHitsTheCurrentLimitNeverExceedsPeak) {
       ac.peak_current_A = 99.0;
       CHECK(ApplyForceAllocationConfig<float>(ac, &unlimited) == ForceAllocationError::kOk);
       AllocationOutput<float> free_out;
-      AllocateCurrents<float>(r.c.status().effort_A, r.c.status().pose.x_pm, r.c.status().pose.y_pm, unlimited,
+      AllocateCurrents<float>(r.c.status().effort_A, r.c.status().pose[maglev::kernel::Axis::kX], r.c.status().pose[maglev::kernel::Axis::kY], unlimited,
                               &free_out);
       const float k = r.c.status().scale_k;
       for (int j = 0; j < io::kCoils; ++j) {
         DOUBLES_EQUAL(k * free_out.current_A[j], r.c.status().coil_current_A[j], 2e-4);
       }
-      CHECK(std::fabs(static_cast<double>(r.c.status().pose.x_pm - x0)) > 50e6);  // the jump is seen
+      CHECK(std::fabs(static_cast<double>(r.c.status().pose[maglev::kernel::Axis::kX] - x0)) > 50e6);  // the jump is seen
     }
   }
   CHECK(saturated);

@@ -246,9 +246,9 @@ TEST(SensorsToPose, BeamLayoutSolveWithAbbeAndCosine) {
         pm = SensorsToPoseStep(step, &st);
       }
       CHECK_EQUAL(kPoseValidAll, pm.valid_axes);
-      const double ex = static_cast<double>(pm.pose.x_pm) * 1e-12 - x;
-      const double ey = static_cast<double>(pm.pose.y_pm) * 1e-12 - y;
-      const double et = static_cast<double>(pm.pose.theta_z_prad) * 1e-12 - th;
+      const double ex = static_cast<double>(pm.pose[maglev::kernel::Axis::kX]) * 1e-12 - x;
+      const double ey = static_cast<double>(pm.pose[maglev::kernel::Axis::kY]) * 1e-12 - y;
+      const double et = static_cast<double>(pm.pose[maglev::kernel::Axis::kThetaZ]) * 1e-12 - th;
       worst_xy = std::fmax(worst_xy, std::fmax(std::fabs(ex), std::fabs(ey)));
       worst_th = std::fmax(worst_th, std::fabs(et));
     }
@@ -266,7 +266,7 @@ TEST(SensorsToPose, BeamLayoutSolveWithAbbeAndCosine) {
       s.interferometer_counts[b] = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::llround(m / kLsb_m)));
     }
     const PoseMeasurement pm = SensorsToPoseStep(s, &st);
-    worst_uncorrected = std::fmax(worst_uncorrected, std::fabs(static_cast<double>(pm.pose.x_pm) * 1e-12 - x));
+    worst_uncorrected = std::fmax(worst_uncorrected, std::fabs(static_cast<double>(pm.pose[maglev::kernel::Axis::kX]) * 1e-12 - x));
   }
   std::printf("\n  beam solve: worst |x,y err| = %.3g m, |theta_z err| = %.3g rad (LSB 0.618 nm);"
               " uncorrected Abbe error = %.3g m",
@@ -299,9 +299,9 @@ TEST(SensorsToPose, DisplacementPlaneFit) {
     const double tx = (h[1] - h[2]) / (2 * a);
     const double z = h[1] - tx * a - ty * a;
     const PoseMeasurement pm = SensorsToPoseStep(s, &st);
-    DOUBLES_EQUAL(z, static_cast<double>(pm.pose.z_pm) * 1e-12, 2e-12);
-    DOUBLES_EQUAL(tx, static_cast<double>(pm.pose.theta_x_prad) * 1e-12, 2e-11);
-    DOUBLES_EQUAL(ty, static_cast<double>(pm.pose.theta_y_prad) * 1e-12, 2e-11);
+    DOUBLES_EQUAL(z, static_cast<double>(pm.pose[maglev::kernel::Axis::kZ]) * 1e-12, 2e-12);
+    DOUBLES_EQUAL(tx, static_cast<double>(pm.pose[maglev::kernel::Axis::kThetaX]) * 1e-12, 2e-11);
+    DOUBLES_EQUAL(ty, static_cast<double>(pm.pose[maglev::kernel::Axis::kThetaY]) * 1e-12, 2e-11);
   }
   // Sign convention: a positive theta_x lifts the sensors at positive y.
   io::SensorSample s = ZeroSample();
@@ -309,8 +309,8 @@ TEST(SensorsToPose, DisplacementPlaneFit) {
   s.displacement_adc[1] = 1000;  // (-a, a)
   s.displacement_adc[2] = -1000; // (-a, -a)
   const PoseMeasurement pm = SensorsToPoseStep(s, &st);
-  CHECK(pm.pose.theta_x_prad > 0);
-  CHECK_EQUAL(0, pm.pose.theta_y_prad);
+  CHECK(pm.pose[maglev::kernel::Axis::kThetaX] > 0);
+  CHECK_EQUAL(0, pm.pose[maglev::kernel::Axis::kThetaY]);
 }
 
 TEST(SensorsToPose, ValidityFlags) {
@@ -422,7 +422,7 @@ TEST(SensorsToPose, HomingMakesXyMagnetFrame) {
     s.hall_adc[3] = static_cast<std::int16_t>(std::lround(20000 * (std::cos(ay) - eps * std::cos(5 * ay))));
     // The interferometer zero is wherever the platen was at power-up.
     const PoseMeasurement pm0 = SensorsToPoseStep(s, &st);
-    CHECK_EQUAL(0, pm0.pose_unhomed.x_pm);
+    CHECK_EQUAL(0, pm0.pose_unhomed[maglev::kernel::Axis::kX]);
     const HomingOffsets off = ComputeHomingOffsets(HallToPhase(s, st), pm0.pose_unhomed, st);
     CHECK(off.x_pm >= -st.pitch_pm / 2 && off.x_pm < st.pitch_pm / 2);
     SetHomingOffsets(off, &st);
@@ -433,14 +433,20 @@ TEST(SensorsToPose, HomingMakesXyMagnetFrame) {
       e -= stage::kPitch_m * std::floor(e / stage::kPitch_m + 0.5);
       return std::fabs(e);
     };
-    CHECK(mod_err(pm.pose.x_pm, x_true) < 1e-6);
-    CHECK(mod_err(pm.pose.y_pm, y_true) < 1e-6);
+    CHECK(mod_err(pm.pose[maglev::kernel::Axis::kX], x_true) < 1e-6);
+    CHECK(mod_err(pm.pose[maglev::kernel::Axis::kY], y_true) < 1e-6);
   }
 }
 
 TEST(SensorsToPose, PoseErrorsSaturate) {
-  Pose64 ref{1000000, -2500000, 30000000, 100000, -100000, 1000000};
-  Pose64 meas{0, 0, 0, 0, 0, 0};
+  Pose64 ref{};
+  ref[Axis::kX] = 1000000;
+  ref[Axis::kY] = -2500000;
+  ref[Axis::kZ] = 30000000;
+  ref[Axis::kThetaX] = 100000;
+  ref[Axis::kThetaY] = -100000;
+  ref[Axis::kThetaZ] = 1000000;
+  Pose64 meas{};
   float e[6];
   PoseErrors<float>(ref, meas, e);
   DOUBLES_EQUAL(1.0, static_cast<double>(e[0]), 1e-7);   // x 1 um
@@ -450,9 +456,9 @@ TEST(SensorsToPose, PoseErrorsSaturate) {
   DOUBLES_EQUAL(0.1, static_cast<double>(e[4]), 1e-7);
   DOUBLES_EQUAL(-0.1, static_cast<double>(e[5]), 1e-7);
   maglev::numeric::Q7_24 q[6];
-  ref.x_pm = INT64_MAX;
-  meas.x_pm = -5;
-  ref.y_pm = -1000000000000;  // -1 m
+  ref[maglev::kernel::Axis::kX] = INT64_MAX;
+  meas[maglev::kernel::Axis::kX] = -5;
+  ref[maglev::kernel::Axis::kY] = -1000000000000;  // -1 m
   PoseErrors<maglev::numeric::Q7_24>(ref, meas, q);
   CHECK(q[0] == maglev::numeric::Q7_24::max());
   CHECK(q[1] == maglev::numeric::Q7_24::min());

@@ -99,9 +99,7 @@ bool write_file(const std::string& path, const std::vector<std::uint8_t>& bytes)
 }
 
 double reference_si(const kernel::ControllerStatus& st, Axis axis) {
-  const kernel::Pose64& r = st.reference;
-  const std::int64_t v[6] = {r.x_pm, r.y_pm, r.theta_z_prad, r.z_pm, r.theta_x_prad, r.theta_y_prad};
-  return static_cast<double>(v[static_cast<int>(axis)]) * 1e-12;
+  return static_cast<double>(st.reference[axis]) * 1e-12;
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 // Explicit instantiations for the two kernel scalars (float, Q7.24).
-#include "maglev/axis_loops/axis.hpp"
+#include "maglev/io/axis.hpp"
 #include "maglev/axis_loops/biquad.hpp"
 #include "maglev/axis_loops/defaults.hpp"
 #include "maglev/axis_loops/internal_model.hpp"

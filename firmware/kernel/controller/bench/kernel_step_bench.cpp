@@ -82,7 +82,7 @@ long run_ready(long ticks, bool* ok) {
   long checksum = 0;
   for (long n = 0; n < ticks; ++n) {
     const ActuatorCommand cmd = measured_ready_step(c, stage.sample());
-    stage.advance(cmd, c.status().pose.x_pm, c.status().pose.y_pm);
+    stage.advance(cmd, c.status().pose[Axis::kX], c.status().pose[Axis::kY]);
     checksum += cmd.dac_code[0] + cmd.dac_code[3];
   }
   *ok = *ok && c.status().state == SequencerState::kReady && c.status().excitation_active;

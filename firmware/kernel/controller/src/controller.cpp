@@ -11,19 +11,6 @@ namespace {
 
 namespace stage = io::stage;
 
-void pose_to_axes(const Pose64& p, std::int64_t out[kAxisCount]) {
-  out[0] = p.x_pm;
-  out[1] = p.y_pm;
-  out[2] = p.theta_z_prad;
-  out[3] = p.z_pm;
-  out[4] = p.theta_x_prad;
-  out[5] = p.theta_y_prad;
-}
-
-Pose64 axes_to_pose(const std::int64_t a[kAxisCount]) {
-  return Pose64{a[0], a[1], a[3], a[4], a[5], a[2]};
-}
-
 float pico_to_si(std::int64_t v) { return static_cast<float>(static_cast<double>(v) * 1e-12); }
 
 template <typename T>
@@ -264,7 +251,7 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
   };
   const double fs = static_cast<double>(config_.servo_rate_Hz);
   const AxisReferenceLimits lim = axis_limits(a);
-  const std::int64_t start = reference_pm_[a] + pending_step_pm_[a];
+  const std::int64_t start = reference_.pico[a] + pending_step_pm_[a];
   switch (cmd.type) {
     case MotionType::kStep: {
       StepReference step;
@@ -317,7 +304,7 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
       const double jerk = cmd.jerk > 0.0 ? cmd.jerk
                                          : 0.5 * (jlim - 3.0 * speed * at / r - speed * centripetal / r);
       CircleReference c;
-      const ReferenceError e = c.plan(reference_pm_[ix] + pending_step_pm_[ix], reference_pm_[iy] + pending_step_pm_[iy],
+      const ReferenceError e = c.plan(reference_.pico[ix] + pending_step_pm_[ix], reference_.pico[iy] + pending_step_pm_[iy],
                                       cmd.diameter_m, speed, cmd.turns, at, jerk, fs, lx, ly);
       if (e != ReferenceError::kOk) return result(e);
       cancel_profile(ix);
@@ -422,7 +409,7 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
 template <typename Scalar>
 void Controller<Scalar>::measure_pose(const io::SensorSample& sample, Tick& t) {
   t.m = SensorsToPoseStep(sample, &s2p_);
-  pose_to_axes(t.m.pose, measured_pm_);
+  measured_ = t.m.pose;
 }
 
 // 2. supervisor: checks on this sample and last tick's commands.
@@ -438,8 +425,8 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
   si.envelope_active = (prev.closed_axes & kAxisBitZ) != 0;
   si.closed_axes = prev.closed_axes;
   for (int a = 0; a < kAxisCount; ++a) {
-    si.pose[a] = pico_to_si(measured_pm_[a]);
-    si.following_error[a] = pico_to_si(reference_pm_[a] - measured_pm_[a]);
+    si.pose[a] = pico_to_si(measured_.pico[a]);
+    si.following_error[a] = pico_to_si(reference_.pico[a] - measured_.pico[a]);
     t.abs_err[a] = std::fabs(si.following_error[a]);
   }
   for (int j = 0; j < io::kCoils; ++j) {
@@ -467,7 +454,7 @@ void Controller<Scalar>::home(const io::SensorSample& sample, Tick& t) {
     // Re-evaluate this sample with the new zero (same raw counts: no
     // counter motion) so that references start from the homed pose.
     t.m = SensorsToPoseStep(sample, &s2p_);
-    pose_to_axes(t.m.pose, measured_pm_);
+    measured_ = t.m.pose;
     t.qi.homing_done = true;
   } else {
     t.qi.homing_failed = true;
@@ -479,7 +466,7 @@ template <typename Scalar>
 void Controller<Scalar>::sequence(Tick& t) {
   SequencerInputs& qi = t.qi;
   qi.z_valid = t.sup->z_sensors_valid && (t.m.valid_axes & kPoseValidZ) != 0;
-  qi.z_m = pico_to_si(measured_pm_[3]);
+  qi.z_m = pico_to_si(measured_.pico[3]);
   for (int a = 0; a < kAxisCount; ++a) qi.abs_error[a] = t.abs_err[a];
   qi.fault_reaction = t.sup->reaction;
   t.so = &sequencer_.step(qi);
@@ -534,17 +521,17 @@ void Controller<Scalar>::advance_references(Tick& t) {
         break;
     }
     if (sampled) {
-      reference_pm_[a] = r.position_pico;
+      reference_.pico[a] = r.position_pico;
       acc_now = static_cast<double>(r.acceleration);
     }
     t.step_pm[a] = closed ? pending_step_pm_[a] : 0;
-    reference_pm_[a] += t.step_pm[a];
+    reference_.pico[a] += t.step_pm[a];
     pending_step_pm_[a] = 0;
     const bool newly_closed = closed && (t.si.closed_axes & (1u << a)) == 0;
     if (!closed || newly_closed) {
-      reference_pm_[a] = measured_pm_[a];  // bumpless: close on the present position
+      reference_.pico[a] = measured_.pico[a];  // bumpless: close on the present position
     } else if (a == axis_index(Axis::kZ) && !so.motion_allowed) {
-      reference_pm_[a] = numeric::si_to_pico(static_cast<double>(so.z_reference_m));
+      reference_.pico[a] = numeric::si_to_pico(static_cast<double>(so.z_reference_m));
     }
     profile_accel_[a] = acc_now;
     // u_ff = (m or I) a / (2 b*) in double (a in SI, up to 1.5e6 um/s^2 would
@@ -583,7 +570,7 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
   for (int a = 0; a < kAxisCount; ++a) {
     AxisLoop<Scalar> l = loop(a);
     // Only the error (and this tick's explicit step) become Scalar: +-128 um.
-    const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_pm_[a] - measured_pm_[a]);
+    const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_.pico[a] - measured_.pico[a]);
     const Scalar dr_um = numeric::pico_to_micro<Scalar>(t.step_pm[a]);
     const Scalar ff = a == axis_index(Axis::kZ) ? gravity_A + t.accel_ff[a] : t.accel_ff[a];
     const Scalar v_loop = l.update(e_um, dr_um, ff);
@@ -607,7 +594,7 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
 template <typename Scalar>
 void Controller<Scalar>::allocate_forces(Tick& t) {
   const Applied& ap = applied_[active_];
-  AllocateCurrents<Scalar>(t.effort, measured_pm_[0], measured_pm_[1], ap.allocation, &t.out);
+  AllocateCurrents<Scalar>(t.effort, measured_.pico[0], measured_.pico[1], ap.allocation, &t.out);
   for (int a = 0; a < kAxisCount; ++a) {
     AxisLoop<Scalar> l = loop(a);
     const bool closed = (t.so->closed_axes & (1u << a)) != 0;
@@ -639,7 +626,7 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
   const SequencerOutput& so = *t.so;
   const SupervisorStatus& sup = *t.sup;
   status_.pose = t.m.pose;
-  status_.reference = axes_to_pose(reference_pm_);
+  status_.reference = reference_;
   status_.pose_valid = t.m.valid_axes;
   status_.state = so.state;
   status_.last_reason = so.last_reason;

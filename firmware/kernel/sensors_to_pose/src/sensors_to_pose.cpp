@@ -294,10 +294,15 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   const std::int64_t theta_z_prad =
       est[2] - (s.abbe_cosine_correction ? MulShiftRound(est[2], t2_q40) / 3 : 0);
 
-  out.pose_unhomed = Pose64{est[0], est[1], plane[0], plane[1], plane[2], theta_z_prad};
+  out.pose_unhomed[Axis::kX] = est[0];
+  out.pose_unhomed[Axis::kY] = est[1];
+  out.pose_unhomed[Axis::kZ] = plane[0];
+  out.pose_unhomed[Axis::kThetaX] = plane[1];
+  out.pose_unhomed[Axis::kThetaY] = plane[2];
+  out.pose_unhomed[Axis::kThetaZ] = theta_z_prad;
   out.pose = out.pose_unhomed;
-  out.pose.x_pm += s.home_offset_x_pm;
-  out.pose.y_pm += s.home_offset_y_pm;
+  out.pose[Axis::kX] += s.home_offset_x_pm;
+  out.pose[Axis::kY] += s.home_offset_y_pm;
 
   // --- validity ------------------------------------------------------------------
   // Every in-plane axis uses every beam (the solve and the Abbe terms couple
@@ -383,7 +388,7 @@ HomingOffsets ComputeHomingOffsets(const HallPhase& hall, const Pose64& pose_unh
   const std::int64_t hy = HallCoarsePosition_pm(hall.phase_y_turn, state.hall_a_y_pm, p);
   // offset = hall - ifm (mod p), represented in [-p/2, p/2).
   const auto wrap = [p](std::int64_t v) { return wide::FloorMod(v + p / 2, p) - p / 2; };
-  return HomingOffsets{wrap(hx - pose_unhomed.x_pm), wrap(hy - pose_unhomed.y_pm)};
+  return HomingOffsets{wrap(hx - pose_unhomed[Axis::kX]), wrap(hy - pose_unhomed[Axis::kY])};
 }
 
 void SetHomingOffsets(const HomingOffsets& offsets, SensorsToPoseState* state) {

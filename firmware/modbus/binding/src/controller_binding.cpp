@@ -91,12 +91,12 @@ double ControllerDevice<Scalar>::read_status(RegId id) const {
     case RegId::status_fault: return static_cast<double>(st.fault);
     case RegId::status_saturation: return st.saturated ? 1.0 : 0.0;
     case RegId::status_moving: return activity() == Activity::kMoving ? 1.0 : 0.0;
-    case RegId::status_x: return static_cast<double>(st.pose.x_pm) * kPico;
-    case RegId::status_y: return static_cast<double>(st.pose.y_pm) * kPico;
-    case RegId::status_z: return static_cast<double>(st.pose.z_pm) * kPico;
-    case RegId::status_theta_x: return static_cast<double>(st.pose.theta_x_prad) * kPico;
-    case RegId::status_theta_y: return static_cast<double>(st.pose.theta_y_prad) * kPico;
-    case RegId::status_theta_z: return static_cast<double>(st.pose.theta_z_prad) * kPico;
+    case RegId::status_x: return static_cast<double>(st.pose[maglev::kernel::Axis::kX]) * kPico;
+    case RegId::status_y: return static_cast<double>(st.pose[maglev::kernel::Axis::kY]) * kPico;
+    case RegId::status_z: return static_cast<double>(st.pose[maglev::kernel::Axis::kZ]) * kPico;
+    case RegId::status_theta_x: return static_cast<double>(st.pose[maglev::kernel::Axis::kThetaX]) * kPico;
+    case RegId::status_theta_y: return static_cast<double>(st.pose[maglev::kernel::Axis::kThetaY]) * kPico;
+    case RegId::status_theta_z: return static_cast<double>(st.pose[maglev::kernel::Axis::kThetaZ]) * kPico;
     case RegId::status_closed_axes: return st.closed_axes;
     case RegId::status_config_error: return static_cast<double>(st.last_config_error);
     case RegId::status_scale_k: return static_cast<double>(st.scale_k);

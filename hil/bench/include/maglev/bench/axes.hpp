@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <string>
 
-#include "maglev/axis_loops/axis.hpp"
+#include "maglev/io/axis.hpp"
 #include "maglev/controller/controller.hpp"
 
 namespace maglev::bench {

@@ -29,7 +29,7 @@
 
 #include <cmath>
 
-#include "maglev/axis_loops/axis.hpp"
+#include "maglev/io/axis.hpp"
 #include "maglev/axis_loops/biquad.hpp"
 #include "maglev/axis_loops/internal_model.hpp"
 #include "maglev/axis_loops/pid2dof.hpp"

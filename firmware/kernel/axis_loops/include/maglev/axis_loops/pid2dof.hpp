@@ -36,7 +36,7 @@
 
 #include <cmath>
 
-#include "maglev/axis_loops/axis.hpp"
+#include "maglev/io/axis.hpp"
 #include "maglev/axis_loops/design_error.hpp"
 #include "maglev/axis_loops/loop_terms.hpp"
 #include "maglev/numeric/saturation.hpp"

@@ -15,7 +15,7 @@
 
 #include <cstdint>
 
-#include "maglev/axis_loops/axis.hpp"
+#include "maglev/io/axis.hpp"
 #include "maglev/axis_loops/axis_loop.hpp"
 #include "maglev/axis_loops/defaults.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
@@ -297,9 +297,9 @@ class Controller {
   AxisReference circle_y_{};  // y's sample, produced with x's in the same tick
   bool circle_y_valid_ = false;
   bool circle_y_last_ = false;
-  std::int64_t reference_pm_[kAxisCount] = {};
+  Pose64 reference_{};
   std::int64_t pending_step_pm_[kAxisCount] = {};  // step() applies and reports it
-  std::int64_t measured_pm_[kAxisCount] = {};
+  Pose64 measured_{};
   double profile_accel_[kAxisCount] = {};
   float last_current_A_[io::kCoils] = {};
   std::uint32_t homing_ticks_ = 0;

@@ -19,12 +19,12 @@ constexpr std::int64_t SaturatingDiff(std::int64_t a, std::int64_t b) {
 // out[i] in maglev::kernel::Axis order: x, y, theta_z, z, theta_x, theta_y.
 template <typename Scalar>
 constexpr void PoseErrors(const Pose64& reference, const Pose64& measured, Scalar out[6]) {
-  out[0] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference.x_pm, measured.x_pm));
-  out[1] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference.y_pm, measured.y_pm));
-  out[2] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference.theta_z_prad, measured.theta_z_prad));
-  out[3] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference.z_pm, measured.z_pm));
-  out[4] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference.theta_x_prad, measured.theta_x_prad));
-  out[5] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference.theta_y_prad, measured.theta_y_prad));
+  out[0] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference[Axis::kX], measured[Axis::kX]));
+  out[1] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference[Axis::kY], measured[Axis::kY]));
+  out[2] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference[Axis::kThetaZ], measured[Axis::kThetaZ]));
+  out[3] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference[Axis::kZ], measured[Axis::kZ]));
+  out[4] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference[Axis::kThetaX], measured[Axis::kThetaX]));
+  out[5] = numeric::pico_to_micro<Scalar>(SaturatingDiff(reference[Axis::kThetaY], measured[Axis::kThetaY]));
 }
 
 }  // namespace maglev::kernel

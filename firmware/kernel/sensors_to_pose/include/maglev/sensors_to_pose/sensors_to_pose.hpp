@@ -22,18 +22,17 @@
 
 #include <cstdint>
 
+#include "maglev/io/axis.hpp"
 #include "maglev/io/sensor_sample.hpp"
 
 namespace maglev::kernel {
 
-// 1 pm per LSB for lengths, 1 prad per LSB for angles.
+// A pose: 1 pm per LSB for lengths, 1 prad per LSB for angles, indexed by
+// the one Axis order (io/axis.hpp): pose[Axis::kZ].
 struct Pose64 {
-  std::int64_t x_pm;
-  std::int64_t y_pm;
-  std::int64_t z_pm;
-  std::int64_t theta_x_prad;
-  std::int64_t theta_y_prad;
-  std::int64_t theta_z_prad;
+  std::int64_t pico[kAxisCount];
+  constexpr std::int64_t& operator[](Axis a) { return pico[axis_index(a)]; }
+  constexpr const std::int64_t& operator[](Axis a) const { return pico[axis_index(a)]; }
 };
 
 // Validity bit i <-> maglev::kernel::Axis i: x, y, theta_z, z, theta_x,

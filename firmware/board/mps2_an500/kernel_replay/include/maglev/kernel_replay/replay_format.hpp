@@ -224,10 +224,7 @@ inline void encode_output(const OutputRecord& r, std::uint8_t* out) {
   for (float v : s.applied_effort_A) put<float>(p, v);
   for (float v : s.coil_current_A) put<float>(p, v);
   for (const kernel::Pose64* pose : {&s.pose, &s.reference}) {
-    for (std::int64_t v : {pose->x_pm, pose->y_pm, pose->theta_z_prad, pose->z_pm, pose->theta_x_prad,
-                           pose->theta_y_prad}) {
-      put<std::int64_t>(p, v);
-    }
+    for (std::int64_t v : pose->pico) put<std::int64_t>(p, v);  // kernel Axis order
   }
 }
 
