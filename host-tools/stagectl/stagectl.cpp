@@ -17,12 +17,14 @@
 #include <vector>
 
 #include "maglev/io/axis.hpp"
+#include "maglev/can_link/host_commands.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/register_schema/register_map.hpp"
 
 namespace {
 
 using namespace maglev::modbus;
+using maglev::can::HostCommandCode;  // cmd.code values: the one command table
 
 // Exit codes (also in --help and host-tools/stagectl/README.md).
 enum Exit : int {
@@ -220,7 +222,7 @@ class Client {
   }
 
   // cmd.axis, cmd.value, cmd.code in one 0x17, reading cmd.result back.
-  std::uint16_t command(CommandCode code, std::uint16_t axis, float value) {
+  std::uint16_t command(HostCommandCode code, std::uint16_t axis, float value) {
     std::uint16_t w[4];
     w[0] = axis;
     split_words(encode(RegType::kF32, static_cast<double>(value)), w + 1);
@@ -300,7 +302,7 @@ int wait_state(Client& c, std::uint16_t want, double seconds) {
   die(kTimeout, std::string("timed out waiting for state '") + state_name(want) + "'");
 }
 
-int run_command(Client& c, CommandCode code, std::uint16_t axis, float value, const Options& o) {
+int run_command(Client& c, HostCommandCode code, std::uint16_t axis, float value, const Options& o) {
   const std::uint16_t r = c.command(code, axis, value);
   if (r != 0) {
     die(kCommandRejected, std::string("command rejected: ") +
@@ -309,9 +311,9 @@ int run_command(Client& c, CommandCode code, std::uint16_t axis, float value, co
   }
   if (o.wait_s <= 0.0) return kOk;
   switch (code) {
-    case CommandCode::kLevitate: return wait_state(c, 6, o.wait_s);
-    case CommandCode::kLand: return wait_state(c, 0, o.wait_s);
-    case CommandCode::kMove: {
+    case HostCommandCode::kLevitate: return wait_state(c, 6, o.wait_s);
+    case HostCommandCode::kLand: return wait_state(c, 0, o.wait_s);
+    case HostCommandCode::kMoveTo: {
       const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.wait_s);
       const double tol = is_rotation(axis) ? 1e-6 : 1e-6;
       while (std::chrono::steady_clock::now() < deadline) {
@@ -485,11 +487,11 @@ int main(int argc, char** argv) {
     return kOk;
   }
   if (cmd == "status") return do_status(c);
-  if (cmd == "home") return run_command(c, CommandCode::kHome, 0, 0.0f, o);
-  if (cmd == "levitate") return run_command(c, CommandCode::kLevitate, 0, 0.0f, o);
-  if (cmd == "land") return run_command(c, CommandCode::kLand, 0, 0.0f, o);
-  if (cmd == "stop") return run_command(c, CommandCode::kStop, 0, 0.0f, o);
-  if (cmd == "clear-fault") return run_command(c, CommandCode::kClearFault, 0, 0.0f, o);
+  if (cmd == "home") return run_command(c, HostCommandCode::kHome, 0, 0.0f, o);
+  if (cmd == "levitate") return run_command(c, HostCommandCode::kLevitate, 0, 0.0f, o);
+  if (cmd == "land") return run_command(c, HostCommandCode::kLand, 0, 0.0f, o);
+  if (cmd == "stop") return run_command(c, HostCommandCode::kStop, 0, 0.0f, o);
+  if (cmd == "clear-fault") return run_command(c, HostCommandCode::kClearFault, 0, 0.0f, o);
   if (cmd == "move" || cmd == "move-by" || cmd == "step") {
     need(2);
     const std::uint16_t axis = axis_of(o.args[1]);
@@ -498,7 +500,7 @@ int main(int argc, char** argv) {
     if (!value_in_range(def(RegId::cmd_value), v)) {
       die(kBadValue, "cmd.value: value " + o.args[2] + " is out of range " + range_text(def(RegId::cmd_value)));
     }
-    return run_command(c, cmd == "step" ? CommandCode::kStep : CommandCode::kMove, axis, static_cast<float>(v), o);
+    return run_command(c, cmd == "step" ? HostCommandCode::kStep : HostCommandCode::kMoveTo, axis, static_cast<float>(v), o);
   }
   if (cmd == "save") {
     need(0);

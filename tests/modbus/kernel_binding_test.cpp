@@ -10,6 +10,7 @@
 #include <mutex>
 #include <thread>
 
+#include "maglev/can_link/host_commands.hpp"
 #include "maglev/modbus/controller_binding.hpp"
 #include "maglev/modbus_tcp/tcp_server.hpp"
 
@@ -142,7 +143,7 @@ TEST(KernelBinding, GainWriteWhileTheKernelIsBusyIsServerBusy) {
   Stage st(flash);
   LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
   // Home: the sequencer leaves Idle at once.
-  std::uint16_t cmd[4] = {0, 0, 0, static_cast<std::uint16_t>(CommandCode::kHome)};
+  std::uint16_t cmd[4] = {0, 0, 0, static_cast<std::uint16_t>(maglev::can::HostCommandCode::kHome)};
   LONGS_EQUAL(4, modbus_write_registers(st.ctx, addr(RegId::cmd_axis), 4, cmd));
   std::uint16_t result = 0xFFFF;
   LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::cmd_result), 1, &result));
@@ -157,7 +158,7 @@ TEST(KernelBinding, GainWriteWhileTheKernelIsBusyIsServerBusy) {
   // A move is refused by the kernel (not levitated): cmd.result says why.
   cmd[0] = 0;
   set_f32(1.0e-3f, cmd + 1);
-  cmd[3] = static_cast<std::uint16_t>(CommandCode::kMove);
+  cmd[3] = static_cast<std::uint16_t>(maglev::can::HostCommandCode::kMoveTo);
   LONGS_EQUAL(4, modbus_write_registers(st.ctx, addr(RegId::cmd_axis), 4, cmd));
   LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::cmd_result), 1, &result));
   LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kRefusedNotReady), result);

@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "maglev/plant/plant.hpp"
+#include "maglev/can_link/host_commands.hpp"
 #include "maglev/modbus/controller_binding.hpp"
 #include "maglev/persistence/flash.hpp"
 
@@ -55,7 +56,7 @@ struct LevitatedStage : ErasedFlash {
     return d.type == RegType::kU16 ? static_cast<double>(w[0]) : decode(d.type, join_words(w));
   }
   // cmd.axis, cmd.value, cmd.code in one write (as stagectl does).
-  std::uint16_t command(CommandCode code, std::uint16_t axis, float value) {
+  std::uint16_t command(maglev::can::HostCommandCode code, std::uint16_t axis, float value) {
     std::uint16_t w[4] = {axis, 0, 0, static_cast<std::uint16_t>(code)};
     split_words(encode(RegType::kF32, static_cast<double>(value)), w + 1);
     if (server.write_registers(def(RegId::cmd_axis).address, 4, w) != ExceptionCode::kNone) return 0xFFFF;
@@ -84,7 +85,7 @@ TEST(MotionRule, SaveIsBusyDuringAMoveAndAllowedAfterIt) {
   DOUBLES_EQUAL(0.0, st->read(RegId::status_moving), 0.0);
   LONGS_EQUAL(static_cast<int>(ExceptionCode::kNone), static_cast<int>(st->write_u16(RegId::config_save, 1)));
 
-  LONGS_EQUAL(0, st->command(CommandCode::kLevitate, 0, 0.0f));
+  LONGS_EQUAL(0, st->command(maglev::can::HostCommandCode::kLevitate, 0, 0.0f));
   // The sequencer lifting the stage is "moving" too (and the save is busy).
   st->tick();
   DOUBLES_EQUAL(1.0, st->read(RegId::status_moving), 0.0);
@@ -101,7 +102,7 @@ TEST(MotionRule, SaveIsBusyDuringAMoveAndAllowedAfterIt) {
               static_cast<int>(st->write_f32(RegId::gain_x_kp, kp)));
 
   const double x0 = st->read(RegId::status_x);
-  LONGS_EQUAL(0, st->command(CommandCode::kMove, 0, static_cast<float>(x0 + 1e-3)));
+  LONGS_EQUAL(0, st->command(maglev::can::HostCommandCode::kMoveTo, 0, static_cast<float>(x0 + 1e-3)));
   // Right after the command, before any tick: the kernel's live flag already
   // says moving, so the very next request is refused.
   DOUBLES_EQUAL(1.0, st->read(RegId::status_moving), 0.0);
@@ -128,7 +129,7 @@ TEST(MotionRule, SaveIsBusyDuringAMoveAndAllowedAfterIt) {
   LONGS_EQUAL(static_cast<int>(ExceptionCode::kNone), static_cast<int>(st->write_u16(RegId::config_save, 1)));
 
   // A step is motion until the tick that applies it.
-  LONGS_EQUAL(0, st->command(CommandCode::kStep, 0, 1e-6f));
+  LONGS_EQUAL(0, st->command(maglev::can::HostCommandCode::kStep, 0, 1e-6f));
   DOUBLES_EQUAL(1.0, st->read(RegId::status_moving), 0.0);
   LONGS_EQUAL(static_cast<int>(ExceptionCode::kServerDeviceBusy),
               static_cast<int>(st->write_u16(RegId::config_save, 1)));

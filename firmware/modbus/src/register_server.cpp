@@ -198,7 +198,7 @@ ExceptionCode RegisterServer::apply_pending(std::size_t n_pending) {
     saved_ = config_;
   }
   if (run_command) {
-    cmd_result_ = device_.command(static_cast<CommandCode>(cmd_code_), cmd_axis_, cmd_value_);
+    cmd_result_ = device_.command(cmd_code_, cmd_axis_, cmd_value_);
   }
   return ExceptionCode::kNone;
 }

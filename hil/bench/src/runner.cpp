@@ -8,7 +8,7 @@
 #include <memory>
 
 #include "internal/run_common.hpp"
-#include "maglev/app/host_command.hpp"
+#include "maglev/motion_commands/to_motion_command.hpp"
 #include "maglev/bench/metrics_registry.hpp"
 #include "maglev/bench/timeline.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
@@ -111,9 +111,9 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
         log.accepted = true;
       } else {
         // The board's and the two-process bench's path: host command ->
-        // app::to_motion_command (relative moves on the present reference).
+        // motion_commands::to_motion_command (relative moves on the present reference).
         kernel::MotionCommand c{};
-        (void)app::to_motion_command(a.command, node.status().reference, &c);
+        (void)motion_commands::to_motion_command(a.command, node.status().reference, &c);
         const kernel::CommandResult r = node.command(c);
         if (a.is(can::HostCommandCode::kLevitate) && levitate_t < 0) levitate_t = t;
         log.result = hil::to_string(r);

@@ -4,7 +4,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "maglev/app/host_command.hpp"
+#include "maglev/motion_commands/to_motion_command.hpp"
 #include "maglev/app/servo_loop.hpp"
 #include "maglev/app/telemetry.hpp"
 #include "maglev/can_link/catalog.hpp"
@@ -237,7 +237,7 @@ std::uint32_t ControllerNode::sensor_faults() const { return servo_->loop.state(
 
 std::uint8_t ControllerNode::execute(const can::HostCommandFrame& h) {
   kernel::MotionCommand c;
-  if (!app::to_motion_command(h, kernel_->status().reference, &c)) return can::kHostResultNotExecuted;
+  if (!motion_commands::to_motion_command(h, kernel_->status().reference, &c)) return can::kHostResultNotExecuted;
   return static_cast<std::uint8_t>(kernel_->command(c));
 }
 

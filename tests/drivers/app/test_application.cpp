@@ -438,24 +438,24 @@ TEST(Application, HostCommandMappingIsTheBenchOne) {
   ref[maglev::kernel::Axis::kThetaZ] = -250'000; // -0.25 urad
   can::HostCommandFrame h = can::make_host_command(0, 0, can::MoveByArgs{2e-6, 1e-3, 0.5});
   kernel::MotionCommand c{};
-  CHECK(app::to_motion_command(h, ref, &c));
+  CHECK(motion_commands::to_motion_command(h, ref, &c));
   CHECK(c.type == kernel::MotionType::kMoveTo);
   CHECK(c.axis == kernel::Axis::kX);
   DOUBLES_EQUAL(3.5e-6, c.target, 1e-18);
   DOUBLES_EQUAL(1e-3, c.velocity, 0.0);
   DOUBLES_EQUAL(0.5, c.acceleration, 0.0);
   h = can::make_host_command(0, 2 /* theta_z */, can::MoveJerkByArgs{1e-6, 1e-3, 0.5, 40.0});
-  CHECK(app::to_motion_command(h, ref, &c));
+  CHECK(motion_commands::to_motion_command(h, ref, &c));
   CHECK(c.type == kernel::MotionType::kMoveJerkLimited);
   DOUBLES_EQUAL(0.75e-6, c.target, 1e-18);
   DOUBLES_EQUAL(40.0, c.jerk, 0.0);
   h = can::make_host_command(0, 2, can::ExciteArgs{0.1, 5.0, 2.0, 300.0});  // harmonics clamp to 255
-  CHECK(app::to_motion_command(h, ref, &c));
+  CHECK(motion_commands::to_motion_command(h, ref, &c));
   CHECK(c.type == kernel::MotionType::kExcite);
   LONGS_EQUAL(255, c.harmonics);
   h.code = can::HostCommandCode::kShutdown;
   c.target = 42.0;
-  CHECK_FALSE(app::to_motion_command(h, ref, &c));
+  CHECK_FALSE(motion_commands::to_motion_command(h, ref, &c));
   DOUBLES_EQUAL(42.0, c.target, 0.0);  // untouched
 }
 

@@ -27,7 +27,7 @@ class FuzzDevice final : public Device {
     ++calls_;
     return static_cast<ApplyResult>(c.raw[0] % 3);
   }
-  std::uint16_t command(CommandCode code, std::uint16_t axis, float) override {
+  std::uint16_t command(std::uint16_t code, std::uint16_t axis, float) override {
     ++calls_;
     return static_cast<std::uint16_t>(static_cast<unsigned>(code) + axis);
   }

@@ -37,7 +37,7 @@ class ProtocolDevice final : public Device {
     applied = config;
     return ApplyResult::kApplied;
   }
-  std::uint16_t command(CommandCode code, std::uint16_t axis, float value) override {
+  std::uint16_t command(std::uint16_t code, std::uint16_t axis, float value) override {
     commands.push_back({code, axis, value});
     return 0;
   }
@@ -45,7 +45,7 @@ class ProtocolDevice final : public Device {
   PersistStatus persist_status() const override { return store_.status(); }
 
   struct Command {
-    CommandCode code;
+    std::uint16_t code;  // can::HostCommandCode value
     std::uint16_t axis;
     float value;
   };

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <mutex>
 
+#include "maglev/can_link/host_commands.hpp"
 #include "maglev/modbus/register_server.hpp"
 #include "protocol_device.hpp"
 
@@ -82,7 +83,7 @@ inline void run_protocol_suite(modbus_t* ctx, std::mutex& m, RegisterServer& ser
   std::uint16_t cmd[4];
   cmd[0] = 0;  // axis x
   set_f32(1.0e-3f, cmd + 1);
-  cmd[3] = static_cast<std::uint16_t>(CommandCode::kMove);
+  cmd[3] = static_cast<std::uint16_t>(maglev::can::HostCommandCode::kMoveTo);
   std::uint16_t rb[5] = {};
   LONGS_EQUAL(5, modbus_write_and_read_registers(ctx, addr(RegId::cmd_axis), 4, cmd, addr(RegId::cmd_axis), 5, rb));
   DOUBLES_EQUAL(1.0e-3, get_f32(rb + 1), 1e-9);
@@ -90,7 +91,7 @@ inline void run_protocol_suite(modbus_t* ctx, std::mutex& m, RegisterServer& ser
   {
     std::lock_guard<std::mutex> lock(m);
     CHECK(!dev.commands.empty());
-    LONGS_EQUAL(static_cast<int>(CommandCode::kMove), static_cast<int>(dev.commands.back().code));
+    LONGS_EQUAL(static_cast<int>(maglev::can::HostCommandCode::kMoveTo), static_cast<int>(dev.commands.back().code));
     DOUBLES_EQUAL(1.0e-3, static_cast<double>(dev.commands.back().value), 1e-9);
   }
 

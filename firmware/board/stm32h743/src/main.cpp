@@ -344,7 +344,7 @@ extern "C" void board_main() {
   app_config.sync_period_ticks = maglev::can::kSyncPeriodTicks;  // the HIL board is the time master
   app_hooks.rx_stats = &g_sensors.receiver();
   // host_command frames arrive in the tick ISR's drain; the comms loop
-  // executes them (app::to_motion_command) and sends host_command_ack.
+  // executes them (motion_commands::to_motion_command) and sends host_command_ack.
   app_hooks.host_commands = &g_sensors.host_commands();
 #endif
   static maglev::app::Application<float, kRecorderEntries> application(

@@ -1,5 +1,8 @@
 #include "maglev/modbus/controller_binding.hpp"
 
+#include "maglev/can_link/host_commands.hpp"
+#include "maglev/motion_commands/to_motion_command.hpp"
+
 namespace maglev::modbus {
 
 float* config_field(kernel::KernelConfig& cfg, RegId id) {
@@ -121,24 +124,36 @@ Device::ApplyResult ControllerDevice<Scalar>::apply_config(const ConfigImage& co
 }
 
 template <typename Scalar>
-std::uint16_t ControllerDevice<Scalar>::command(CommandCode code, std::uint16_t axis, float value) {
-  kernel::MotionCommand cmd;
-  switch (code) {
-    case CommandCode::kHome: cmd.type = kernel::MotionType::kHome; break;
-    case CommandCode::kLevitate: cmd.type = kernel::MotionType::kLevitate; break;
-    case CommandCode::kLand: cmd.type = kernel::MotionType::kLand; break;
-    case CommandCode::kStop: cmd.type = kernel::MotionType::kStop; break;
-    case CommandCode::kClearFault: cmd.type = kernel::MotionType::kClearFault; break;
-    case CommandCode::kMove: cmd.type = kernel::MotionType::kMoveTo; break;
-    case CommandCode::kStep: cmd.type = kernel::MotionType::kStep; break;
-    case CommandCode::kNone: return 0;
+std::uint16_t ControllerDevice<Scalar>::command(std::uint16_t code, std::uint16_t axis, float value) {
+  using C = can::HostCommandCode;
+  if (code == 0) return 0;
+  // The Modbus command as the typed host command, then the one mapping.
+  const auto c = static_cast<C>(code);
+  const auto ax = static_cast<std::uint8_t>(axis);
+  can::HostCommandFrame h{};
+  switch (c) {
+    case C::kHome: case C::kLevitate: case C::kLand: case C::kStop: case C::kClearFault: case C::kHold:
+      h = can::make_host_command(c, 0, ax);
+      break;
+    case C::kStep:
+      h = can::make_host_command(0, ax, can::StepArgs{static_cast<double>(value)});
+      break;
+    case C::kMoveTo: {
+      // Moves run at the configured profile limits of their axis.
+      const kernel::ReferenceLimits& lim = controller_.config().references;
+      const int a = axis % kernel::kAxisCount;
+      h = can::make_host_command(0, ax, can::MoveToArgs{static_cast<double>(value),
+                                                        static_cast<double>(lim.max_velocity[a]),
+                                                        static_cast<double>(lim.max_acceleration[a])});
+      break;
+    }
+    default:  // more fields than cmd.value carries: over CAN only
+      return static_cast<std::uint16_t>(kernel::CommandResult::kUnsupported);
   }
-  cmd.axis = static_cast<kernel::Axis>(axis);
-  cmd.target = static_cast<double>(value);
-  // Moves run at the configured profile limits of their axis.
-  const kernel::ReferenceLimits& lim = controller_.config().references;
-  cmd.velocity = static_cast<double>(lim.max_velocity[axis % kernel::kAxisCount]);
-  cmd.acceleration = static_cast<double>(lim.max_acceleration[axis % kernel::kAxisCount]);
+  kernel::MotionCommand cmd;
+  if (!motion_commands::to_motion_command(h, controller_.status().reference, &cmd)) {
+    return static_cast<std::uint16_t>(kernel::CommandResult::kUnsupported);
+  }
   return static_cast<std::uint16_t>(controller_.command(cmd));
 }
 

@@ -16,7 +16,7 @@
 //        and counted (the HIL board's CanSensorSource owns RX instead);
 //     2b. host commands (host_command frames from that receiver, or from
 //        Hooks::host_commands -- the HIL board's CanSensorSource queue):
-//        app::to_motion_command -> kernel command() inside the critical
+//        motion_commands::to_motion_command -> kernel command() inside the critical
 //        section, answered with host_command_ack (result, sequencer state,
 //        servo tick) -- the same mapping as the bench's controller node;
 //     3. CAN telemetry by servo ticks: controller_status every
@@ -43,7 +43,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "maglev/app/host_command.hpp"
+#include "maglev/motion_commands/to_motion_command.hpp"
 #include "maglev/app/host_command_queue.hpp"
 #include "maglev/app/recorder.hpp"
 #include "maglev/app/telemetry.hpp"
@@ -147,7 +147,7 @@ class GuardedDevice final : public modbus::Device {
     exit();
     return r;
   }
-  std::uint16_t command(modbus::CommandCode code, std::uint16_t axis, float value) override {
+  std::uint16_t command(std::uint16_t code, std::uint16_t axis, float value) override {
     enter();
     const std::uint16_t r = inner_.command(code, axis, value);
     exit();
@@ -282,7 +282,7 @@ class Application {
     ack.tick = servo_ticks;
     enter();
     kernel::MotionCommand c{};
-    ack.result = to_motion_command(h, kernel_.status().reference, &c) ? static_cast<std::uint8_t>(kernel_.command(c))
+    ack.result = motion_commands::to_motion_command(h, kernel_.status().reference, &c) ? static_cast<std::uint8_t>(kernel_.command(c))
                                                                        : can::kHostResultNotExecuted;
     ack.sequencer_state = static_cast<std::uint8_t>(kernel_.status().state);
     exit();

@@ -53,7 +53,8 @@ class Device {
   enum class ApplyResult : std::uint8_t { kApplied, kRefused, kBusy };
   virtual ApplyResult apply_config(const ConfigImage& config, bool live_tuning) = 0;
   // Run a motion command; returns 0 when accepted, else a kernel result code.
-  virtual std::uint16_t command(CommandCode code, std::uint16_t axis, float value) = 0;
+  // code: can::HostCommandCode value (cmd.code); 0 = none.
+  virtual std::uint16_t command(std::uint16_t code, std::uint16_t axis, float value) = 0;
   // Persist `config`; false when flash failed.
   virtual bool save_config(const ConfigImage& config) = 0;
   virtual PersistStatus persist_status() const = 0;

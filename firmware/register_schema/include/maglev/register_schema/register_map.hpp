@@ -82,10 +82,12 @@ constexpr const RegisterDef& def(RegId id) { return detail::kTable[static_cast<s
 // operator tool, not a security boundary: it is documented in REGISTERS.md.
 inline constexpr std::uint16_t kEngineerKey = 0x4E47;
 
-// Command codes (cmd.code).
-enum class CommandCode : std::uint16_t {
-  kNone = 0, kHome = 1, kLevitate = 2, kLand = 3, kStop = 4, kClearFault = 5, kMove = 6, kStep = 7,
-};
+// Command codes (cmd.code): can::HostCommandCode values, the one command
+// table (firmware/can_link host_commands.hpp). Over Modbus a command carries
+// one value (cmd.value): the commands whose fields are at most the axis and
+// one position (home, levitate, land, stop, clear_fault, hold, step,
+// move_to at the axis' profile limits) run; the others are refused
+// (kernel CommandResult kUnsupported) -- send them over CAN.
 
 // persist.flags bits.
 enum PersistFlag : std::uint16_t {

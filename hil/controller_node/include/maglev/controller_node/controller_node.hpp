@@ -199,7 +199,7 @@ class ControllerNode {
   NodeLinkStats link_{};
 };
 
-// The MotionCommand a host command means: app::to_motion_command
+// The MotionCommand a host command means: motion_commands::to_motion_command
 // (firmware/app host_command.hpp), the same mapping the HIL board's
 // app::Application executes.
 // Names of the kernel enums: kernel::to_string (one table next to each enum).

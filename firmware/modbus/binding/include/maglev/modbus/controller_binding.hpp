@@ -32,7 +32,7 @@ class ControllerDevice final : public Device {
   Activity activity() const override;
   double read_status(RegId id) const override;
   ApplyResult apply_config(const ConfigImage& config, bool live_tuning) override;
-  std::uint16_t command(CommandCode code, std::uint16_t axis, float value) override;
+  std::uint16_t command(std::uint16_t code, std::uint16_t axis, float value) override;
   bool save_config(const ConfigImage& config) override;
   PersistStatus persist_status() const override;
 

@@ -1,9 +1,9 @@
-#include "maglev/app/host_command.hpp"
+#include "maglev/motion_commands/to_motion_command.hpp"
 
 #include <algorithm>
 #include <cstdint>
 
-namespace maglev::app {
+namespace maglev::motion_commands {
 
 double reference_si(const kernel::Pose64& r, int a) {
   return static_cast<double>(r.pico[a < 0 || a >= kernel::kAxisCount ? 0 : a]) * 1e-12;
@@ -66,4 +66,4 @@ bool to_motion_command(const can::HostCommandFrame& h, const kernel::Pose64& ref
   return true;
 }
 
-}  // namespace maglev::app
+}  // namespace maglev::motion_commands
