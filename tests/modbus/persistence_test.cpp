@@ -6,6 +6,7 @@
 #include <cstring>
 #include <string>
 #include <unistd.h>
+#include <vector>
 
 #include "maglev/persistence/config_store.hpp"
 #include "maglev/file_flash/file_flash.hpp"
@@ -279,6 +280,65 @@ TEST(Persistence, FileFlashKeepsConfigurationAcrossInstances) {
     const auto r = store.load();
     DOUBLES_EQUAL(777.0, r.config.get(RegId::gain_x_kp), 0.0);
     CHECK(r.status.flags & modbus::kLoadedBankA);
+  }
+  std::remove(path);
+}
+
+// Issue 17: a flash file of the wrong size (truncated, empty, or a valid one
+// with 1 MiB appended) and any unrelated file were overwritten with 0xFF and
+// reported as "first boot", destroying the saved settings. Now refused, untouched.
+TEST(Persistence, AFlashFileOfTheWrongSizeIsRefusedUntouched) {
+  char path[] = "/tmp/maglev_fileflash_XXXXXX";
+  const int fd = mkstemp(path);
+  CHECK(fd >= 0);
+  close(fd);
+  std::remove(path);
+  {  // a real flash file with saved settings
+    persistence::FileFlash flash(path, kSector, 2);
+    CHECK(flash.ok());
+    persistence::ConfigStore store(flash, 0, 1);
+    CHECK(store.save(variant(555.0f)));
+  }
+  auto bytes_of = [](const char* p) {
+    std::FILE* f = std::fopen(p, "rb");
+    std::vector<std::uint8_t> b;
+    if (f == nullptr) return b;
+    int c;
+    while ((c = std::fgetc(f)) != EOF) b.push_back(static_cast<std::uint8_t>(c));
+    std::fclose(f);
+    return b;
+  };
+  const std::vector<std::uint8_t> good = bytes_of(path);
+  LONGS_EQUAL(2 * kSector, good.size());
+  auto write_bytes = [](const char* p, const std::vector<std::uint8_t>& b) {
+    std::FILE* f = std::fopen(p, "wb");
+    if (!b.empty()) std::fwrite(b.data(), 1, b.size(), f);
+    std::fclose(f);
+  };
+  std::vector<std::uint8_t> appended = good;
+  appended.resize(good.size() + (1u << 20), 0x42);
+  const std::vector<std::vector<std::uint8_t>> bad = {
+      std::vector<std::uint8_t>(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(good.size() / 2)),  // truncated
+      {},                                                                                                     // empty
+      appended,                                                                                               // + 1 MiB
+      std::vector<std::uint8_t>(1234, 0x7A),                                                                  // unrelated
+  };
+  for (const auto& b : bad) {
+    write_bytes(path, b);
+    {
+      persistence::FileFlash flash(path, kSector, 2);
+      CHECK_FALSE(flash.ok());
+      CHECK_TRUE(flash.error().find("left untouched") != std::string::npos);
+    }
+    CHECK_TRUE(bytes_of(path) == b);  // not a byte changed
+  }
+  // The real file still loads its settings.
+  write_bytes(path, good);
+  {
+    persistence::FileFlash flash(path, kSector, 2);
+    CHECK(flash.ok());
+    persistence::ConfigStore store(flash, 0, 1);
+    DOUBLES_EQUAL(555.0, store.load().config.get(RegId::gain_x_kp), 0.0);
   }
   std::remove(path);
 }

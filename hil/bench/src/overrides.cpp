@@ -1,5 +1,7 @@
 #include "maglev/bench/overrides.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "maglev/bench/axes.hpp"
@@ -8,6 +10,7 @@
 #include "maglev/bench/units.hpp"
 #include "maglev/plant/plant_profile.hpp"
 #include "maglev/profile/profile_text.hpp"
+#include "maglev/register_schema/register_map.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 
 #ifndef MAGLEV_PROFILE_DIR
@@ -69,8 +72,22 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     else if (k == "interferometer_noise_m") num("plant", k, v, Dim::kLength, &p.interferometer.noise_m);
     else if (k == "displacement_noise_m") num("plant", k, v, Dim::kLength, &p.displacement.noise_m);
     else if (k == "sensor_noise") flag("plant", k, v, &p.sensor_noise_enabled);
-    else if (k == "initial_x_m") num("plant", k, v, Dim::kLength, &p.initial.position_m[0]);
-    else if (k == "initial_y_m") num("plant", k, v, Dim::kLength, &p.initial.position_m[1]);
+    else if (k == "initial_x_m" || k == "initial_y_m") {
+      // Where the platen rests at power-on: on the magnet array, inside the
+      // travel (initial_x_m = 1 once levitated to Ready a metre off the stage).
+      const int i = k == "initial_x_m" ? 0 : 1;
+      const Axis a = i == 0 ? Axis::kX : Axis::kY;
+      double pos = 0.0;
+      if (num("plant", k, v, Dim::kLength, &pos)) {
+        const double lo = static_cast<double>(o->controller.references.position_min[index(a)]);
+        const double hi = static_cast<double>(o->controller.references.position_max[index(a)]);
+        if (!(pos >= lo && pos <= hi)) {
+          fail("[plant] " + k + " = " + v + ": outside the travel [" + std::to_string(lo) + ", " + std::to_string(hi) + "] m");
+        } else {
+          p.initial.position_m[i] = pos;
+        }
+      }
+    }
     else if (k == "substeps_per_tick") {
       double n = 0;
       if (num("plant", k, v, Dim::kNumber, &n)) {
@@ -100,6 +117,20 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     const std::string field = k.substr(dot + 1);
     double x = 0;
     if (!num("controller", k, v, Dim::kNumber, &x)) continue;
+    // The same bounds as the register map (one source): a scenario may not
+    // set what Modbus would refuse (z.kp = 1e30 once pinned the coils at 4 A).
+    static const std::pair<const char*, const char*> kRegisterOf[] = {
+        {"kp", "kp"}, {"ki", "ki"}, {"kd", "kd"}, {"b", "setpoint_weight_p"}, {"derivative_filter_Hz", "derivative_filter"}};
+    for (const auto& [scenario_field, register_field] : kRegisterOf) {
+      if (field != scenario_field) continue;
+      const std::string reg = std::string("gain.") + axis_name(p) + "." + register_field;
+      const modbus::RegisterDef* d = modbus::find_by_name(reg.c_str());
+      if (d != nullptr && !(x >= d->min && x <= d->max)) {
+        fail("[controller] " + k + " = " + v + ": outside " + reg + "'s range [" + std::to_string(d->min) + ", " +
+             std::to_string(d->max) + "]");
+        x = std::clamp(x, d->min, d->max);  // reported above: nothing runs
+      }
+    }
     auto& pid = c.axis[index(p)].pid;
     const float xf = static_cast<float>(x);
     if (field == "kp") pid.kp = xf;
@@ -162,6 +193,14 @@ std::vector<ScenarioError> validate(const scenario::Scenario& sc) {
   Overrides o;
   apply_overrides(sc, &o, &errs);
   if (sc.duration_s() > 600.0) errs.push_back({sc.source + ": duration_s above 600 s"});
+  // The name becomes a folder under --out: letters, digits, '_', '-', '.' only,
+  // never a path (name = ../../x once wrote outside --out).
+  const std::string& n = sc.name();
+  const bool name_ok = !n.empty() && n != "." && n != ".." && n.size() <= 64 &&
+                       std::all_of(n.begin(), n.end(), [](char ch) {
+                         return std::isalnum(static_cast<unsigned char>(ch)) != 0 || ch == '_' || ch == '-' || ch == '.';
+                       });
+  if (!name_ok) errs.push_back({sc.source + ": [scenario] name '" + n + "': letters, digits, _ - . only (it names the output folder)"});
   return errs;
 }
 

@@ -20,13 +20,16 @@ namespace maglev::bench {
 namespace {
 
 // The bench multisine as coil currents added to the controller's DAC codes,
-// through the kernel's own allocation at the controller's measured pose.
+// through the kernel's own allocation at the controller's measured pose. The
+// sum stays inside the stage's peak coil current (the disturbance once drove
+// 5.0 A through a 4 A coil): the bench never commands what the controller may not.
 class DisturbanceInjector {
  public:
   explicit DisturbanceInjector(const kernel::KernelConfig& config) {
     kernel::ForceAllocationConfig ac = config.allocation;
     ac.payload_kg = static_cast<double>(config.payload_mass_kg);
     kernel::ApplyForceAllocationConfig<float>(ac, &alloc_);
+    limit_codes_ = config.allocation.peak_current_A * alloc_.dac_codes_per_A;
   }
   void add(Axis axis, double effort, const kernel::ControllerStatus& st, io::ActuatorCommand* applied) const {
     if (effort == 0.0 || !applied->amplifier_enable) return;
@@ -37,12 +40,13 @@ class DisturbanceInjector {
     for (int j = 0; j < 8; ++j) {
       const double code = static_cast<double>(applied->dac_code[j]) +
                           static_cast<double>(out.current_A[j]) * alloc_.dac_codes_per_A;
-      applied->dac_code[j] = static_cast<std::int16_t>(std::clamp(std::lround(code), -32768L, 32767L));
+      applied->dac_code[j] = static_cast<std::int16_t>(std::lround(std::clamp(code, -limit_codes_, limit_codes_)));
     }
   }
 
  private:
   kernel::ForceAllocationState<float> alloc_{};
+  double limit_codes_ = 0.0;
 };
 
 }  // namespace

@@ -1,5 +1,9 @@
 #include "maglev/file_flash/file_flash.hpp"
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <vector>
 
 namespace maglev::persistence {
@@ -9,19 +13,40 @@ FileFlash::FileFlash(const std::string& path, std::size_t sector_size, std::size
   const long total = static_cast<long>(sector_size * sector_count);
   file_ = std::fopen(path.c_str(), "r+b");
   if (file_ != nullptr) {
+    // An existing file of another size is not our flash (a truncated copy, a
+    // wrong path, an unrelated file): refuse it and leave it untouched --
+    // never "first boot" over somebody's data.
     std::fseek(file_, 0, SEEK_END);
-    if (std::ftell(file_) != total) {
+    const long size = std::ftell(file_);
+    if (size != total) {
       std::fclose(file_);
       file_ = nullptr;
+      error_ = path + ": " + std::to_string(size) + " bytes, a flash file has " + std::to_string(total) +
+               " (left untouched; give a new path to start from defaults)";
     }
+    return;
   }
+  if (errno != ENOENT) {
+    error_ = path + ": " + std::strerror(errno);
+    return;
+  }
+  // A new file: all erased (first boot), made durable before use.
+  file_ = std::fopen(path.c_str(), "w+b");
   if (file_ == nullptr) {
-    file_ = std::fopen(path.c_str(), "w+b");
-    if (file_ == nullptr) return;
-    const std::vector<std::uint8_t> erased(sector_size * sector_count, 0xFF);
-    std::fwrite(erased.data(), 1, erased.size(), file_);
-    std::fflush(file_);
+    error_ = path + ": " + std::strerror(errno);
+    return;
   }
+  const std::vector<std::uint8_t> erased(sector_size * sector_count, 0xFF);
+  if (std::fwrite(erased.data(), 1, erased.size(), file_) != erased.size() || !sync()) {
+    error_ = path + ": cannot initialize: " + std::strerror(errno);
+    std::fclose(file_);
+    file_ = nullptr;
+  }
+}
+
+bool FileFlash::sync() {
+  // fflush hands the data to the kernel; fsync makes it survive a power cut.
+  return std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
 }
 
 FileFlash::~FileFlash() {
@@ -34,7 +59,7 @@ FlashError FileFlash::erase(std::size_t sector) {
   const std::vector<std::uint8_t> erased(sector_size_, 0xFF);
   std::fseek(file_, static_cast<long>(sector * sector_size_), SEEK_SET);
   if (std::fwrite(erased.data(), 1, erased.size(), file_) != erased.size()) return FlashError::kFailed;
-  return std::fflush(file_) == 0 ? FlashError::kOk : FlashError::kFailed;
+  return sync() ? FlashError::kOk : FlashError::kFailed;
 }
 
 FlashError FileFlash::program(std::size_t offset, const std::uint8_t* word) {
@@ -48,7 +73,7 @@ FlashError FileFlash::program(std::size_t offset, const std::uint8_t* word) {
   }
   std::fseek(file_, static_cast<long>(offset), SEEK_SET);
   if (std::fwrite(word, 1, kFlashWordBytes, file_) != kFlashWordBytes) return FlashError::kFailed;
-  return std::fflush(file_) == 0 ? FlashError::kOk : FlashError::kFailed;
+  return sync() ? FlashError::kOk : FlashError::kFailed;
 }
 
 FlashError FileFlash::read(std::size_t offset, std::uint8_t* out, std::size_t len) const {

@@ -12,13 +12,16 @@ namespace maglev::persistence {
 
 class FileFlash final : public Flash {
  public:
-  // Opens `path`, creating it (all erased) when missing or of the wrong size.
+  // Opens `path`; creates it (all erased: first boot) only when it does not
+  // exist. A file of another size is refused untouched (ok() false, error()
+  // says why). Every erase and program is fsync'ed.
   FileFlash(const std::string& path, std::size_t sector_size, std::size_t sector_count);
   ~FileFlash();
   FileFlash(const FileFlash&) = delete;
   FileFlash& operator=(const FileFlash&) = delete;
 
   bool ok() const { return file_ != nullptr; }
+  const std::string& error() const { return error_; }
   std::size_t sector_size() const override { return sector_size_; }
   std::size_t sector_count() const override { return sector_count_; }
   FlashError erase(std::size_t sector) override;
@@ -26,7 +29,9 @@ class FileFlash final : public Flash {
   FlashError read(std::size_t offset, std::uint8_t* out, std::size_t len) const override;
 
  private:
+  bool sync();
   std::FILE* file_ = nullptr;
+  std::string error_;
   std::size_t sector_size_;
   std::size_t sector_count_;
 };

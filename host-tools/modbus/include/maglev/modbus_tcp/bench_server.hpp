@@ -33,7 +33,7 @@ class BenchServer {
         tcp_(registers_, host, port, unit_id) {}
 
   bool ok() const { return flash_.ok() && tcp_.ok(); }
-  std::string error() const { return flash_.ok() ? tcp_.error() : "cannot open the flash file"; }
+  std::string error() const { return flash_.ok() ? tcp_.error() : "flash file refused: " + flash_.error(); }
   int port() const { return tcp_.port(); }
   int poll(int timeout_ms) { return tcp_.poll(timeout_ms); }
   modbus::RegisterServer& registers() { return registers_; }
