@@ -207,7 +207,19 @@ ExceptionCode RegisterServer::write_registers(std::uint16_t start, std::uint16_t
   std::size_t n = 0;
   const ExceptionCode e = validate_write(start, count, values, n);
   if (e != ExceptionCode::kNone) return e;
-  return apply_pending(n);
+  const ExceptionCode r = apply_pending(n);
+  if (r == ExceptionCode::kNone) engineer_idle_us_ = 0;
+  return r;
+}
+
+void RegisterServer::advance_time_us(std::uint32_t dt_us) {
+  if (level_ != Access::kEngineer) return;
+  engineer_idle_us_ += dt_us;
+  if (engineer_idle_us_ >= kEngineerRelock_us) {
+    level_ = Access::kOperator;
+    live_tuning_ = false;
+    engineer_idle_us_ = 0;
+  }
 }
 
 std::size_t RegisterServer::handle_pdu(const std::uint8_t* req, std::size_t len, std::uint8_t* resp, bool broadcast) {

@@ -302,6 +302,7 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
     ++c.ticks;
     // --- Modbus, between ticks: only requests already waiting.
     c.modbus_requests += static_cast<std::uint64_t>(std::max(0, modbus->poll(0)));
+    modbus->registers().advance_time_us(static_cast<std::uint32_t>(period_ns / 1000));  // engineer relock clock
 
     const std::int64_t done = now_ns();
     c.max_work_ns = std::max(c.max_work_ns, done - start);

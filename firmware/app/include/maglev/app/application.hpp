@@ -245,6 +245,10 @@ class Application {
   }
 
   void service_modbus(std::uint32_t now_us) {
+    // The engineering-access relock clock (wrapping microseconds).
+    if (have_last_service_us_) registers_.advance_time_us(now_us - last_service_us_);
+    last_service_us_ = now_us;
+    have_last_service_us_ = true;
     const std::size_t n = rtu_.poll(now_us, tx_);
     stats_.saves = guarded_.saves;
     if (n == 0) return;
@@ -374,6 +378,8 @@ class Application {
   modbus::ControllerDevice<Scalar> device_;
   application_detail::GuardedDevice guarded_;
   modbus::RegisterServer registers_;
+  std::uint32_t last_service_us_ = 0;
+  bool have_last_service_us_ = false;
   modbus::RtuServer rtu_;
   can::CanPort* can_;
   ByteSink* uart_;

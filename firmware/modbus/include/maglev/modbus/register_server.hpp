@@ -86,6 +86,12 @@ class RegisterServer {
 
   const ConfigImage& config() const { return config_; }
   Access level() const { return level_; }
+  // Engineering access relocks by itself: after kEngineerRelock_us without a
+  // successful write, the level falls back to operator (and live tuning off),
+  // so a forgotten engineer session does not leave the gains open. The
+  // caller advances the clock (the board's service loop, the bench's tick).
+  static constexpr std::uint64_t kEngineerRelock_us = 10ull * 60ull * 1000000ull;  // 10 min
+  void advance_time_us(std::uint32_t dt_us);
   bool live_tuning() const { return live_tuning_; }
   // The configuration now matches what flash holds (after load or save).
   void mark_saved() { saved_ = config_; }
@@ -105,6 +111,7 @@ class RegisterServer {
   ConfigImage config_;
   ConfigImage saved_;
   Access level_ = Access::kOperator;
+  std::uint64_t engineer_idle_us_ = 0;  // since the last successful write at engineer level
   bool live_tuning_ = false;
   std::uint16_t cmd_axis_ = 0;
   float cmd_value_ = 0.0f;
