@@ -4,6 +4,7 @@
 #include <cstddef>
 
 #include "maglev/axis_loops/defaults.hpp"
+#include "maglev/axis_loops/loop_check.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
 #include "maglev/io/stage_parameters.hpp"
 
@@ -186,50 +187,15 @@ double AxisPlantGain(const StageProfile& p, int a) {
 }
 
 LoopMargins AxisLoopMargins(const StageProfile& p, int a) {
-  LoopMargins m;
   const AxisController& c = p.axis[a].controller;
-  const double g = AxisPlantGain(p, a);
-  const double k = p.axis[a].open_loop_stiffness_per_s2, d = p.axis[a].open_loop_damping_per_s;
-  const double T = 1.0 / p.servo_rate_Hz;
-  const double wf = 2.0 * io::stage::kPi * c.derivative_filter_Hz;
-  // |L(jw)| and arg L(jw) without complex types (target-friendly).
-  auto loop = [&](double w, double* mag, double* phase) {
-    // C = kp + ki/(jw) + kd jw / (1 + jw/wf)
-    const double den = 1.0 + (w / wf) * (w / wf);
-    const double d_re = c.kd * w * (w / wf) / den, d_im = c.kd * w / den;
-    const double c_re = c.kp + d_re, c_im = -c.ki / w + d_im;
-    // P = g / (k - w^2 + j d w)
-    const double p_re = k - w * w, p_im = d * w;
-    const double p_mag = g / std::sqrt(p_re * p_re + p_im * p_im);
-    const double p_ph = -std::atan2(p_im, p_re);
-    *mag = std::sqrt(c_re * c_re + c_im * c_im) * p_mag;
-    *phase = std::atan2(c_im, c_re) + p_ph - 0.5 * T * w;
-  };
-  const double f_lo = 0.1, f_hi = 0.5 * p.servo_rate_Hz;
-  constexpr int kSteps = 4000;
-  double prev_mag = 0.0, prev_f = f_lo;
-  for (int i = 0; i <= kSteps; ++i) {
-    const double f = f_lo * std::pow(f_hi / f_lo, static_cast<double>(i) / kSteps);
-    double mag = 0.0, ph = 0.0;
-    loop(2.0 * io::stage::kPi * f, &mag, &ph);
-    if (i > 0 && prev_mag >= 1.0 && mag < 1.0) {  // the last downward crossing wins below
-      // Interpolate log-linearly between the two samples.
-      const double t = std::log(prev_mag) / (std::log(prev_mag) - std::log(mag));
-      const double fc = prev_f * std::pow(f / prev_f, t);
-      double mc = 0.0, pc = 0.0;
-      loop(2.0 * io::stage::kPi * fc, &mc, &pc);
-      // Phase unwrapped into (-360, 0].
-      double deg = pc * 180.0 / io::stage::kPi;
-      while (deg > 0.0) deg -= 360.0;
-      while (deg <= -360.0) deg += 360.0;
-      m.crossover_found = true;
-      m.crossover_Hz = fc;
-      m.phase_margin_deg = 180.0 + deg;
-    }
-    prev_mag = mag;
-    prev_f = f;
-  }
-  return m;
+  kernel::Pid2DofConfig pid{};
+  pid.kp = static_cast<float>(c.kp);
+  pid.ki = static_cast<float>(c.ki);
+  pid.kd = static_cast<float>(c.kd);
+  pid.derivative_filter_hz = static_cast<float>(c.derivative_filter_Hz);
+  const kernel::LoopPlant plant{AxisPlantGain(p, a), p.axis[a].open_loop_damping_per_s,
+                                p.axis[a].open_loop_stiffness_per_s2};
+  return kernel::Pid2DofLoopMargins(pid, plant, p.servo_rate_Hz);
 }
 
 ProfileCheck CheckStageProfile(const StageProfile& p) {
@@ -317,7 +283,7 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
   for (int a = 0; a < kA; ++a) {
     if (p.axis[a].controller.kind != ControllerKind::kPid2Dof) continue;
     const LoopMargins lm = AxisLoopMargins(p, a);
-    if (!lm.crossover_found || !(lm.phase_margin_deg > 0.0)) return fail(ProfileError::kUnstableLoop, a);
+    if (!kernel::LoopIsAcceptable(lm)) return fail(ProfileError::kUnstableLoop, a);
   }
   return r;
 }

@@ -1,5 +1,7 @@
 #include "maglev/controller/controller.hpp"
 
+#include "maglev/axis_loops/loop_check.hpp"
+
 #include <cmath>
 #include <cstring>
 
@@ -88,6 +90,17 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
       return refuse(ConfigError::kUnsupportedLoopType);
     }
     scratch.type[a] = type;
+    // Gains the loop check finds unstable on this axis' plant are refused
+    // (a z.kp of 1e7 once saturated the coils while the status said Ready).
+    if (type == LoopType::kPid2Dof) {
+      const InternalModelConfig& plant = c.axis[a].imr;  // the axis plant the kernel designs against
+      const LoopPlant lp{static_cast<double>(plant.plant_gain), static_cast<double>(plant.plant_damping_per_s),
+                         static_cast<double>(plant.plant_stiffness_per_s2)};
+      if (!LoopIsAcceptable(Pid2DofLoopMargins(c.axis[a].pid, lp, rate))) {
+        status_.config_axis = static_cast<std::uint8_t>(a);
+        return refuse(ConfigError::kUnstableLoop);
+      }
+    }
     // Only the selected loop must design; the other keeps zero coefficients.
     const LoopDesignError de =
         type == LoopType::kPid2Dof

@@ -2,6 +2,7 @@
 // the profile can run on this controller. Heap-free; host and Cortex-M7.
 #pragma once
 
+#include "maglev/axis_loops/loop_check.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/stage_profile/stage_profile.hpp"
 
@@ -15,17 +16,10 @@ struct ProfileCheck {
   double allocation_condition = 0.0;
 };
 
-// The open loop of one active axis with its profile gains: the 2-DOF PID's
-// feedback part (kp + ki/s + kd s/(1 + s/wf)), the half-tick delay of the
-// zero-order hold (the output of tick n is applied during tick n: the
-// bench's lockstep and the board's tick both work so), and the axis plant
-// g / (s^2 + c s + k) with g = 2 b* / (mass or inertia). Found by a
-// logarithmic scan from 0.1 Hz to the Nyquist rate (constant work).
-struct LoopMargins {
-  bool crossover_found = false;
-  double crossover_Hz = 0.0;
-  double phase_margin_deg = 0.0;
-};
+// The loop check (kernel axis_loops/loop_check.hpp) of one active axis with
+// the profile's gains and the axis plant g / (s^2 + c s + k), g = 2 b* /
+// (mass or inertia).
+using kernel::LoopMargins;
 LoopMargins AxisLoopMargins(const StageProfile& p, int axis);
 // y'' + c y' + k y: plant gain per A of effort (m/s^2 or rad/s^2 per A).
 double AxisPlantGain(const StageProfile& p, int axis);

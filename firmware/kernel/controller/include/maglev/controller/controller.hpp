@@ -99,7 +99,8 @@ KernelConfig default_kernel_config();
   X(kSupervisor, 8, "Supervisor") \
   X(kPayload, 9, "Payload") \
   X(kLockedWhileLevitated, 10, "LockedWhileLevitated")  /* an unsafe-to-change field differs while not on rest */ \
-  X(kGainsLockedWhileLevitated, 11, "GainsLockedWhileLevitated")  /* gains differ while levitated and live_tuning is off */
+  X(kGainsLockedWhileLevitated, 11, "GainsLockedWhileLevitated")  /* gains differ while levitated and live_tuning is off */ \
+  X(kUnstableLoop, 12, "UnstableLoop")  /* the loop check finds a PID loop without crossover or phase margin (config_axis) */
 
 enum class ConfigError : std::uint8_t {
   MAGLEV_CONFIG_ERRORS(MAGLEV_ENUMERATOR)

@@ -1,0 +1,37 @@
+// The loop check: crossover and phase margin of one axis' PID loop on its
+// plant, so the kernel can refuse gains that would not hold the stage (a
+// z.kp of 1e7 once saturated the coils while the status said Ready).
+//
+// L(jw) = (kp + ki/(jw) + kd jw / (1 + jw/wf)) e^{-jw T/2} g / (k - w^2 + j c w):
+// the PID's feedback part, the half-tick hold (the output of tick n is
+// applied during tick n) and the axis plant y'' + c y' + k y = g u. A
+// logarithmic scan from 0.1 Hz to the Nyquist rate (constant work, double,
+// heap-free); the last downward crossing of |L| = 1 is the crossover.
+#pragma once
+
+#include "maglev/axis_loops/pid2dof.hpp"
+
+namespace maglev::kernel {
+
+struct LoopMargins {
+  bool crossover_found = false;
+  double crossover_Hz = 0.0;
+  double phase_margin_deg = 0.0;
+};
+
+struct LoopPlant {
+  double gain;             // m/s^2 (rad/s^2) per A of effort
+  double damping_per_s;    // c
+  double stiffness_per_s2; // k
+};
+
+LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant, double servo_rate_Hz);
+
+// A loop the kernel accepts: it crosses over below the Nyquist rate with a
+// phase margin of at least this.
+inline constexpr double kMinPhaseMargin_deg = 10.0;
+inline bool LoopIsAcceptable(const LoopMargins& m) {
+  return m.crossover_found && m.phase_margin_deg >= kMinPhaseMargin_deg;
+}
+
+}  // namespace maglev::kernel

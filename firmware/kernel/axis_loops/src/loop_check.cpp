@@ -1,0 +1,48 @@
+#include "maglev/axis_loops/loop_check.hpp"
+
+#include <cmath>
+
+namespace maglev::kernel {
+
+LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant, double servo_rate_Hz) {
+  constexpr double kPi = 3.14159265358979323846;
+  LoopMargins m;
+  const double kp = static_cast<double>(pid.kp), ki = static_cast<double>(pid.ki), kd = static_cast<double>(pid.kd);
+  const double wf = 2.0 * kPi * static_cast<double>(pid.derivative_filter_hz);
+  const double T = 1.0 / servo_rate_Hz;
+  // |L(jw)| and arg L(jw) without complex types (target-friendly).
+  auto loop = [&](double w, double* mag, double* phase) {
+    const double den = 1.0 + (w / wf) * (w / wf);
+    const double d_re = kd * w * (w / wf) / den, d_im = kd * w / den;
+    const double c_re = kp + d_re, c_im = -ki / w + d_im;
+    const double p_re = plant.stiffness_per_s2 - w * w, p_im = plant.damping_per_s * w;
+    *mag = std::sqrt(c_re * c_re + c_im * c_im) * plant.gain / std::sqrt(p_re * p_re + p_im * p_im);
+    *phase = std::atan2(c_im, c_re) - std::atan2(p_im, p_re) - 0.5 * T * w;
+  };
+  const double f_lo = 0.1, f_hi = 0.5 * servo_rate_Hz;
+  constexpr int kSteps = 1000;
+  const double ratio = std::pow(f_hi / f_lo, 1.0 / kSteps);
+  double prev_mag = 0.0, prev_f = f_lo, f = f_lo;
+  for (int i = 0; i <= kSteps; ++i, f *= ratio) {
+    double mag = 0.0, ph = 0.0;
+    loop(2.0 * kPi * f, &mag, &ph);
+    if (i > 0 && prev_mag >= 1.0 && mag < 1.0) {
+      // Log-linear interpolation between the two samples.
+      const double t = std::log(prev_mag) / (std::log(prev_mag) - std::log(mag));
+      const double fc = prev_f * std::pow(f / prev_f, t);
+      double mc = 0.0, pc = 0.0;
+      loop(2.0 * kPi * fc, &mc, &pc);
+      double deg = pc * 180.0 / kPi;  // unwrapped into (-360, 0]
+      while (deg > 0.0) deg -= 360.0;
+      while (deg <= -360.0) deg += 360.0;
+      m.crossover_found = true;
+      m.crossover_Hz = fc;
+      m.phase_margin_deg = 180.0 + deg;
+    }
+    prev_mag = mag;
+    prev_f = f;
+  }
+  return m;
+}
+
+}  // namespace maglev::kernel
