@@ -261,4 +261,5 @@ TEST(EnumNames, EveryValueOfEveryWireEnumHasItsName) {
   LONGS_EQUAL(11, static_cast<int>(CommandResult::kRefusedExcitation));
   LONGS_EQUAL(6, static_cast<int>(SequencerState::kReady));
   LONGS_EQUAL(16, static_cast<int>(FaultCode::kCurrentMonitorOutOfRange));
+  LONGS_EQUAL(17, static_cast<int>(FaultCode::kCurrentSaturation));
 }

@@ -271,3 +271,21 @@ TEST(Supervisor, ConfigValidation) {
   b.interferometer_lsb_m = 0.0f;
   CHECK(validate(b, kRate) == SupervisorConfigError::kBadPlausibility);
 }
+
+// Issue 17: the current limit acting without pause is a fault at once after
+// max_saturated_ticks (50 ms): a stiff-gain attack once let z sag for 8 s
+// with the status Ready. A gap in the saturation restarts the count.
+TEST(Supervisor, PersistentCurrentSaturationIsAFault) {
+  Rig r;
+  r.in.current_limited = true;
+  for (int n = 0; n < 124; ++n) CHECK(r.tick().active == FaultCode::kNone);
+  r.in.current_limited = false;
+  CHECK(r.tick().active == FaultCode::kNone);
+  r.in.current_limited = true;
+  for (int n = 0; n < 124; ++n) CHECK(r.tick().active == FaultCode::kNone);
+  const SupervisorStatus& s = r.tick();
+  CHECK(s.active == FaultCode::kCurrentSaturation);
+  CHECK(s.first_fault.code == FaultCode::kCurrentSaturation);
+  CHECK(s.reaction == FaultReaction::kLand);
+  STRCMP_EQUAL("CurrentSaturation", to_string(FaultCode::kCurrentSaturation));
+}

@@ -442,6 +442,7 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
     si.following_error[a] = pico_to_si(reference_.pico[a] - measured_.pico[a]);
     t.abs_err[a] = std::fabs(si.following_error[a]);
   }
+  si.current_limited = last_current_limited_;
   for (int j = 0; j < io::kCoils; ++j) {
     si.coil_current_cmd_A[j] = last_current_A_[j];
     si.coil_current_measured_A[j] =
@@ -630,6 +631,7 @@ io::ActuatorCommand Controller<Scalar>::coil_currents_to_dac(const Tick& t) {
     status_.coil_current_A[j] = last_current_A_[j];
   }
   cmd.amplifier_enable = enable;
+  last_current_limited_ = enable && t.out.saturated;
   return cmd;
 }
 

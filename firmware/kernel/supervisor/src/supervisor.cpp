@@ -130,6 +130,11 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
        static_cast<float>(overrun_run_));
 
   // --- currents ----------------------------------------------------------------
+  saturated_run_ = in.current_limited
+                       ? static_cast<std::uint16_t>(saturated_run_ < 0xFFFF ? saturated_run_ + 1 : saturated_run_)
+                       : 0;
+  note(t, saturated_run_ >= config_.max_saturated_ticks, FaultCode::kCurrentSaturation, kNoAxis,
+       static_cast<float>(saturated_run_));
   const float measured_limit = config_.peak_current_A + config_.measured_current_margin_A;
   bool measured_over = false;
   for (int j = 0; j < io::kCoils; ++j) {

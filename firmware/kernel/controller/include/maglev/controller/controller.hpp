@@ -303,6 +303,7 @@ class Controller {
   Pose64 measured_{};
   double profile_accel_[kAxisCount] = {};
   float last_current_A_[io::kCoils] = {};
+  bool last_current_limited_ = false;  // last tick's allocation scaled the currents down
   std::uint32_t homing_ticks_ = 0;
   std::uint32_t homing_needed_ticks_ = 1;
   ControllerStatus status_{};

@@ -39,7 +39,8 @@ namespace maglev::kernel {
   X(kStaleFrames, 13, "StaleFrames")  /* more consecutive stale samples than allowed */ \
   X(kDisplacementOutOfRange, 14, "DisplacementOutOfRange")  /* laser displacement sensor: status bit or ADC at a rail */ \
   X(kAdcFault, 15, "AdcFault")  /* AD7606 conversion fault */ \
-  X(kCurrentMonitorOutOfRange, 16, "CurrentMonitorOutOfRange")  /* coil current monitor ADC at a rail */
+  X(kCurrentMonitorOutOfRange, 16, "CurrentMonitorOutOfRange")  /* coil current monitor ADC at a rail */ \
+  X(kCurrentSaturation, 17, "CurrentSaturation")  /* the current limit acted for max_saturated_ticks in a row */
 
 enum class FaultCode : std::uint8_t {
   MAGLEV_FAULT_CODES(MAGLEV_ENUMERATOR)
@@ -86,6 +87,10 @@ struct SupervisorConfig {
   float interferometer_lsb_m = 0.618e-9f;   // io::stage::kInterferometerLsb_m
   std::uint16_t max_consecutive_stale_frames = 2;
   std::uint16_t max_consecutive_overruns = 2;
+  // The whole-vector current limit acting without pause for this many ticks
+  // is a fault: the coils cannot give what the loops ask (50 ms at 2.5 kHz).
+  // A stiff-gain attack once sagged z by 22 um for 8 s with the status Ready.
+  std::uint16_t max_saturated_ticks = 125;
 };
 
 SupervisorConfigError validate(const SupervisorConfig& config, float servo_rate_Hz);
@@ -101,6 +106,7 @@ struct SupervisorInputs {
   float following_error[kSequencedAxes] = {};  // reference - measured, SI
   float coil_current_cmd_A[io::kCoils] = {};
   float coil_current_measured_A[io::kCoils] = {};
+  bool current_limited = false;  // last tick's allocation scaled its currents down (k < 1)
 };
 
 struct SupervisorStatus {
@@ -134,6 +140,7 @@ class Supervisor {
   bool have_previous_ = false;
   std::uint16_t stale_run_ = 0;
   std::uint16_t overrun_run_ = 0;
+  std::uint16_t saturated_run_ = 0;
   float i2_filtered_[io::kCoils] = {};
 };
 
