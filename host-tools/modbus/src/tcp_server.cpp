@@ -48,6 +48,15 @@ TcpServer::TcpServer(maglev::modbus::RegisterServer& registers, const std::strin
   clients_.reserve(static_cast<std::size_t>(std::max(1, limits_.max_clients)));
 }
 
+std::uint64_t TcpServer::max_syscalls_per_poll() const {
+  // poll; per client one recv, kMaxFramesPerClient sends and a close; then
+  // kMaxAcceptsPerPoll accepts, each with two fcntl and at most two closes
+  // (an evicted client and a refused or broken newcomer), plus the final
+  // accept that finds none waiting.
+  const std::uint64_t clients = static_cast<std::uint64_t>(std::max(1, limits_.max_clients));
+  return 1 + clients * (1 + kMaxFramesPerClient + 1) + kMaxAcceptsPerPoll * (1 + 2 + 2) + 1;
+}
+
 TcpServer::~TcpServer() {
   for (const Client& c : clients_) ::close(c.fd);
   if (listen_fd_ >= 0) ::close(listen_fd_);
@@ -55,11 +64,14 @@ TcpServer::~TcpServer() {
 
 void TcpServer::accept_new(Clock::time_point now) {
   // At most a few accepts per call: a connection storm cannot take the tick.
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < kMaxAcceptsPerPoll; ++i) {
     const int fd = ::accept(listen_fd_, nullptr, nullptr);
+    ++syscalls_;
     if (fd < 0) return;  // EAGAIN: none waiting
+    syscalls_ += 2;      // fcntl get + set
     if (!set_nonblocking(fd)) {
       ::close(fd);
+      ++syscalls_;
       continue;
     }
     if (static_cast<int>(clients_.size()) >= limits_.max_clients) {
@@ -72,10 +84,12 @@ void TcpServer::accept_new(Clock::time_point now) {
       }
       if (oldest != clients_.end() && now - oldest->last_activity >= limits_.evict_after) {
         ::close(oldest->fd);
+        ++syscalls_;
         clients_.erase(oldest);
         ++stats_.evicted;
       } else {
         ::close(fd);
+        ++syscalls_;
         ++stats_.refused;
         continue;
       }
@@ -107,6 +121,7 @@ bool TcpServer::answer(Client& c, std::size_t frame_len) {
   const std::size_t total = kMbap + pdu;
   ++stats_.requests;
   // Non-blocking: a client that does not read its replies is dropped.
+  ++syscalls_;
   return ::send(c.fd, reply, total, MSG_NOSIGNAL | MSG_DONTWAIT) == static_cast<ssize_t>(total);
 }
 
@@ -114,6 +129,7 @@ bool TcpServer::serve(Client& c, Clock::time_point now, int* answered) {
   // One bounded read: whatever fits in the frame buffer.
   if (c.used < sizeof c.buf) {
     const ssize_t r = ::recv(c.fd, c.buf + c.used, sizeof c.buf - c.used, MSG_DONTWAIT);
+    ++syscalls_;
     if (r == 0) return false;  // closed by the client
     if (r < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) return false;
     if (r > 0) {
@@ -155,6 +171,7 @@ int TcpServer::poll(int timeout_ms) {
   const std::size_t n = std::min<std::size_t>(clients_.size(), 64);
   fds[0] = {listen_fd_, POLLIN, 0};
   for (std::size_t i = 0; i < n; ++i) fds[1 + i] = {clients_[i].fd, POLLIN, 0};
+  syscalls_ = 1;
   (void)::poll(fds, 1 + n, timeout_ms);
   const Clock::time_point now = Clock::now();
   int answered = 0;
@@ -164,10 +181,12 @@ int TcpServer::poll(int timeout_ms) {
       ++i;
     } else {
       ::close(clients_[i].fd);
+      ++syscalls_;
       clients_.erase(clients_.begin() + static_cast<std::ptrdiff_t>(i));
     }
   }
   if ((fds[0].revents & POLLIN) != 0) accept_new(now);
+  stats_.max_poll_syscalls = std::max(stats_.max_poll_syscalls, syscalls_);
   return answered;
 }
 

@@ -50,11 +50,15 @@ struct TcpServerStats {
   std::uint64_t slow_closed = 0;      // partial frame older than frame_timeout
   std::uint64_t bad_frames = 0;       // MBAP rules broken: connection closed
   std::uint64_t other_unit = 0;       // frames for another unit: no reply
+  // The most system calls one poll() made: the work per call, counted
+  // rather than timed, so that a loaded machine cannot blur it.
+  std::uint64_t max_poll_syscalls = 0;
 };
 
 class TcpServer {
  public:
   static constexpr int kMaxFramesPerClient = 4;
+  static constexpr int kMaxAcceptsPerPoll = 4;
   static constexpr std::size_t kMaxAdu = 260;  // MBAP 7 + PDU 253
 
   // Listens on host:port (port 0: an ephemeral port, see port()).
@@ -73,6 +77,8 @@ class TcpServer {
   std::size_t clients() const { return clients_.size(); }
   const TcpServerStats& stats() const { return stats_; }
   const TcpServerLimits& limits() const { return limits_; }
+  // The bound on stats().max_poll_syscalls that the limits imply.
+  std::uint64_t max_syscalls_per_poll() const;
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -96,6 +102,7 @@ class TcpServer {
   TcpServerLimits limits_;
   std::vector<Client> clients_;
   TcpServerStats stats_{};
+  std::uint64_t syscalls_ = 0;  // in the current poll()
   std::string error_;
 };
 
