@@ -361,7 +361,9 @@ std::string key_list(const Keys& k) {
 ProfileParse parse_profile(const std::string& text, const std::string& source) {
   ProfileParse r;
   sp::StageProfile& p = r.profile;
-  p = sp::StageProfile{};
+  // Every byte zero first (padding too): the record is stored and CRC-checked
+  // as bytes in the firmware's profile database.
+  std::memset(static_cast<void*>(&p), 0, sizeof p);
   for (auto& a : p.axis) {
     a.mode = sp::AxisMode::kAbsent;
     a.controller.kind = sp::ControllerKind::kNone;

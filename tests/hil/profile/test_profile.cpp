@@ -126,3 +126,31 @@ TEST(Profiles, LoopMarginsAgreeWithTheBenchMeasurement) {
   DOUBLES_EQUAL(50.6, m.crossover_Hz, 1.0);
   DOUBLES_EQUAL(28.3, m.phase_margin_deg, 2.0);
 }
+
+// The firmware's built-in database: the generated records are the parser's
+// bytes (the drift test checks the file), each loads with its CRC and its
+// check, and a corrupted record is refused with kChecksum.
+#include "maglev/stage_profile/stage_database.hpp"
+
+TEST(Profiles, TheBuiltInDatabaseLoadsEveryShippedProfile) {
+  LONGS_EQUAL(profile::list_profiles(MAGLEV_PROFILE_DIR).size(), sp::kStageDatabaseCount);
+  for (const char* n : {"nk2017-cross", "nk2020-square", "nk2020-triangle"}) {
+    const int i = sp::FindStageProfile(n);
+    CHECK_TRUE(i >= 0);
+    static sp::StageProfile loaded;
+    CHECK_TRUE(sp::LoadStageProfile(static_cast<std::size_t>(i), &loaded) == sp::ProfileError::kOk);
+    const auto parsed = shipped(n);
+    MEMCMP_EQUAL(&parsed.profile, &loaded, sizeof loaded);
+  }
+  CHECK_TRUE(sp::FindStageProfile("no-such-stage") < 0);
+  static sp::StageProfile out;
+  CHECK_TRUE(sp::LoadStageProfile(sp::kStageDatabaseCount, &out) == sp::ProfileError::kUnknownProfile);
+  // One flipped bit in a record: refused, nothing loaded.
+  static std::uint8_t copy[sizeof(sp::StageProfile)];
+  std::memcpy(copy, sp::kStageDatabase[0].bytes, sizeof copy);
+  copy[100] ^= 0x08;
+  const sp::StageRecord corrupt{sp::kStageDatabase[0].name, copy, sp::kStageDatabase[0].crc32};
+  std::memset(static_cast<void*>(&out), 0, sizeof out);
+  CHECK_TRUE(sp::LoadStageRecord(corrupt, &out) == sp::ProfileError::kChecksum);
+  CHECK_EQUAL(0, out.name[0]);
+}
