@@ -25,6 +25,8 @@ function(maglev_add_cpputest)
   _maglev_check_labels(maglev_add_cpputest ${T_NAME} "${T_LABEL}")
   add_executable(${T_NAME} ${T_SOURCES} ${PROJECT_SOURCE_DIR}/tests/support/cpputest_main.cpp)
   target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} PkgConfig::CPPUTEST)
+  # tests/support/*.hpp: fixtures shared across test folders.
+  target_include_directories(${T_NAME} PRIVATE ${PROJECT_SOURCE_DIR}/tests/support/include)
   maglev_set_warnings(${T_NAME})
   # CppUTest's macros trip a few of our strict warnings; keep the rest.
   target_compile_options(${T_NAME} PRIVATE -Wno-old-style-cast -Wno-missing-declarations)

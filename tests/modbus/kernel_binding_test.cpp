@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <memory>
 #include <mutex>
@@ -13,6 +14,8 @@
 #include "maglev/can_link/host_commands.hpp"
 #include "maglev/modbus/controller_binding.hpp"
 #include "maglev/modbus_tcp/tcp_server.hpp"
+#include "maglev/stage_profile/stage_database.hpp"
+#include "maglev_test/resting_sample.hpp"
 
 using namespace maglev;
 using namespace maglev::modbus;
@@ -86,7 +89,8 @@ TEST(KernelBinding, TableDefaultsAreTheKernelDefaults) {
   for (std::size_t s = 0; s < kPersistedCount; ++s) {
     const RegisterDef& d = persisted_def(s);
     kernel::KernelConfig cfg = kernel::default_kernel_config();
-    CHECK_TEXT(config_field(cfg, d.id) != nullptr, d.name);
+    // Every persisted entry is a kernel field, except the stage selection.
+    CHECK_TEXT((config_field(cfg, d.id) != nullptr) == (d.kind == Kind::kConfig), d.name);
     if (from_kernel.raw[s] != table.raw[s]) {
       FAIL(d.name);
     }
@@ -210,4 +214,121 @@ TEST(KernelBinding, RecordTheKernelRefusesFallsBackToKernelDefaults) {
   std::uint16_t r[2];
   LONGS_EQUAL(2, modbus_read_registers(st.ctx, addr(RegId::gain_x_kp), 2, r));
   DOUBLES_EQUAL(36000.0, get_f32(r), 0.0);
+}
+
+// --- stage.profile: the stage database selected by a persisted register ------
+
+namespace {
+// A resting stage's raw sensor sample (z at rest, Hall pairs plausible).
+io::SensorSample resting_sample() {
+  static const std::uint32_t base[3] = {1000u, 2000u, 3000u};
+  return test::stage_sample_at(0.0, 0.0, base);
+}
+std::uint16_t read_u16(modbus_t* ctx, RegId id) {
+  std::uint16_t v = 0xFFFF;
+  LONGS_EQUAL(1, modbus_read_registers(ctx, addr(id), 1, &v));
+  return v;
+}
+std::uint16_t run_command(modbus_t* ctx, maglev::can::HostCommandCode code) {
+  std::uint16_t cmd[4] = {0, 0, 0, static_cast<std::uint16_t>(code)};
+  LONGS_EQUAL(4, modbus_write_registers(ctx, addr(RegId::cmd_axis), 4, cmd));
+  return read_u16(ctx, RegId::cmd_result);
+}
+}  // namespace
+
+TEST(KernelBinding, SelectingAStageProfileLoadsItsWholeConfigurationAndPersists) {
+  kernel::KernelConfig square{};
+  CHECK(KernelConfigOfProfile(1, &square) == stage_profile::ProfileError::kOk);  // nk2020-square
+  CHECK_FALSE(same_config(square, kernel::default_kernel_config()));            // a different stage
+  {
+    Stage st(flash);
+    LONGS_EQUAL(0, read_u16(st.ctx, RegId::stage_profile));
+    // Operators cannot switch stages.
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::stage_profile), 1), 1);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+    // Beyond the register's range, and inside it but not in the database: refused, nothing changed.
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::stage_profile), 16), 3);
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::stage_profile), 9), 3);
+    CHECK(same_config(kernel::default_kernel_config(), st.config()));
+    LONGS_EQUAL(0, read_u16(st.ctx, RegId::stage_profile));
+    // Landed, engineer: the square stage's configuration, whole.
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::stage_profile), 1));
+    kernel::KernelConfig running = st.config();
+    running.live_tuning = square.live_tuning;
+    CHECK(same_config(square, running));
+    LONGS_EQUAL(1, read_u16(st.ctx, RegId::stage_profile));
+    LONGS_EQUAL(0, read_u16(st.ctx, RegId::status_profile_error));
+    // The map serves what runs (a register the profile sets).
+    std::uint16_t r[2];
+    LONGS_EQUAL(2, modbus_read_registers(st.ctx, addr(RegId::gain_z_kp), 2, r));
+    DOUBLES_EQUAL(static_cast<double>(square.axis[3].pid.kp), get_f32(r), 0.0);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::config_save), 1));
+  }
+  Stage rebooted(flash);
+  kernel::KernelConfig running = rebooted.config();
+  running.live_tuning = square.live_tuning;
+  CHECK(same_config(square, running));
+  LONGS_EQUAL(1, read_u16(rebooted.ctx, RegId::stage_profile));
+}
+
+TEST(KernelBinding, SwitchingTheStageWhileOffRestIsRefusedAndChangesNothing) {
+  Stage st(flash);
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+  LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kAccepted),
+              run_command(st.ctx, maglev::can::HostCommandCode::kHome));
+  const kernel::KernelConfig before = st.config();
+  EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::stage_profile), 1), 6);  // server busy
+  CHECK(same_config(before, st.config()));
+  LONGS_EQUAL(0, read_u16(st.ctx, RegId::stage_profile));
+}
+
+TEST(KernelBinding, AnInvalidStoredProfileKeepsTheStageLandedWithTheReasonNamed) {
+  {
+    persistence::RamFlash f(flash, kSector, 2);
+    persistence::ConfigStore store(f, 0, 1);
+    store.load();
+    ConfigImage image = ConfigImage::defaults();
+    set_stage_profile(image, 9);  // in the register's range, not in this firmware's database
+    CHECK(store.save(image));
+  }
+  Stage st(flash);
+  LONGS_EQUAL(static_cast<int>(stage_profile::ProfileError::kUnknownProfile),
+              read_u16(st.ctx, RegId::status_profile_error));
+  LONGS_EQUAL(9, read_u16(st.ctx, RegId::stage_profile));  // the stored selection, shown
+  {
+    std::lock_guard<std::mutex> lock(st.m);
+    const io::ActuatorCommand out = st.controller->step(resting_sample(), false);
+    CHECK_FALSE(out.amplifier_enable);
+  }
+  LONGS_EQUAL(static_cast<int>(kernel::FaultCode::kStageProfileInvalid), read_u16(st.ctx, RegId::status_fault));
+  // It cannot leave rest, and the fault cannot be cleared while the cause remains.
+  CHECK(run_command(st.ctx, maglev::can::HostCommandCode::kHome) != 0);
+  CHECK(run_command(st.ctx, maglev::can::HostCommandCode::kClearFault) != 0);
+  // Nothing else may be changed until a valid stage is selected.
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+  std::uint16_t w[2];
+  set_f32(20000.0f, w);
+  EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::gain_x_kp), 2, w), 3);
+  // Selecting a valid stage removes the cause; then the fault clears.
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::stage_profile), 0));
+  LONGS_EQUAL(0, read_u16(st.ctx, RegId::status_profile_error));
+  {
+    std::lock_guard<std::mutex> lock(st.m);
+    (void)st.controller->step(resting_sample(), false);
+  }
+  LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kAccepted),
+              run_command(st.ctx, maglev::can::HostCommandCode::kClearFault));
+  CHECK(same_config(kernel::default_kernel_config(), st.config()));
+}
+
+TEST(KernelBinding, ACorruptDatabaseRecordIsRefusedByItsChecksum) {
+  // The record as stored, one byte flipped (a flash bit error in the image).
+  static std::uint8_t copy[sizeof(stage_profile::StageProfile)];
+  std::memcpy(copy, stage_profile::kStageDatabase[0].bytes, sizeof copy);
+  stage_profile::StageRecord record = stage_profile::kStageDatabase[0];
+  record.bytes = copy;
+  static stage_profile::StageProfile out;
+  CHECK(stage_profile::LoadStageRecord(record, &out) == stage_profile::ProfileError::kOk);
+  copy[100] ^= 0x10;
+  CHECK(stage_profile::LoadStageRecord(record, &out) == stage_profile::ProfileError::kChecksum);
 }

@@ -28,6 +28,7 @@ std::uint32_t RegisterServer::read_raw(const RegisterDef& d) const {
       if (d.id == RegId::id_schema_hash) return kSchemaHash;
       return encode(d.type, d.default_value);
     case Kind::kConfig:
+    case Kind::kStage:
       return config_.raw[static_cast<std::size_t>(persisted_slot(d.id))];
     case Kind::kStatus: {
       const PersistStatus ps = device_.persist_status();
@@ -146,7 +147,7 @@ ExceptionCode RegisterServer::apply_pending(std::size_t n_pending) {
   bool config_touched = false;
   for (std::size_t i = 0; i < n_pending; ++i) {
     const RegisterDef& d = *pending_[i].def;
-    if (d.kind != Kind::kConfig) continue;
+    if (d.kind != Kind::kConfig && d.kind != Kind::kStage) continue;
     candidate.raw[static_cast<std::size_t>(persisted_slot(d.id))] = pending_[i].raw;
     config_touched = true;
   }

@@ -51,6 +51,8 @@
 #include "maglev/controller/controller.hpp"
 #include "maglev/controller_node/controller_node.hpp"
 #include "maglev/plant/plant.hpp"
+#include "maglev/plant/plant_profile.hpp"
+#include "maglev/stage_profile/stage_database.hpp"
 #include "maglev/io/stage_parameters.hpp"
 #include "maglev/modbus_tcp/bench_server.hpp"
 #include "maglev/scenario/scenario.hpp"
@@ -232,7 +234,6 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
   auto plant_port = bus->open_endpoint();
   auto ctrl_port = bus->open_endpoint();
 
-  hil::Plant plant(plant_config, seed);
   auto controller = std::make_unique<Kernel>();  // large: not on the stack
   // Boot as on the board: the configuration comes from the flash file.
   auto modbus = std::make_unique<modbus_tcp::BenchServer<Scalar>>(*controller, o.host, o.port, o.flash);
@@ -241,6 +242,25 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
                  o.port, o.flash.c_str(), modbus->error().c_str());
     return 1;
   }
+  // The bench's plant is the stage the flash selects (stage.profile), as the
+  // board's stage is the one wired to it. A selection the firmware refused
+  // (status.profile_error) leaves the default stage's plant: the kernel
+  // holds it landed with fault 18 anyway.
+  hil::PlantConfig stage_plant = plant_config;
+  const auto profile_index = static_cast<std::uint16_t>(modbus->registers().config().get(modbus::RegId::stage_profile));
+  if (profile_index != 0 && controller->stage_profile_error() == 0) {
+    static stage_profile::StageProfile profile;  // ~4 kB
+    std::string why;
+    if (stage_profile::LoadStageProfile(profile_index, &profile) != stage_profile::ProfileError::kOk ||
+        !hil::PlantConfigForProfile(profile, plant_config, &stage_plant, &why)) {
+      std::fprintf(stderr, "maglev-hil serve: the bench cannot build the plant of stage.profile %u: %s\n",
+                   static_cast<unsigned>(profile_index), why.c_str());
+      return 1;
+    }
+    std::printf("maglev-hil serve: stage.profile %u (%s) from the flash: plant and kernel built from it\n",
+                static_cast<unsigned>(profile_index), profile.name);
+  }
+  hil::Plant plant(stage_plant, seed);
   app::CanSensorSource sensors(*ctrl_port, app::CanSensorConfig{});
   app::CanActuatorSink actuators(*ctrl_port, sensors);
   app::ServoLoop<Kernel> loop(sensors, actuators, *controller, app::ServoConfig{}, app::ServoHooks{});

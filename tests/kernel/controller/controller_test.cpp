@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "maglev_test/resting_sample.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/io/stage_parameters.hpp"
 
@@ -23,22 +24,7 @@ struct FakeStage {
   double x_m = 0.0;
   double z_m = 0.0;
   std::uint32_t base[3] = {1000u, 2000u, 3000u};
-  io::SensorSample sample() const {
-    io::SensorSample s{};
-    const auto counts = static_cast<std::int32_t>(std::lround(x_m / st::kInterferometerLsb_m));
-    s.interferometer_counts[0] = base[0] + static_cast<std::uint32_t>(counts);
-    s.interferometer_counts[1] = base[1];
-    s.interferometer_counts[2] = base[2];
-    const double volts = (z_m - st::kDisplacementZeroHeight_m) / st::kDisplacementScale_m_per_V;
-    const auto code = static_cast<std::int16_t>(std::lround(volts / st::kAdcFullScale_V * 32768.0));
-    for (auto& c : s.displacement_adc) c = code;
-    // Hall: sin/cos pairs of a plausible amplitude.
-    s.hall_adc[0] = 6000;
-    s.hall_adc[1] = 6000;
-    s.hall_adc[2] = 10000;
-    s.hall_adc[3] = 10000;
-    return s;
-  }
+  io::SensorSample sample() const { return test::stage_sample_at(x_m, z_m, base); }
   // z: a first-order lag towards 23 um per A of z effort beyond the weight
   // (m g / 2b* = 4.32 A) -- enough for the sequencer's lift, capture and z lock.
   void follow(float z_effort_A) {

@@ -23,7 +23,7 @@ class FuzzDevice final : public Device {
  public:
   Activity activity() const override { return static_cast<Activity>(calls_ % 3); }
   double read_status(RegId id) const override { return static_cast<double>(static_cast<int>(id)) * 1e-6; }
-  ApplyResult apply_config(const ConfigImage& c, bool) override {
+  ApplyResult apply_config(ConfigImage& c, bool) override {
     ++calls_;
     return static_cast<ApplyResult>(c.raw[0] % 3);
   }

@@ -30,7 +30,7 @@ class ProtocolDevice final : public Device {
       default: return 0;
     }
   }
-  ApplyResult apply_config(const ConfigImage& config, bool live_tuning) override {
+  ApplyResult apply_config(ConfigImage& config, bool live_tuning) override {
     last_live_tuning = live_tuning;
     ++apply_calls;
     if (refuse_config) return ApplyResult::kRefused;

@@ -110,7 +110,7 @@ inline void run_protocol_suite(modbus_t* ctx, std::mutex& m, RegisterServer& ser
   }
   // 02: unknown address (gap), read-only register, half of a float.
   expect_exception(modbus_read_registers(ctx, 50, 1, r), 2);
-  expect_exception(modbus_read_registers(ctx, addr(RegId::persist_flags), 6, r), 2);  // 120..125: 125 is a gap
+  expect_exception(modbus_read_registers(ctx, addr(RegId::persist_flags), 7, r), 2);  // 120..126: 126 is a gap
   expect_exception(modbus_write_register(ctx, 50, 1), 2);
   expect_exception(modbus_write_register(ctx, addr(RegId::status_state), 1), 2);
   expect_exception(modbus_write_register(ctx, addr(RegId::gain_x_kp), 0x4000), 2);       // high word only

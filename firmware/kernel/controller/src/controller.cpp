@@ -443,6 +443,7 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
     t.abs_err[a] = std::fabs(si.following_error[a]);
   }
   si.current_limited = last_current_limited_;
+  si.stage_profile_error = stage_profile_error_;
   for (int j = 0; j < io::kCoils; ++j) {
     si.coil_current_cmd_A[j] = last_current_A_[j];
     si.coil_current_measured_A[j] =

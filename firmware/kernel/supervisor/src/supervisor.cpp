@@ -82,6 +82,10 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   const io::SensorSample& s = *in.sample;
   Trip t;
 
+  // --- configuration: first, so that it names the reason ---------------------
+  note(t, in.stage_profile_error != 0, FaultCode::kStageProfileInvalid, kNoAxis,
+       static_cast<float>(in.stage_profile_error));
+
   // --- sensor plausibility --------------------------------------------------
   const std::uint16_t flags = s.status_flags;
   const std::uint16_t beam_bits = io::kBeamLoss0 | io::kBeamLoss1 | io::kBeamLoss2;

@@ -2,6 +2,8 @@
 
 #include "maglev/can_link/host_commands.hpp"
 #include "maglev/motion_commands/to_motion_command.hpp"
+#include "maglev/stage_profile/apply_profile.hpp"
+#include "maglev/stage_profile/stage_database.hpp"
 
 namespace maglev::modbus {
 
@@ -13,6 +15,7 @@ float* config_field(kernel::KernelConfig& cfg, RegId id) {
 #define MAGLEV_BIND_IDENT(id, field)
 #define MAGLEV_BIND_STATUS(id, field)
 #define MAGLEV_BIND_CONTROL(id, field)
+#define MAGLEV_BIND_STAGE(id, field)
 #define MAGLEV_REG(id, name, address, type, unit, min, max, def, access, when, persist, kind, field, desc) \
   MAGLEV_BIND_##kind(id, field)
 #include "maglev/register_schema/registers.def"
@@ -21,6 +24,7 @@ float* config_field(kernel::KernelConfig& cfg, RegId id) {
 #undef MAGLEV_BIND_IDENT
 #undef MAGLEV_BIND_STATUS
 #undef MAGLEV_BIND_CONTROL
+#undef MAGLEV_BIND_STAGE
     default:
       return nullptr;
   }
@@ -43,6 +47,23 @@ ConfigImage image_from_kernel(const kernel::KernelConfig& config) {
   return image;
 }
 
+std::uint16_t stage_profile_of(const ConfigImage& image) {
+  return static_cast<std::uint16_t>(image.raw[static_cast<std::size_t>(persisted_slot(RegId::stage_profile))]);
+}
+
+void set_stage_profile(ConfigImage& image, std::uint16_t index) {
+  image.raw[static_cast<std::size_t>(persisted_slot(RegId::stage_profile))] = index;
+}
+
+stage_profile::ProfileError KernelConfigOfProfile(std::uint16_t index, kernel::KernelConfig* out) {
+  // Static: a StageProfile is ~4 kB, too large for the comms stack; the
+  // comms loop is the only caller (boot, then Modbus writes).
+  static stage_profile::StageProfile profile;
+  const stage_profile::ProfileError loaded = stage_profile::LoadStageProfile(index, &profile);
+  if (loaded != stage_profile::ProfileError::kOk) return loaded;
+  return stage_profile::MakeKernelConfig(profile, out).error;
+}
+
 template <typename Scalar>
 ControllerDevice<Scalar>::ControllerDevice(kernel::Controller<Scalar>& controller, persistence::ConfigStore* store)
     : controller_(controller), store_(store) {}
@@ -54,17 +75,35 @@ ConfigImage ControllerDevice<Scalar>::boot() {
   const persistence::LoadResult loaded = store_->load();
   boot_status_ = loaded.status;
   if ((loaded.status.flags & kLoadedDefaults) != 0) {
-    // No usable record: the kernel's defaults (the table's defaults equal them).
+    // No usable record: the kernel's defaults (the table's defaults equal
+    // them; stage.profile 0 is the default stage).
     return kernel_defaults;
   }
-  kernel::KernelConfig cfg = controller_.config();
+  // The stage first: its profile is the base the record's values overlay.
+  const std::uint16_t index = stage_profile_of(loaded.config);
+  kernel::KernelConfig base{};
+  const stage_profile::ProfileError pe = KernelConfigOfProfile(index, &base);
+  if (pe != stage_profile::ProfileError::kOk) {
+    // Refused: stay landed with the reason latched; the kernel keeps the
+    // default stage's configuration, which can never lift this stage.
+    controller_.set_stage_profile_error(static_cast<std::uint8_t>(pe));
+    active_profile_ = 0;
+    return loaded.config;
+  }
+  kernel::KernelConfig cfg = base;
   image_to_kernel(loaded.config, cfg);
   if (controller_.apply_config(cfg) != kernel::ConfigError::kOk) {
     boot_status_.flags = static_cast<std::uint16_t>((boot_status_.flags & ~(kLoadedBankA | kLoadedBankB)) |
                                                     kRefused | kLoadedDefaults);
     boot_status_.reason = static_cast<std::uint16_t>(persistence::Reason::kValueOutOfRange);
-    return kernel_defaults;
+    // The profile's own defaults (CheckStageProfile passed them).
+    (void)controller_.apply_config(base);
+    active_profile_ = index;
+    ConfigImage image = image_from_kernel(base);
+    set_stage_profile(image, index);
+    return image;
   }
+  active_profile_ = index;
   return loaded.config;
 }
 
@@ -103,12 +142,37 @@ double ControllerDevice<Scalar>::read_status(RegId id) const {
     case RegId::status_closed_axes: return st.closed_axes;
     case RegId::status_config_error: return static_cast<double>(st.last_config_error);
     case RegId::status_scale_k: return static_cast<double>(st.scale_k);
+    case RegId::status_profile_error: return static_cast<double>(controller_.stage_profile_error());
     default: return 0.0;
   }
 }
 
 template <typename Scalar>
-Device::ApplyResult ControllerDevice<Scalar>::apply_config(const ConfigImage& config, bool live_tuning) {
+Device::ApplyResult ControllerDevice<Scalar>::apply_config(ConfigImage& config, bool live_tuning) {
+  const std::uint16_t index = stage_profile_of(config);
+  if (index != active_profile_ || controller_.stage_profile_error() != 0) {
+    // A stage selection (or, after a refused boot, any write: nothing else
+    // may change until a valid stage is selected). The profile's whole
+    // configuration replaces the old stage's: gains and limits tuned for
+    // one stage mean nothing on another.
+    kernel::KernelConfig cfg{};
+    if (KernelConfigOfProfile(index, &cfg) != stage_profile::ProfileError::kOk) return ApplyResult::kRefused;
+    cfg.live_tuning = live_tuning;
+    switch (controller_.apply_config(cfg)) {
+      case kernel::ConfigError::kOk:
+        break;
+      case kernel::ConfigError::kLockedWhileLevitated:
+      case kernel::ConfigError::kGainsLockedWhileLevitated:
+        return ApplyResult::kBusy;
+      default:
+        return ApplyResult::kRefused;
+    }
+    active_profile_ = index;
+    controller_.set_stage_profile_error(0);
+    config = image_from_kernel(cfg);
+    set_stage_profile(config, index);
+    return ApplyResult::kApplied;
+  }
   kernel::KernelConfig cfg = controller_.config();
   image_to_kernel(config, cfg);
   cfg.live_tuning = live_tuning;

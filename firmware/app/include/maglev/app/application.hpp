@@ -141,7 +141,7 @@ class GuardedDevice final : public modbus::Device {
     exit();
     return v;
   }
-  ApplyResult apply_config(const modbus::ConfigImage& config, bool live_tuning) override {
+  ApplyResult apply_config(modbus::ConfigImage& config, bool live_tuning) override {
     enter();
     const ApplyResult r = inner_.apply_config(config, live_tuning);
     exit();

@@ -49,9 +49,12 @@ class Device {
   virtual double read_status(RegId id) const = 0;
   // Apply a whole candidate configuration; on refusal nothing changed.
   // kBusy: the kernel locks it in its present state (reply 06), kRefused: the
-  // values are inconsistent (reply 03).
+  // values are inconsistent (reply 03). On kApplied the device may have
+  // rewritten other entries of `config` to what it applied (selecting a
+  // stage profile loads that profile's gains and limits): the server keeps
+  // the image as the device left it.
   enum class ApplyResult : std::uint8_t { kApplied, kRefused, kBusy };
-  virtual ApplyResult apply_config(const ConfigImage& config, bool live_tuning) = 0;
+  virtual ApplyResult apply_config(ConfigImage& config, bool live_tuning) = 0;
   // Run a motion command; returns 0 when accepted, else a kernel result code.
   // code: can::HostCommandCode value (cmd.code); 0 = none.
   virtual std::uint16_t command(std::uint16_t code, std::uint16_t axis, float value) = 0;

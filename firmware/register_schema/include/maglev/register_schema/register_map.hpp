@@ -18,7 +18,9 @@ enum class WriteWhen : std::uint8_t {
   kIdle,       // landed / not levitating
   kGains,      // kIdle, or always while tuning.live = 1 (live tuning)
 };
-enum class Kind : std::uint8_t { kIdent, kStatus, kConfig, kControl };
+// kStage: persisted like kConfig, but not a KernelConfig field (the stage
+// profile selection, applied by the controller binding).
+enum class Kind : std::uint8_t { kIdent, kStatus, kConfig, kControl, kStage };
 
 // Stable identifiers, in table order.
 enum class RegId : std::uint16_t {
@@ -62,6 +64,7 @@ inline constexpr Kind IDENT = Kind::kIdent;
 inline constexpr Kind STATUS = Kind::kStatus;
 inline constexpr Kind CONFIG = Kind::kConfig;
 inline constexpr Kind CONTROL = Kind::kControl;
+inline constexpr Kind STAGE = Kind::kStage;
 
 inline constexpr RegisterDef kTable[] = {
 #define MAGLEV_REG(id, name, address, type, unit, min, max, def, access, when, persist, kind, field, desc) \

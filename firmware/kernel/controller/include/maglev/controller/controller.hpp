@@ -215,6 +215,11 @@ class Controller {
   // Live value of ControllerStatus::motion_active (also right between a
   // command() that started a profile and the next step()).
   bool motion_active() const;
+  // The stage profile check's verdict from boot (stage_profile::ProfileError,
+  // 0 = ok): while nonzero the supervisor holds FaultCode::kStageProfileInvalid
+  // (the stage stays landed; clear_fault is refused while the cause remains).
+  void set_stage_profile_error(std::uint8_t error) { stage_profile_error_ = error; }
+  std::uint8_t stage_profile_error() const { return stage_profile_error_; }
 
  private:
   // The generator driving an axis (firmware/kernel/references), sampled at
@@ -304,6 +309,7 @@ class Controller {
   double profile_accel_[kAxisCount] = {};
   float last_current_A_[io::kCoils] = {};
   bool last_current_limited_ = false;  // last tick's allocation scaled the currents down
+  std::uint8_t stage_profile_error_ = 0;  // see set_stage_profile_error()
   std::uint32_t homing_ticks_ = 0;
   std::uint32_t homing_needed_ticks_ = 1;
   ControllerStatus status_{};

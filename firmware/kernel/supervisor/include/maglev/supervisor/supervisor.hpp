@@ -40,7 +40,8 @@ namespace maglev::kernel {
   X(kDisplacementOutOfRange, 14, "DisplacementOutOfRange")  /* laser displacement sensor: status bit or ADC at a rail */ \
   X(kAdcFault, 15, "AdcFault")  /* AD7606 conversion fault */ \
   X(kCurrentMonitorOutOfRange, 16, "CurrentMonitorOutOfRange")  /* coil current monitor ADC at a rail */ \
-  X(kCurrentSaturation, 17, "CurrentSaturation")  /* the current limit acted for max_saturated_ticks in a row */
+  X(kCurrentSaturation, 17, "CurrentSaturation")  /* the current limit acted for max_saturated_ticks in a row */ \
+  X(kStageProfileInvalid, 18, "StageProfileInvalid")  /* the selected stage profile failed its boot check (value: ProfileError) */
 
 enum class FaultCode : std::uint8_t {
   MAGLEV_FAULT_CODES(MAGLEV_ENUMERATOR)
@@ -107,6 +108,10 @@ struct SupervisorInputs {
   float coil_current_cmd_A[io::kCoils] = {};
   float coil_current_measured_A[io::kCoils] = {};
   bool current_limited = false;  // last tick's allocation scaled its currents down (k < 1)
+  // Nonzero: the stage profile selected in the persisted configuration was
+  // refused at boot (its stage_profile::ProfileError). A cause that stays
+  // present until a valid profile is selected: the stage cannot leave rest.
+  std::uint8_t stage_profile_error = 0;
 };
 
 struct SupervisorStatus {

@@ -9,6 +9,7 @@
 #include "maglev/controller/controller.hpp"
 #include "maglev/modbus/register_server.hpp"
 #include "maglev/persistence/config_store.hpp"
+#include "maglev/stage_profile/stage_profile.hpp"
 
 namespace maglev::modbus {
 
@@ -17,6 +18,12 @@ float* config_field(kernel::KernelConfig& config, RegId id);
 // Copy the mapped fields; fields the map does not carry are left as they are.
 void image_to_kernel(const ConfigImage& image, kernel::KernelConfig& config);
 ConfigImage image_from_kernel(const kernel::KernelConfig& config);
+// The stage.profile entry of an image.
+std::uint16_t stage_profile_of(const ConfigImage& image);
+void set_stage_profile(ConfigImage& image, std::uint16_t index);
+// The kernel configuration of database profile `index` (LoadStageProfile,
+// then MakeKernelConfig): kOk, or why it is refused (*out untouched).
+stage_profile::ProfileError KernelConfigOfProfile(std::uint16_t index, kernel::KernelConfig* out);
 
 template <typename Scalar>
 class ControllerDevice final : public Device {
@@ -24,14 +31,20 @@ class ControllerDevice final : public Device {
   // `store` may be nullptr (no flash: config.save fails with 04).
   ControllerDevice(kernel::Controller<Scalar>& controller, persistence::ConfigStore* store);
 
-  // Boot: load flash, apply it to the kernel; a record the kernel refuses
-  // falls back to the kernel defaults (flagged refused). Returns the image the
-  // RegisterServer starts from.
+  // Boot: load flash, load the stage profile it selects (stage.profile) from
+  // the built-in database and check it, then apply the record over that
+  // profile's configuration. A record the kernel refuses falls back to the
+  // profile's defaults (flagged refused). A profile that fails its check
+  // (unknown index, CRC, CheckStageProfile) leaves the kernel on the default
+  // stage's configuration with FaultCode::kStageProfileInvalid latched and
+  // status.profile_error naming the ProfileError: the stage stays landed
+  // until a valid profile is selected. Returns the image the RegisterServer
+  // starts from (the stored selection kept, so the operator sees it).
   ConfigImage boot();
 
   Activity activity() const override;
   double read_status(RegId id) const override;
-  ApplyResult apply_config(const ConfigImage& config, bool live_tuning) override;
+  ApplyResult apply_config(ConfigImage& config, bool live_tuning) override;
   std::uint16_t command(std::uint16_t code, std::uint16_t axis, float value) override;
   bool save_config(const ConfigImage& config) override;
   PersistStatus persist_status() const override;
@@ -40,6 +53,7 @@ class ControllerDevice final : public Device {
   kernel::Controller<Scalar>& controller_;
   persistence::ConfigStore* store_;
   PersistStatus boot_status_{};
+  std::uint16_t active_profile_ = 0;  // stage.profile the kernel runs
 };
 
 extern template class ControllerDevice<float>;
