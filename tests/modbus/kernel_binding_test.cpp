@@ -88,9 +88,8 @@ TEST(KernelBinding, TableDefaultsAreTheKernelDefaults) {
   const ConfigImage table = ConfigImage::defaults();
   for (std::size_t s = 0; s < kPersistedCount; ++s) {
     const RegisterDef& d = persisted_def(s);
-    kernel::KernelConfig cfg = kernel::default_kernel_config();
     // Every persisted entry is a kernel field, except the stage selection.
-    CHECK_TEXT((config_field(cfg, d.id) != nullptr) == (d.kind == Kind::kConfig), d.name);
+    CHECK_TEXT(has_config_field(d.id) == (d.kind == Kind::kConfig), d.name);
     if (from_kernel.raw[s] != table.raw[s]) {
       FAIL(d.name);
     }
@@ -331,4 +330,60 @@ TEST(KernelBinding, ACorruptDatabaseRecordIsRefusedByItsChecksum) {
   CHECK(stage_profile::LoadStageRecord(record, &out) == stage_profile::ProfileError::kOk);
   copy[100] ^= 0x10;
   CHECK(stage_profile::LoadStageRecord(record, &out) == stage_profile::ProfileError::kChecksum);
+}
+
+// --- filter.AXIS.N.*: the kernel's output filters as registers ----------------
+
+namespace {
+// type, frequency, q, depth in one 0x10 (7 registers from filter.AX.N.type).
+int write_filter(modbus_t* ctx, RegId type_reg, std::uint16_t type, float f_Hz, float q, float depth_dB) {
+  std::uint16_t w[7] = {type};
+  set_f32(f_Hz, w + 1);
+  set_f32(q, w + 3);
+  set_f32(depth_dB, w + 5);
+  return modbus_write_registers(ctx, addr(type_reg), 7, w);
+}
+}  // namespace
+
+TEST(KernelBinding, AFilterWrittenOverModbusRunsInTheKernelAndPersists) {
+  {
+    Stage st(flash);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+    // A 320 Hz notch, Q 5, 20 dB deep, on x (a structural mode above the 50 Hz crossover).
+    LONGS_EQUAL(7, write_filter(st.ctx, RegId::filter_x_1_type, 1, 320.0f, 5.0f, 20.0f));
+    const kernel::KernelConfig c = st.config();
+    CHECK(c.axis[0].filters[0].type == kernel::BiquadType::kNotch);
+    DOUBLES_EQUAL(320.0, static_cast<double>(c.axis[0].filters[0].frequency_Hz), 0.0);
+    DOUBLES_EQUAL(5.0, static_cast<double>(c.axis[0].filters[0].q), 0.0);
+    DOUBLES_EQUAL(20.0, static_cast<double>(c.axis[0].filters[0].depth_dB), 0.0);
+    CHECK(c.axis[0].filters[1].type == kernel::BiquadType::kNone);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::config_save), 1));
+  }
+  Stage rebooted(flash);
+  const kernel::KernelConfig c = rebooted.config();
+  CHECK(c.axis[0].filters[0].type == kernel::BiquadType::kNotch);
+  DOUBLES_EQUAL(320.0, static_cast<double>(c.axis[0].filters[0].frequency_Hz), 0.0);
+  LONGS_EQUAL(1, read_u16(rebooted.ctx, RegId::filter_x_1_type));
+}
+
+TEST(KernelBinding, AFilterThatWouldDestabiliseTheAxisIsRefused) {
+  Stage st(flash);
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+  const kernel::KernelConfig before = st.config();
+  // A 40 Hz low-pass under x's 50 Hz crossover: the loop check finds it unstable.
+  EXPECT_EXCEPTION(write_filter(st.ctx, RegId::filter_x_2_type, 2, 40.0f, 0.7071f, 0.0f), 3);
+  CHECK(same_config(before, st.config()));
+  {
+    std::lock_guard<std::mutex> lock(st.m);
+    LONGS_EQUAL(static_cast<int>(kernel::ConfigError::kUnstableLoop),
+                static_cast<int>(st.controller->status().last_config_error));
+  }
+  // A notch above Nyquist (1250 Hz at 2.5 kHz): the filter cannot be designed.
+  EXPECT_EXCEPTION(write_filter(st.ctx, RegId::filter_z_1_type, 1, 2000.0f, 2.0f, 20.0f), 3);
+  // A type that does not exist: outside the register's range.
+  EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::filter_z_1_type), 4), 3);
+  CHECK(same_config(before, st.config()));
+  // The same low-pass far above the crossover is fine (a 600 Hz noise filter).
+  LONGS_EQUAL(7, write_filter(st.ctx, RegId::filter_x_2_type, 2, 600.0f, 0.7071f, 0.0f));
+  CHECK(st.config().axis[0].filters[1].type == kernel::BiquadType::kLowPass);
 }

@@ -10,27 +10,7 @@
 
 namespace maglev::stage_profile {
 
-const char* to_string(ProfileError e) {
-  switch (e) {
-    case ProfileError::kOk: return "ok";
-    case ProfileError::kBadName: return "bad name";
-    case ProfileError::kBadServoRate: return "servo rate outside 500..20000 Hz";
-    case ProfileError::kNoActiveAxis: return "no active axis";
-    case ProfileError::kAxisWithoutSensor: return "an active axis has no sensor that observes it";
-    case ProfileError::kAllocationRank: return "allocation rank-deficient on the active axes";
-    case ProfileError::kAllocationCondition: return "allocation ill-conditioned on the active axes";
-    case ProfileError::kLimitsOutsideHardware: return "limits outside the hardware";
-    case ProfileError::kBadBody: return "mass or inertia not positive";
-    case ProfileError::kUnsupportedFamily: return "actuator family not supported by this firmware";
-    case ProfileError::kUnsupportedController: return "controller structure not supported by this firmware";
-    case ProfileError::kBadStartup: return "start-up sequence not supported";
-    case ProfileError::kUnstableLoop: return "a default loop is unstable";
-    case ProfileError::kChecksum: return "checksum mismatch";
-    case ProfileError::kUnknownProfile: return "no such profile";
-    case ProfileError::kCount: break;
-  }
-  return "?";
-}
+MAGLEV_ENUM_TO_STRING(ProfileError, MAGLEV_PROFILE_ERRORS)
 
 namespace {
 
@@ -195,7 +175,12 @@ LoopMargins AxisLoopMargins(const StageProfile& p, int a) {
   pid.derivative_filter_hz = static_cast<float>(c.derivative_filter_Hz);
   const kernel::LoopPlant plant{AxisPlantGain(p, a), p.axis[a].open_loop_damping_per_s,
                                 p.axis[a].open_loop_stiffness_per_s2};
-  return kernel::Pid2DofLoopMargins(pid, plant, p.servo_rate_Hz);
+  // The filters the kernel will run are in the loop the check judges.
+  kernel::BiquadConfig filters[kernel::kMaxBiquadStages];
+  for (int f = 0; f < kernel::kMaxBiquadStages; ++f) {
+    filters[f] = f < c.filter_count && f < kMaxFilters ? biquad_of(c.filters[f]) : kernel::BiquadConfig{};
+  }
+  return kernel::Pid2DofLoopMargins(pid, plant, p.servo_rate_Hz, filters, kernel::kMaxBiquadStages);
 }
 
 ProfileCheck CheckStageProfile(const StageProfile& p) {
@@ -265,6 +250,27 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
       return fail(ProfileError::kUnsupportedController, a);
     }
   }
+  // The kernel's pose solver (sensors_to_pose): three interferometer beams
+  // along X or Y, three height sensors; MakeKernelConfig hands it their
+  // placement.
+  {
+    int beams = 0, heights = 0;
+    for (int s = 0; s < p.sensor_count && s < kMaxSensors; ++s) {
+      const Sensor& sensor = p.sensors[s];
+      if (sensor.kind == SensorKind::kInterferometer) {
+        ++beams;
+        const double c = std::fabs(std::cos(sensor.direction_rad)), sn = std::fabs(std::sin(sensor.direction_rad));
+        if (!(c > 1.0 - 1e-9 || sn > 1.0 - 1e-9)) return fail(ProfileError::kUnsupportedSensors);
+      } else if (sensor.kind == SensorKind::kLaserDisplacement) {
+        ++heights;
+      } else if (sensor.kind != SensorKind::kHall) {
+        return fail(ProfileError::kUnsupportedSensors);
+      }
+    }
+    if (beams != io::kInterferometerAxes || heights != io::kDisplacementSensors) {
+      return fail(ProfileError::kUnsupportedSensors);
+    }
+  }
   // The kernel's start-up is paper 000's Sec. V.
   constexpr StartupStep kPaper000[] = {StartupStep::kCloseInPlane, StartupStep::kLiftFeedforward,
                                        StartupStep::kCloseVertical, StartupStep::kCloseTilts, StartupStep::kReady};
@@ -331,6 +337,44 @@ ProfileCheck MakeKernelConfig(const StageProfile& p, kernel::KernelConfig* out) 
   c.supervisor.peak_current_A = static_cast<float>(p.limits.peak_current_A);
   c.supervisor.rms_current_A = static_cast<float>(p.limits.rms_current_A);
   c.sequencer.nominal_height_m = static_cast<float>(p.limits.nominal_height_m);
+  // The sensor geometry sensors_to_pose solves with: the profile's sensors, in
+  // order of kind (interferometers -> the three beams, laser displacement
+  // sensors -> the three heights, the first Hall sensor -> Hall A; B sits a
+  // quarter pitch further). What the profile does not describe (wavelength,
+  // fold, mirror distance, counting sign, ADC scale) stays the family's.
+  int beams = 0, heights = 0, halls = 0;
+  for (int s = 0; s < p.sensor_count && s < kMaxSensors; ++s) {
+    const Sensor& sensor = p.sensors[s];
+    switch (sensor.kind) {
+      case SensorKind::kInterferometer:
+        if (beams < io::kInterferometerAxes) {
+          // Along X (direction 0 or pi) or along Y (+-pi/2): the check admits no other.
+          const bool along_x = std::fabs(std::cos(sensor.direction_rad)) > 0.5;
+          kernel::BeamConfig& b = c.measurement.beam[beams++];
+          b.axis = along_x ? kernel::BeamAxis::kX : kernel::BeamAxis::kY;
+          b.perpendicular_m = along_x ? sensor.y_m : sensor.x_m;
+          // A beam that looks along -X or -Y counts down as the stage moves +.
+          b.sign = (along_x ? std::cos(sensor.direction_rad) : std::sin(sensor.direction_rad)) < 0.0 ? -1 : 1;
+        }
+        break;
+      case SensorKind::kLaserDisplacement:
+        if (heights < io::kDisplacementSensors) {
+          c.measurement.displacement_sensor_x_m[heights] = sensor.x_m;
+          c.measurement.displacement_sensor_y_m[heights] = sensor.y_m;
+          ++heights;
+        }
+        break;
+      case SensorKind::kHall:
+        if (halls++ == 0) {
+          c.measurement.hall_a_x_m = sensor.x_m;
+          c.measurement.hall_a_y_m = sensor.y_m;
+        }
+        break;
+      default:
+        break;
+    }
+  }
+  c.measurement.pitch_m = p.halbach.pitch_m;
   *out = c;
   return check;
 }

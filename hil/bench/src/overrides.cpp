@@ -111,10 +111,60 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     const auto dot = k.find('.');
     Axis p{};
     if (dot == std::string::npos || !parse_axis(k.substr(0, dot), &p)) {
-      fail("[controller] unknown key '" + k + "' (payload_kg, or AXIS.kp|ki|kd|b|derivative_filter_Hz)");
+      fail("[controller] unknown key '" + k +
+           "' (payload_kg, AXIS.kp|ki|kd|b|derivative_filter_Hz, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
       continue;
     }
     const std::string field = k.substr(dot + 1);
+    // AXIS.filterN.FIELD: output filter stage N (1..2) of the axis, the
+    // registers filter.AXIS.N.* (same ranges: one source).
+    if (field.rfind("filter", 0) == 0 && field.size() > 8 && field[7] == '.' &&
+        (field[6] == '1' || field[6] == '2')) {
+      const int stage = field[6] - '1';
+      const std::string sub = field.substr(8);
+      kernel::BiquadConfig& f = c.axis[index(p)].filters[stage];
+      const std::string reg_prefix = std::string("filter.") + axis_name(p) + "." + field[6] + ".";
+      if (sub == "type") {
+        static const std::pair<const char*, kernel::BiquadType> kTypes[] = {
+            {"none", kernel::BiquadType::kNone}, {"notch", kernel::BiquadType::kNotch},
+            {"low_pass", kernel::BiquadType::kLowPass}, {"lead_lag", kernel::BiquadType::kLeadLag}};
+        bool found = false;
+        for (const auto& [name, type] : kTypes) {
+          if (v == name) {
+            f.type = type;
+            found = true;
+          }
+        }
+        if (!found) fail("[controller] " + k + " = " + v + ": expected none, notch, low_pass or lead_lag");
+        continue;
+      }
+      static const std::pair<const char*, const char*> kFilterFields[] = {
+          {"frequency_Hz", "frequency"}, {"q", "q"}, {"depth_dB", "depth"}, {"pole_Hz", "pole"}};
+      const char* reg_field = nullptr;
+      for (const auto& [scenario_field, register_field] : kFilterFields) {
+        if (sub == scenario_field) reg_field = register_field;
+      }
+      if (reg_field == nullptr) {
+        fail("[controller] unknown field '" + sub + "' in '" + k + "' (type, frequency_Hz, q, depth_dB, pole_Hz)");
+        continue;
+      }
+      double x = 0;
+      const Dim dim = sub == "frequency_Hz" || sub == "pole_Hz" ? Dim::kFrequency : Dim::kNumber;
+      if (!num("controller", k, v, dim, &x)) continue;
+      const std::string reg = reg_prefix + reg_field;
+      const modbus::RegisterDef* d = modbus::find_by_name(reg.c_str());
+      if (d == nullptr || !(x >= d->min && x <= d->max)) {
+        fail("[controller] " + k + " = " + v + ": outside " + reg + "'s range [" +
+             (d ? std::to_string(d->min) + ", " + std::to_string(d->max) : std::string("?")) + "]");
+        continue;
+      }
+      const float xf = static_cast<float>(x);
+      if (sub == "frequency_Hz") f.frequency_Hz = xf;
+      else if (sub == "q") f.q = xf;
+      else if (sub == "depth_dB") f.depth_dB = xf;
+      else f.pole_Hz = xf;
+      continue;
+    }
     double x = 0;
     if (!num("controller", k, v, Dim::kNumber, &x)) continue;
     // The same bounds as the register map (one source): a scenario may not
@@ -138,7 +188,8 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     else if (field == "kd") pid.kd = xf;
     else if (field == "b") pid.setpoint_weight_p = xf;
     else if (field == "derivative_filter_Hz") pid.derivative_filter_hz = xf;
-    else fail("[controller] unknown field '" + field + "' in '" + k + "' (kp, ki, kd, b, derivative_filter_Hz)");
+    else fail("[controller] unknown field '" + field + "' in '" + k +
+              "' (kp, ki, kd, b, derivative_filter_Hz, filter1.*, filter2.*)");
   }
   return errs->size() == before;
 }

@@ -117,6 +117,39 @@ TEST(Profiles, TheFirmwareRefusesWhatCannotRun) {
   }
 }
 
+TEST(Profiles, TheSensorGeometryReachesThePoseSolver) {
+  // sensors_to_pose solves with the profile's sensor placement, not the seed
+  // stage's constants: move a height sensor and turn a beam round.
+  sp::StageProfile p = shipped("nk2017-cross").profile;
+  int height = -1, beam = -1;
+  for (int i = 0; i < p.sensor_count; ++i) {
+    if (p.sensors[i].kind == sp::SensorKind::kLaserDisplacement && height < 0) height = i;
+    if (p.sensors[i].kind == sp::SensorKind::kInterferometer && beam < 0) beam = i;
+  }
+  CHECK_TRUE(height >= 0 && beam >= 0);
+  p.sensors[height].x_m = 0.0580;
+  p.sensors[height].y_m = 0.0600;
+  p.sensors[beam].y_m = 0.002;               // the x beam 2 mm off the centre line
+  p.sensors[beam].direction_rad = 3.14159265358979323846;  // looking along -X
+  kernel::KernelConfig kc{};
+  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == sp::ProfileError::kOk);
+  DOUBLES_EQUAL(0.0580, kc.measurement.displacement_sensor_x_m[0], 0.0);
+  DOUBLES_EQUAL(0.0600, kc.measurement.displacement_sensor_y_m[0], 0.0);
+  CHECK_TRUE(kc.measurement.beam[0].axis == kernel::BeamAxis::kX);
+  DOUBLES_EQUAL(0.002, kc.measurement.beam[0].perpendicular_m, 0.0);
+  LONGS_EQUAL(-1, kc.measurement.beam[0].sign);
+  kernel::Controller<float> k;
+  CHECK_TRUE(k.apply_config(kc) == kernel::ConfigError::kOk);
+  // A beam at 45 degrees: this pose solver takes X and Y beams only.
+  p.sensors[beam].direction_rad = 0.7853981633974483;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kUnsupportedSensors);
+  // A fourth height sensor: the solver takes three.
+  p = shipped("nk2017-cross").profile;
+  p.sensors[p.sensor_count] = p.sensors[height];
+  ++p.sensor_count;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kUnsupportedSensors);
+}
+
 TEST(Profiles, LoopMarginsAgreeWithTheBenchMeasurement) {
   // The bench measures x at 50.6 Hz / 28.3 deg (loop_response scenario);
   // the checker's continuous model with the half-tick hold must agree.

@@ -4,9 +4,17 @@
 
 namespace maglev::kernel {
 
-LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant, double servo_rate_Hz) {
+LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant, double servo_rate_Hz,
+                               const BiquadConfig* filters, int filter_count) {
   constexpr double kPi = 3.14159265358979323846;
   LoopMargins m;
+  BiquadDesign stage[kMaxBiquadStages];
+  int stages = 0;
+  for (int k = 0; filters != nullptr && k < filter_count && k < kMaxBiquadStages; ++k) {
+    if (filters[k].type == BiquadType::kNone) continue;
+    if (design_biquad_double(filters[k], servo_rate_Hz, &stage[stages]) != LoopDesignError::kOk) return m;
+    ++stages;
+  }
   const double kp = static_cast<double>(pid.kp), ki = static_cast<double>(pid.ki), kd = static_cast<double>(pid.kd);
   const double wf = 2.0 * kPi * static_cast<double>(pid.derivative_filter_hz);
   const double T = 1.0 / servo_rate_Hz;
@@ -18,6 +26,15 @@ LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant,
     const double p_re = plant.stiffness_per_s2 - w * w, p_im = plant.damping_per_s * w;
     *mag = std::sqrt(c_re * c_re + c_im * c_im) * plant.gain / std::sqrt(p_re * p_re + p_im * p_im);
     *phase = std::atan2(c_im, c_re) - std::atan2(p_im, p_re) - 0.5 * T * w;
+    // Each filter stage: (b0 + b1 z^-1 + b2 z^-2) / (1 + a1 z^-1 + a2 z^-2) at z = e^{jwT}.
+    const double c1 = std::cos(w * T), s1 = std::sin(w * T), c2 = std::cos(2.0 * w * T), s2 = std::sin(2.0 * w * T);
+    for (int k = 0; k < stages; ++k) {
+      const BiquadDesign& d = stage[k];
+      const double n_re = d.b0 + d.b1 * c1 + d.b2 * c2, n_im = -(d.b1 * s1 + d.b2 * s2);
+      const double q_re = 1.0 + d.a1 * c1 + d.a2 * c2, q_im = -(d.a1 * s1 + d.a2 * s2);
+      *mag *= std::sqrt(n_re * n_re + n_im * n_im) / std::sqrt(q_re * q_re + q_im * q_im);
+      *phase += std::atan2(n_im, n_re) - std::atan2(q_im, q_re);
+    }
   };
   const double f_lo = 0.1, f_hi = 0.5 * servo_rate_Hz;
   constexpr int kSteps = 1000;

@@ -96,7 +96,7 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
       const InternalModelConfig& plant = c.axis[a].imr;  // the axis plant the kernel designs against
       const LoopPlant lp{static_cast<double>(plant.plant_gain), static_cast<double>(plant.plant_damping_per_s),
                          static_cast<double>(plant.plant_stiffness_per_s2)};
-      if (!LoopIsAcceptable(Pid2DofLoopMargins(c.axis[a].pid, lp, rate))) {
+      if (!LoopIsAcceptable(Pid2DofLoopMargins(c.axis[a].pid, lp, rate, c.axis[a].filters, kMaxBiquadStages))) {
         status_.config_axis = static_cast<std::uint8_t>(a);
         return refuse(ConfigError::kUnstableLoop);
       }

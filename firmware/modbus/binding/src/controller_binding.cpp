@@ -1,5 +1,7 @@
 #include "maglev/modbus/controller_binding.hpp"
 
+#include <type_traits>
+
 #include "maglev/can_link/host_commands.hpp"
 #include "maglev/motion_commands/to_motion_command.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
@@ -7,42 +9,90 @@
 
 namespace maglev::modbus {
 
-float* config_field(kernel::KernelConfig& cfg, RegId id) {
-  switch (id) {
-#define MAGLEV_BIND_CONFIG(id, field) \
-  case RegId::id:                     \
-    return &cfg.field;
+namespace {
+// A KernelConfig field as a register value: floats, and enums (the filter
+// type) through their underlying integer.
+template <typename T>
+double load_field(const T& f) {
+  if constexpr (std::is_enum_v<T>) {
+    return static_cast<double>(static_cast<std::underlying_type_t<T>>(f));
+  } else {
+    return static_cast<double>(f);
+  }
+}
+template <typename T>
+void store_field(T& f, double v) {
+  if constexpr (std::is_enum_v<T>) {
+    f = static_cast<T>(static_cast<std::underlying_type_t<T>>(v));
+  } else {
+    f = static_cast<T>(v);
+  }
+}
+}  // namespace
+
 #define MAGLEV_BIND_IDENT(id, field)
 #define MAGLEV_BIND_STATUS(id, field)
 #define MAGLEV_BIND_CONTROL(id, field)
 #define MAGLEV_BIND_STAGE(id, field)
 #define MAGLEV_REG(id, name, address, type, unit, min, max, def, access, when, persist, kind, field, desc) \
   MAGLEV_BIND_##kind(id, field)
+
+bool has_config_field(RegId id) {
+  switch (id) {
+#define MAGLEV_BIND_CONFIG(id, field) case RegId::id:
 #include "maglev/register_schema/registers.def"
-#undef MAGLEV_REG
 #undef MAGLEV_BIND_CONFIG
+    return true;
+    default:
+      return false;
+  }
+}
+
+bool get_config_field(const kernel::KernelConfig& cfg, RegId id, double* value) {
+  switch (id) {
+#define MAGLEV_BIND_CONFIG(id, field) \
+  case RegId::id:                     \
+    *value = load_field(cfg.field);   \
+    return true;
+#include "maglev/register_schema/registers.def"
+#undef MAGLEV_BIND_CONFIG
+    default:
+      return false;
+  }
+}
+
+bool set_config_field(kernel::KernelConfig& cfg, RegId id, double value) {
+  switch (id) {
+#define MAGLEV_BIND_CONFIG(id, field) \
+  case RegId::id:                     \
+    store_field(cfg.field, value);    \
+    return true;
+#include "maglev/register_schema/registers.def"
+#undef MAGLEV_BIND_CONFIG
+    default:
+      return false;
+  }
+}
+
+#undef MAGLEV_REG
 #undef MAGLEV_BIND_IDENT
 #undef MAGLEV_BIND_STATUS
 #undef MAGLEV_BIND_CONTROL
 #undef MAGLEV_BIND_STAGE
-    default:
-      return nullptr;
-  }
-}
 
 void image_to_kernel(const ConfigImage& image, kernel::KernelConfig& config) {
   for (std::size_t s = 0; s < kPersistedCount; ++s) {
     const RegisterDef& d = persisted_def(s);
-    if (float* f = config_field(config, d.id)) *f = static_cast<float>(decode(d.type, image.raw[s]));
+    (void)set_config_field(config, d.id, decode(d.type, image.raw[s]));
   }
 }
 
 ConfigImage image_from_kernel(const kernel::KernelConfig& config) {
   ConfigImage image = ConfigImage::defaults();
-  kernel::KernelConfig copy = config;
   for (std::size_t s = 0; s < kPersistedCount; ++s) {
     const RegisterDef& d = persisted_def(s);
-    if (const float* f = config_field(copy, d.id)) image.raw[s] = encode(d.type, static_cast<double>(*f));
+    double v = 0.0;
+    if (get_config_field(config, d.id, &v)) image.raw[s] = encode(d.type, v);
   }
   return image;
 }

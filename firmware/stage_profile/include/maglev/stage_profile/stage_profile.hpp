@@ -15,6 +15,8 @@
 
 #include <cstdint>
 
+#include "maglev/io/enum_names.hpp"
+
 namespace maglev::stage_profile {
 
 inline constexpr int kAxes = 6;          // kernel::Axis order: x, y, theta_z, z, theta_x, theta_y
@@ -198,25 +200,30 @@ struct StageProfile {
   StartupStep startup[kMaxStartupSteps];
 };
 
-// Why a profile cannot run on this controller (explicit values: the fault
-// code reported over Modbus and CAN names it).
+// Why a profile cannot run on this controller: value and text of each,
+// defined once (the enum and to_string() are generated). The values cross
+// Modbus (status.profile_error) and the fault record: append only.
+#define MAGLEV_PROFILE_ERRORS(X) \
+  X(kOk, 0, "ok") \
+  X(kBadName, 1, "bad name") \
+  X(kBadServoRate, 2, "servo rate outside 500..20000 Hz") \
+  X(kNoActiveAxis, 3, "no active axis") \
+  X(kAxisWithoutSensor, 4, "an active axis has no sensor that observes it") \
+  X(kAllocationRank, 5, "allocation rank-deficient on the active axes") \
+  X(kAllocationCondition, 6, "allocation ill-conditioned on the active axes") /* cond > 1e3 */ \
+  X(kLimitsOutsideHardware, 7, "limits outside the hardware") /* current / travel / rate */ \
+  X(kBadBody, 8, "mass or inertia not positive") \
+  X(kUnsupportedFamily, 9, "actuator family not supported by this firmware") \
+  X(kUnsupportedController, 10, "controller structure not supported by this firmware") \
+  X(kBadStartup, 11, "start-up sequence not supported") \
+  X(kUnstableLoop, 12, "a default loop is unstable") /* the loop check */ \
+  X(kChecksum, 13, "checksum mismatch") /* the stored record's CRC */ \
+  X(kUnknownProfile, 14, "no such profile") /* the selected index is not in the database */ \
+  X(kUnsupportedSensors, 15, "sensor set not supported by this firmware's pose solver") \
+  X(kCount, 16, "?")
+
 enum class ProfileError : std::uint8_t {
-  kOk = 0,
-  kBadName = 1,
-  kBadServoRate = 2,
-  kNoActiveAxis = 3,
-  kAxisWithoutSensor = 4,     // an active axis has no sensor that observes it
-  kAllocationRank = 5,        // the allocation is rank-deficient on the active axes
-  kAllocationCondition = 6,   // ill-conditioned (cond > 1e3)
-  kLimitsOutsideHardware = 7, // current / travel / rate beyond what the board and stage allow
-  kBadBody = 8,               // mass or inertia not positive
-  kUnsupportedFamily = 9,     // this firmware build cannot drive that actuator family
-  kUnsupportedController = 10,
-  kBadStartup = 11,
-  kUnstableLoop = 12,         // the loop check finds a default loop unstable
-  kChecksum = 13,             // the stored record's CRC does not match
-  kUnknownProfile = 14,       // the selected index is not in the database
-  kCount = 15,
+  MAGLEV_PROFILE_ERRORS(MAGLEV_ENUMERATOR)
 };
 const char* to_string(ProfileError e);
 

@@ -7,8 +7,12 @@
 // applied during tick n) and the axis plant y'' + c y' + k y = g u. A
 // logarithmic scan from 0.1 Hz to the Nyquist rate (constant work, double,
 // heap-free); the last downward crossing of |L| = 1 is the crossover.
+// The axis' output filters (biquad stages: notch, low-pass, lead-lag) are in
+// the loop, so their discrete response H(e^{jwT}) multiplies L: a low-pass
+// set too low is refused like a gain that is too high.
 #pragma once
 
+#include "maglev/axis_loops/biquad.hpp"
 #include "maglev/axis_loops/pid2dof.hpp"
 
 namespace maglev::kernel {
@@ -25,7 +29,10 @@ struct LoopPlant {
   double stiffness_per_s2; // k
 };
 
-LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant, double servo_rate_Hz);
+// `filters`: the axis' biquad stages in series (kNone stages are skipped),
+// nullptr for none. A stage that cannot be designed gives no crossover.
+LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant, double servo_rate_Hz,
+                               const BiquadConfig* filters = nullptr, int filter_count = 0);
 
 // A loop the kernel accepts: it crosses over below the Nyquist rate with a
 // phase margin of at least this.

@@ -13,8 +13,11 @@
 
 namespace maglev::modbus {
 
-// Address of the KernelConfig float a CONFIG register is, nullptr otherwise.
-float* config_field(kernel::KernelConfig& config, RegId id);
+// The KernelConfig field a CONFIG register is (a float, or an enum through
+// its integer value). false: `id` is not a CONFIG register.
+bool has_config_field(RegId id);
+bool get_config_field(const kernel::KernelConfig& config, RegId id, double* value);
+bool set_config_field(kernel::KernelConfig& config, RegId id, double value);
 // Copy the mapped fields; fields the map does not carry are left as they are.
 void image_to_kernel(const ConfigImage& image, kernel::KernelConfig& config);
 ConfigImage image_from_kernel(const kernel::KernelConfig& config);
