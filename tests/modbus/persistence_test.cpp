@@ -8,6 +8,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "maglev/persistence/power_cut_flash.hpp"
 #include "maglev/persistence/config_store.hpp"
 #include "maglev/file_flash/file_flash.hpp"
 
@@ -20,47 +21,8 @@ namespace {
 
 constexpr std::size_t kSector = 4096;
 
-// Flash that loses power after `budget` erase/program operations. The
-// operation that meets the cut is TORN: a program writes only the first half
-// of its word with garbage in the second; an erase erases only half the
-// sector. Everything after the cut fails.
-class CutFlash final : public persistence::Flash {
- public:
-  CutFlash(persistence::RamFlash& inner, long budget) : inner_(inner), budget_(budget) {}
-  std::size_t sector_size() const override { return inner_.sector_size(); }
-  std::size_t sector_count() const override { return inner_.sector_count(); }
-  FlashError erase(std::size_t sector) override {
-    if (dead_) return FlashError::kFailed;
-    ++ops;
-    if (budget_-- == 0) {
-      dead_ = true;
-      std::memset(inner_.data() + sector * kSector, 0xFF, kSector / 2);
-      return FlashError::kFailed;
-    }
-    return inner_.erase(sector);
-  }
-  FlashError program(std::size_t offset, const std::uint8_t* word) override {
-    if (dead_) return FlashError::kFailed;
-    ++ops;
-    if (budget_-- == 0) {
-      dead_ = true;
-      std::uint8_t torn[persistence::kFlashWordBytes];
-      for (std::size_t i = 0; i < sizeof torn; ++i) torn[i] = i < 16 ? word[i] : static_cast<std::uint8_t>(0x5A ^ i);
-      inner_.program(offset, torn);
-      return FlashError::kFailed;
-    }
-    return inner_.program(offset, word);
-  }
-  FlashError read(std::size_t offset, std::uint8_t* out, std::size_t len) const override {
-    return inner_.read(offset, out, len);
-  }
-  long ops = 0;
-
- private:
-  persistence::RamFlash& inner_;
-  long budget_;
-  bool dead_ = false;
-};
+// The brown-out during a save: firmware/persistence's PowerCutFlash.
+using CutFlash = persistence::PowerCutFlash;
 
 ConfigImage variant(float kp) {
   ConfigImage c = ConfigImage::defaults();

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "maglev/bench/campaign.hpp"
 #include "maglev/bench/profile_check.hpp"
 #include "maglev/bench/runner.hpp"
 #include "maglev/bench/serve.hpp"
@@ -56,6 +57,7 @@ void usage() {
       "  maglev-hil check NAME|FILE...\n"
       "  maglev-hil profiles                  the stage profiles; run/suite take --profile NAME|FILE\n"
       "  maglev-hil check-profile NAME|FILE   allocation, passive axes, loops, current headroom\n"
+      "  maglev-hil campaign --runs N [--seed S] [--jobs J] [--out DIR] [--only I]   randomized faults, judged\n"
       "  maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S]\n"
       "                 [--levitate]       (runs until a shutdown host command, SIGTERM/SIGINT or --duration)\n"
       "  maglev-hil plant NAME|FILE --can IFACE --out DIR [--controller-record FILE]\n"
@@ -212,6 +214,7 @@ int run_one(const maglev::scenario::Scenario& sc, const Args& a, const std::stri
 
 int main(int argc, char** argv) {
   if (argc >= 2 && std::string(argv[1]) == "serve") return maglev::bench::serve_main(argc - 1, argv + 1);
+  if (argc >= 2 && std::string(argv[1]) == "campaign") return maglev::bench::campaign_main(argc - 1, argv + 1);
   const Args a = parse_args(argc, argv);
   if (!a.error.empty()) {
     std::fprintf(stderr, "maglev-hil: %s\n", a.error.c_str());

@@ -12,8 +12,10 @@
 #include "maglev/bench/metrics_registry.hpp"
 #include "maglev/bench/timeline.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
-#include "maglev/plant/plant.hpp"
+#include "maglev/bench/run_hooks.hpp"
+#include "maglev/lockstep/actuator_watchdog.hpp"
 #include "maglev/lockstep/plant_endpoint.hpp"
+#include "maglev/plant/plant.hpp"
 
 namespace maglev::bench {
 
@@ -65,6 +67,15 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     return std::nullopt;
   }
   const std::uint32_t rx_timeout_us = opt.can == "virtual" ? 0u : 100000u;
+  RunHooks* const hooks = opt.hooks;
+  if (hooks != nullptr) {
+    if (!link.bus) {
+      if (errors != nullptr) errors->push_back({"fault hooks need --can virtual"});
+      return std::nullopt;
+    }
+    link.bus->set_fault_hook([hooks](const can::CanFrame& f, std::uint64_t seq) { return hooks->on_frame(f, seq); });
+    hooks->attach(*link.bus);
+  }
 
   can::BusLoadMeter meter;
   hil::Plant plant(ov.plant, ov.seed);
@@ -100,7 +111,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   double levitate_t = -1.0, ready_t = -1.0;
   std::uint64_t missed_actuator = 0;
   bool aborted = false;
-  io::ActuatorCommand held = io::kSafeActuatorCommand;
+  lockstep::ActuatorWatchdog watchdog;  // the amplifier board's command watchdog
   const auto wall0 = std::chrono::steady_clock::now();
 
   for (std::uint64_t n = 0; n < n_ticks; ++n) {
@@ -130,30 +141,35 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     if (timer) timer->wait();
 
     // --- plant endpoint: sensors -> CAN. Coil currents at the sample instant.
-    const io::SensorSample s = plant.sample();
+    if (hooks != nullptr) hooks->before_tick(n, t, plant);
+    io::SensorSample s = plant.sample();
+    if (hooks != nullptr) hooks->on_sensor_sample(n, t, &s);
     double current_before_A[8];
     for (int j = 0; j < 8; ++j) current_before_A[j] = plant.amplifiers().current_A(j);
     const std::uint8_t counter = endpoint.send_tick(n, t, s);
 
     // --- controller node: one tick.
-    if (!node.run_once(rx_timeout_us)) {
+    // With fault hooks a lost sensor frame is a stale tick for the kernel
+    // (its link-loss handling), not the end of the run.
+    if (!node.run_once(rx_timeout_us, hooks != nullptr)) {
       R.warnings.push_back("controller node got no sensor frame at tick " + std::to_string(n));
       aborted = true;
       break;
     }
 
     // --- plant endpoint: the actuator frame answering tick n (else the
-    // actuator watchdog: amplifiers off).
-    if (!endpoint.await_actuator(counter, rx_timeout_us, &held)) {
-      ++missed_actuator;
-      held = io::kSafeActuatorCommand;
-    }
-    io::ActuatorCommand applied = held;
+    // actuator watchdog: the last command held <= 10 ms, then amplifiers off).
+    io::ActuatorCommand received{};
+    const bool got = endpoint.await_actuator(counter, rx_timeout_us, &received);
+    if (!got) ++missed_actuator;
+    io::ActuatorCommand applied = watchdog.update(got, received);
     const Axis ex_axis = excite != nullptr ? excite->axis : Axis::kX;
     const double d_ex = excite != nullptr ? excite->value(t) : 0.0;
     injector.add(ex_axis, d_ex, node.status(), &applied);
+    if (hooks != nullptr) hooks->on_actuator(n, t, &applied);
     plant.apply(applied);
     plant.advance_tick();
+    if (hooks != nullptr) hooks->after_tick(n, t, plant, node.status());
 
     // --- record this tick (pose measured at t, currents at t).
     const auto& st = node.status();

@@ -43,6 +43,7 @@
 #include <string>
 
 #include "maglev/app/can_io.hpp"
+#include "maglev/lockstep/actuator_watchdog.hpp"
 #include "maglev/app/servo_loop.hpp"
 #include "maglev/bench/units.hpp"
 #include "maglev/can_link/catalog.hpp"
@@ -274,7 +275,7 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
   const std::uint64_t end_tick =
       o.duration_s > 0.0 ? static_cast<std::uint64_t>(std::llround(o.duration_s / dt)) : ~std::uint64_t{0};
   can::LinkReceiver prx;
-  io::ActuatorCommand held = io::kSafeActuatorCommand;
+  lockstep::ActuatorWatchdog watchdog;  // the amplifier board's command watchdog
   std::uint8_t cm_counter = 0, hb_counter = 0;
   ServeCounters c;
   std::int64_t deadline = now_ns() + period_ns;
@@ -304,20 +305,18 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
     loop.on_tick();
     // --- plant endpoint: the actuator frame answering tick n (ZOH).
     bool got = false;
+    io::ActuatorCommand received{};
     while (plant_port->pending() > 0) {
       can::CanFrame in{};
       if (plant_port->receive(in, 0u) != can::PortStatus::kOk) break;
       if (prx.accept(in) != can::RxStatus::kOk) continue;
       if (prx.last_message() == &can::message(can::MessageKind::kActuator) && can::frame_counter(in) == counter) {
-        can::decode_actuator(in, held);
+        can::decode_actuator(in, received);
         got = true;
       }
     }
-    if (!got) {
-      ++c.missed_actuator;
-      held = io::kSafeActuatorCommand;  // the amplifiers' own watchdog: zero current
-    }
-    plant.apply(held);
+    if (!got) ++c.missed_actuator;
+    plant.apply(watchdog.update(got, received));  // the amplifiers' watchdog: hold <= 10 ms, then off
     plant.advance_tick();
     ++c.ticks;
     // --- Modbus, between ticks: only requests already waiting.

@@ -13,6 +13,7 @@
 #include "maglev/bench/runner.hpp"
 #include "maglev/bench/timeline.hpp"
 #include "maglev/plant/plant.hpp"
+#include "maglev/lockstep/actuator_watchdog.hpp"
 #include "maglev/lockstep/plant_endpoint.hpp"
 
 namespace maglev::bench {
@@ -103,7 +104,7 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
   const auto n_ticks = static_cast<std::uint64_t>(std::llround(sc.duration_s() / dt));
   Trace& tr = R.trace;
   std::vector<double> current_A[8];
-  io::ActuatorCommand held = io::kSafeActuatorCommand;
+  lockstep::ActuatorWatchdog watchdog;  // the amplifier board's command watchdog
   std::uint64_t missed = 0;
   std::uint8_t cmd_counter = 0;
   std::uint16_t seq = 0;
@@ -160,11 +161,10 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
     const io::SensorSample s = plant.sample();
     const hil::PlantState truth_before = plant.truth();
     const std::uint8_t counter = endpoint.send_tick(n, t, s);
-    if (!endpoint.await_actuator(counter, paced ? 1000u : po.lockstep_timeout_us, &held)) {
-      ++missed;
-      held = io::kSafeActuatorCommand;  // actuator watchdog: amplifiers off
-    }
-    plant.apply(held);
+    io::ActuatorCommand received{};
+    const bool got = endpoint.await_actuator(counter, paced ? 1000u : po.lockstep_timeout_us, &received);
+    if (!got) ++missed;
+    plant.apply(watchdog.update(got, received));  // hold <= 10 ms, then amplifiers off
     plant.advance_tick();
     tr.t_s.push_back(t);
     for (int j = 0; j < 8; ++j) current_A[j].push_back(truth_before.coil_current_A[j]);

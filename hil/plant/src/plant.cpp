@@ -495,7 +495,16 @@ Wrench Plant::TotalWrench(const BodyState& state, const double* currents_A) cons
   if (config_.body.gravity_enabled) {
     acc.f[2] -= mass_ * config_.body.gravity_m_per_s2;
   }
+  if (external_force_active_) {
+    for (int i = 0; i < 3; ++i) acc.f[i] += external_force_N_[i];
+  }
   return ToWrench(k, acc);
+}
+
+void Plant::set_external_force(const Eigen::Vector3d& force_world_N) {
+  external_force_N_ = force_world_N;
+  external_force_active_ = !force_world_N.isZero(0.0);
+  truth_wrench_stale_ = true;
 }
 
 BodyDerivative Plant::Derivative(const BodyState& state, const double* currents_A) const {

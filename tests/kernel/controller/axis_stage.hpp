@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "maglev_test/resting_sample.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/io/stage_parameters.hpp"
 
@@ -60,12 +61,14 @@ class AxisStage {
     s.hall_adc[1] = 6000;
     s.hall_adc[2] = 10000;
     s.hall_adc[3] = 10000;
+    maglev::test::set_monitored_currents(last_command_, &s);
     return s;
   }
 
   // Applies one tick of the command; x_pm, y_pm = the kernel's commutation position.
   void advance(const io::ActuatorCommand& cmd, std::int64_t x_pm, std::int64_t y_pm) {
     namespace st = io::stage;
+    last_command_ = cmd;
     double u[kAxisCount] = {};
     if (cmd.amplifier_enable) {
       std::uint32_t phase[io::kCoils];
@@ -122,6 +125,7 @@ class AxisStage {
   }
 
  private:
+  io::ActuatorCommand last_command_ = io::kSafeActuatorCommand;
   double gauss() {  // Box-Muller on a 64-bit xorshift*
     const double u1 = (static_cast<double>(next() >> 11) + 0.5) * (1.0 / 9007199254740992.0);
     const double u2 = (static_cast<double>(next() >> 11) + 0.5) * (1.0 / 9007199254740992.0);

@@ -24,7 +24,12 @@ struct FakeStage {
   double x_m = 0.0;
   double z_m = 0.0;
   std::uint32_t base[3] = {1000u, 2000u, 3000u};
-  io::SensorSample sample() const { return test::stage_sample_at(x_m, z_m, base); }
+  io::ActuatorCommand last = io::kSafeActuatorCommand;  // what the amplifiers follow
+  io::SensorSample sample() const {
+    io::SensorSample s = test::stage_sample_at(x_m, z_m, base);
+    test::set_monitored_currents(last, &s);
+    return s;
+  }
   // z: a first-order lag towards 23 um per A of z effort beyond the weight
   // (m g / 2b* = 4.32 A) -- enough for the sequencer's lift, capture and z lock.
   void follow(float z_effort_A) {
@@ -40,6 +45,7 @@ struct Rig {
   FakeStage stage;
   io::ActuatorCommand tick() {
     const io::ActuatorCommand cmd = c.step(stage.sample(), false);
+    stage.last = cmd;
     stage.follow(c.status().effort_A[3]);
     return cmd;
   }

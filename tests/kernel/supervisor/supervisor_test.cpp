@@ -112,6 +112,7 @@ TEST(Supervisor, RmsCurrentFollowsTheThermalTimeConstant) {
   // 3.5 A dc on coil 4: filtered i^2 crosses 9 A^2 when 1 - exp(-t/tau) = 9/12.25,
   // t = -10 s * ln(1 - 0.7347) = 13.27 s = 33170 ticks.
   r.in.coil_current_cmd_A[4] = 3.5f;
+  r.in.coil_current_measured_A[4] = 3.5f;  // the amplifier follows
   int n = 0;
   while (r.tick().active == FaultCode::kNone && n < 100000) ++n;
   DOUBLES_EQUAL(33170.0, n, 60.0);
@@ -288,4 +289,27 @@ TEST(Supervisor, PersistentCurrentSaturationIsAFault) {
   CHECK(s.first_fault.code == FaultCode::kCurrentSaturation);
   CHECK(s.reaction == FaultReaction::kLand);
   STRCMP_EQUAL("CurrentSaturation", to_string(FaultCode::kCurrentSaturation));
+}
+
+TEST(Supervisor, AnAmplifierThatDoesNotFollowItsCommandCutsTheCurrents) {
+  // Coil 2 shorted to its rail: 4 A measured while 0.5 A is commanded. The
+  // mismatch must persist current_mismatch_ticks (10) before it trips (the
+  // monitor is held between frames), and the reaction is currents off: an
+  // actuator that does not follow cannot land the stage.
+  Rig r;
+  r.in.coil_current_cmd_A[2] = 0.5f;
+  r.in.coil_current_measured_A[2] = 4.0f;
+  int n = 1;
+  while (r.tick().active == FaultCode::kNone && n < 100) ++n;
+  LONGS_EQUAL(10, n);
+  CHECK(r.sup.status().first_fault.code == FaultCode::kCurrentMismatch);
+  LONGS_EQUAL(2, r.sup.status().first_fault.axis);
+  CHECK(r.sup.status().reaction == FaultReaction::kCurrentsOff);
+  // A brief disagreement (a step the amplifier is still following) does not trip.
+  Rig q;
+  q.in.coil_current_cmd_A[5] = 2.0f;
+  q.in.coil_current_measured_A[5] = 0.0f;
+  for (int k = 0; k < 9; ++k) CHECK(q.tick().active == FaultCode::kNone);
+  q.in.coil_current_measured_A[5] = 1.9f;
+  for (int k = 0; k < 50; ++k) CHECK(q.tick().active == FaultCode::kNone);
 }

@@ -48,7 +48,8 @@ SupervisorConfigError validate(const SupervisorConfig& c, float servo_rate_Hz) {
   }
   if (!positive(c.peak_current_A) || c.peak_current_A > 5.0f || !positive(c.rms_current_A) ||
       c.rms_current_A > c.peak_current_A || !(c.measured_current_margin_A >= 0.0f) ||
-      c.measured_current_margin_A > 2.0f) {
+      c.measured_current_margin_A > 2.0f || !positive(c.current_mismatch_A) || c.current_mismatch_A > 10.0f ||
+      c.current_mismatch_ticks == 0) {
     return SupervisorConfigError::kBadCurrentLimit;
   }
   if (!positive(c.thermal_time_constant_s) || c.thermal_time_constant_s * servo_rate_Hz < 10.0f ||
@@ -74,6 +75,7 @@ void Supervisor::reset() {
   status_ = SupervisorStatus{};
   have_previous_ = false;
   stale_run_ = 0;
+  for (auto& r : mismatch_run_) r = 0;
   overrun_run_ = 0;
   for (float& v : i2_filtered_) v = 0.0f;
 }
@@ -141,6 +143,14 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
        static_cast<float>(saturated_run_));
   const float measured_limit = config_.peak_current_A + config_.measured_current_margin_A;
   bool measured_over = false;
+  for (int j = 0; j < io::kCoils; ++j) {
+    const bool off = abs_f(in.coil_current_measured_A[j] - in.coil_current_cmd_A[j]) > config_.current_mismatch_A;
+    mismatch_run_[j] = off ? static_cast<std::uint16_t>(mismatch_run_[j] < 0xFFFF ? mismatch_run_[j] + 1 : mismatch_run_[j])
+                           : 0;
+    const bool broken = mismatch_run_[j] >= config_.current_mismatch_ticks;
+    measured_over = measured_over || broken;  // the actuator does not follow: it cannot land the stage
+    note(t, broken, FaultCode::kCurrentMismatch, static_cast<std::uint8_t>(j), in.coil_current_measured_A[j]);
+  }
   for (int j = 0; j < io::kCoils; ++j) {
     const float m = in.coil_current_measured_A[j];
     const bool over = abs_f(m) > measured_limit;

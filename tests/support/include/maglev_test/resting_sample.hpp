@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "maglev/force_allocation/force_allocation.hpp"
+#include "maglev/io/actuator_command.hpp"
 #include "maglev/io/sensor_sample.hpp"
 #include "maglev/io/stage_parameters.hpp"
 
@@ -28,6 +30,20 @@ inline io::SensorSample stage_sample_at(double x_m, double z_m, const std::uint3
   s.hall_adc[2] = 10000;
   s.hall_adc[3] = 10000;
   return s;
+}
+
+// Amplifiers that follow: the current monitor reads what `command` asked
+// for (the supervisor's current-mismatch check compares the two).
+inline void set_monitored_currents(const io::ActuatorCommand& command, io::SensorSample* s) {
+  static const kernel::ForceAllocationState<float> alloc = [] {
+    kernel::ForceAllocationState<float> a{};
+    (void)kernel::ApplyForceAllocationConfig<float>(kernel::DefaultForceAllocationConfig(), &a);
+    return a;
+  }();
+  for (int j = 0; j < io::kCoils; ++j) {
+    const double i = command.amplifier_enable ? command.dac_code[j] / alloc.dac_codes_per_A : 0.0;
+    s->coil_current_adc[j] = static_cast<std::int16_t>(std::lround(i / alloc.monitor_A_per_code));
+  }
 }
 
 }  // namespace maglev::test

@@ -37,6 +37,9 @@ struct RunOptions {
   std::optional<std::uint64_t> seed;      // overrides the scenario's `seed`
   std::optional<std::string> profile;     // overrides the scenario's `profile` (NAME or FILE)
   bool verbose = true;                    // print command results while running
+  // Fault injection and judging (maglev-hil campaign); nullptr: none. Only
+  // the in-process run with --can virtual takes hooks.
+  class RunHooks* hooks = nullptr;
 };
 
 // The recorded time series: one row per servo tick (SI units). Every

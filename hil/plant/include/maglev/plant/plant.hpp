@@ -117,6 +117,10 @@ class Plant {
   void set_coil_currents(const std::array<double, kCoils>& currents_A);
   // Manual beam loss (in addition to the configured events).
   void set_beam_loss(int axis, bool lost);
+  // A force on the platen's centre of mass from outside (world frame, N):
+  // the fault campaign's push and payload change. Zero: none (the default
+  // path is untouched, bit for bit).
+  void set_external_force(const Eigen::Vector3d& force_world_N);
 
   double mass_kg() const { return mass_; }
   const Eigen::Vector3d& inertia_kgm2() const { return inertia_; }
@@ -183,6 +187,8 @@ class Plant {
   bool forcer_errors_active_ = false;
 
   double mass_;
+  Eigen::Vector3d external_force_N_ = Eigen::Vector3d::Zero();
+  bool external_force_active_ = false;
   Eigen::Vector3d inertia_;
   double tick_s_;
   double side_force_per_A_;  // N * p

@@ -41,7 +41,8 @@ namespace maglev::kernel {
   X(kAdcFault, 15, "AdcFault")  /* AD7606 conversion fault */ \
   X(kCurrentMonitorOutOfRange, 16, "CurrentMonitorOutOfRange")  /* coil current monitor ADC at a rail */ \
   X(kCurrentSaturation, 17, "CurrentSaturation")  /* the current limit acted for max_saturated_ticks in a row */ \
-  X(kStageProfileInvalid, 18, "StageProfileInvalid")  /* the selected stage profile failed its boot check (value: ProfileError) */
+  X(kStageProfileInvalid, 18, "StageProfileInvalid")  /* the selected stage profile failed its boot check (value: ProfileError) */ \
+  X(kCurrentMismatch, 19, "CurrentMismatch")  /* a coil's monitored current left its command for current_mismatch_ticks: amplifier shorted or open */
 
 enum class FaultCode : std::uint8_t {
   MAGLEV_FAULT_CODES(MAGLEV_ENUMERATOR)
@@ -84,7 +85,10 @@ struct SupervisorConfig {
   float measured_current_margin_A = 0.5f;   // monitor noise + amplifier tracking error
   float rms_current_A = 3.0f;               // io::stage::kRmsCoilCurrent_A
   float thermal_time_constant_s = 10.0f;    // coil thermal time constant (ours)
-  float max_interferometer_speed_m_per_s = 0.5f;  // stage reaches 0.12 m/s (paper 000 Fig. 10)
+  // 2x the fastest move the suite makes (150 mm/s): a count step beyond
+  // this per tick is a glitch. 0.5 m/s let a 173 um count jump through as a
+  // "following error", and the landing then chased a false theta_z (campaign).
+  float max_interferometer_speed_m_per_s = 0.3f;
   float interferometer_lsb_m = 0.618e-9f;   // io::stage::kInterferometerLsb_m
   std::uint16_t max_consecutive_stale_frames = 2;
   std::uint16_t max_consecutive_overruns = 2;
@@ -92,6 +96,14 @@ struct SupervisorConfig {
   // is a fault: the coils cannot give what the loops ask (50 ms at 2.5 kHz).
   // A stiff-gain attack once sagged z by 22 um for 8 s with the status Ready.
   std::uint16_t max_saturated_ticks = 125;
+  // A coil whose monitored current stays further than this from its command
+  // for this many ticks has an amplifier that does not follow (shorted to a
+  // rail, or open): currents off at once, it cannot land the stage. 1.5 A and
+  // 10 ticks (4 ms) stay clear of the held monitor value (a frame every 5
+  // ticks) and the amplifier's step response; a shorted amplifier at 4 A was
+  // left on for 38 ms and threw the platen 18 mm sideways (campaign).
+  float current_mismatch_A = 1.5f;
+  std::uint16_t current_mismatch_ticks = 10;
 };
 
 SupervisorConfigError validate(const SupervisorConfig& config, float servo_rate_Hz);
@@ -146,6 +158,7 @@ class Supervisor {
   std::uint16_t stale_run_ = 0;
   std::uint16_t overrun_run_ = 0;
   std::uint16_t saturated_run_ = 0;
+  std::uint16_t mismatch_run_[io::kCoils] = {};
   float i2_filtered_[io::kCoils] = {};
 };
 
