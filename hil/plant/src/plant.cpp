@@ -101,6 +101,33 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
   k_susp_ = config.suspension.stiffness_N_per_m -
             (config.suspension.subtract_magnetic_stiffness ? field_.gamma1_per_m() * weight : 0.0);
 
+  triangle_ = config.body.layout == BodyConfig::Layout::kTriangle;
+  if (triangle_) {
+    BuildTriangleSides();
+  } else {
+    BuildArraySides();
+  }
+  for (int f = 0; f < kForcers; ++f) {
+    if (config.forcer_errors.epsilon_tangential[f] != 0.0 || config.forcer_errors.epsilon_off_axis_z[f] != 0.0) {
+      forcer_errors_active_ = true;
+    }
+  }
+
+  // --- initial state ---------------------------------------------------------
+  body_.position_m = {config.initial.position_m[0], config.initial.position_m[1], config.initial.position_m[2]};
+  body_.attitude = Eigen::Quaterniond(
+      RotationFromAngles(config.initial.angles_rad[0], config.initial.angles_rad[1], config.initial.angles_rad[2]));
+
+  lsb_m_ = config.interferometer.wavelength_m /
+           (static_cast<double>(config.interferometer.fold) * config.interferometer.interpolation);
+  for (int a = 0; a < io::kInterferometerAxes; ++a) {
+    counter_adjust_[a] = 0;
+    last_count_[a] = static_cast<std::int64_t>(config.interferometer.start_count[a]);
+  }
+  UpdateTruth();
+}
+
+void Plant::BuildArraySides() {
   // --- coil geometry from eq (18) and kCoilPhase_rad (eq 19) ---------------
   // Coil j obeys (F_tangential, F_z) = b* i_j (sin psi_j, cos psi_j) with
   // psi_j = gamma_1 * base + phi_j. A side carrying current along u_ref
@@ -112,13 +139,9 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
   // coil is centred at 0 when its phase allows it, otherwise at +L/4 (pairs
   // 1&2, 3&4) or -L/4 (5&6, 7&8): the layout is symmetric under a 180 deg
   // turn, and the four sides of a pair are L/4 apart (Sec. III).
-  triangle_ = config.body.layout == BodyConfig::Layout::kTriangle;
-  if (triangle_) {
-    BuildTriangleSides();
-  } else {
-  const double pitch = config.field.pitch_m;
+  const double pitch = config_.field.pitch_m;
   const double gamma1 = field_.gamma1_per_m();
-  const double l = config.body.lever_arm_m;
+  const double l = config_.body.lever_arm_m;
   int k = 0;
   for (int j = 0; j < kCoils; ++j) {
     const int f = j / 2;
@@ -131,8 +154,8 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
       centre = (f < 2) ? pitch / 4.0 : -pitch / 4.0;
     }
     const Eigen::Vector3d u_ref = fx_coil ? Eigen::Vector3d(0.0, -1.0, 0.0) : Eigen::Vector3d(1.0, 0.0, 0.0);
-    const Eigen::Vector2d fc = ForcerCentre(f, l, config.body.layout);
-    const double alpha = config.forcer_errors.misalignment_rad[f];
+    const Eigen::Vector2d fc = ForcerCentre(f, l, config_.body.layout);
+    const double alpha = config_.forcer_errors.misalignment_rad[f];
     const Eigen::Matrix3d rot_alpha = Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     for (int side = 0; side < 2; ++side) {
       const double s = centre + (side == 0 ? -pitch / 4.0 : pitch / 4.0);
@@ -175,31 +198,12 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
     c.q_half_pi = cs.quarter_turns * (kPi / 2.0);
     c.sel_x = cs.array_axis == 0 ? 1.0 : 0.0;
     c.sel_y = cs.array_axis == 0 ? 0.0 : 1.0;
-    c.eps_t_x = c.sel_x * config.forcer_errors.epsilon_tangential[cs.forcer];
-    c.eps_t_y = c.sel_y * config.forcer_errors.epsilon_tangential[cs.forcer];
-    c.eps_z = config.forcer_errors.epsilon_off_axis_z[cs.forcer];
+    c.eps_t_x = c.sel_x * config_.forcer_errors.epsilon_tangential[cs.forcer];
+    c.eps_t_y = c.sel_y * config_.forcer_errors.epsilon_tangential[cs.forcer];
+    c.eps_z = config_.forcer_errors.epsilon_off_axis_z[cs.forcer];
     c.ax = cs.array_axis;
     c.coil = cs.coil;
   }
-  }  // cross / square
-  for (int f = 0; f < kForcers; ++f) {
-    if (config.forcer_errors.epsilon_tangential[f] != 0.0 || config.forcer_errors.epsilon_off_axis_z[f] != 0.0) {
-      forcer_errors_active_ = true;
-    }
-  }
-
-  // --- initial state ---------------------------------------------------------
-  body_.position_m = {config.initial.position_m[0], config.initial.position_m[1], config.initial.position_m[2]};
-  body_.attitude = Eigen::Quaterniond(
-      RotationFromAngles(config.initial.angles_rad[0], config.initial.angles_rad[1], config.initial.angles_rad[2]));
-
-  lsb_m_ = config.interferometer.wavelength_m /
-           (static_cast<double>(config.interferometer.fold) * config.interferometer.interpolation);
-  for (int a = 0; a < io::kInterferometerAxes; ++a) {
-    counter_adjust_[a] = 0;
-    last_count_[a] = static_cast<std::int64_t>(config.interferometer.start_count[a]);
-  }
-  UpdateTruth();
 }
 
 void Plant::TriangleForcer(int f, double centre[2], double thrust[2]) const {

@@ -153,6 +153,8 @@ class Plant {
   // cross and square keep their arithmetic bit for bit).
   void AddMagneticOblique(const Kinematics& k, const double* currents_A, Accum* acc) const;
   void BuildTriangleSides();
+  // Cross and square: every side along one array (paper 000 eq (18)).
+  void BuildArraySides();
   // Forcer centre and unit thrust axis (platen frame) of the triangle's forcer f.
   void TriangleForcer(int f, double centre[2], double thrust[2]) const;
   void AddSuspension(const Kinematics& k, Accum* acc) const;
