@@ -48,7 +48,37 @@ HalbachField::HalbachField(const FieldConfig& config)
     const double sign = (h % 2 == 0) ? 1.0 : -1.0;  // (-1)^k, n = 4k + 1
     point_amp_[h] = sign * m0_ * CnPerM0(n, config_);
     side_amp_[h] = point_amp_[h] * SideFactor(n, config_);
+    const double gd = 2.0 * kPi * n / config_.pitch_m * config_.coil_thickness_m;
+    thick_amp_[h] = point_amp_[h] * ((1.0 - std::exp(-gd)) / gd);
   }
+}
+
+namespace {
+
+// sin(x) / x, 1 at 0.
+double Sinc(double x) { return std::fabs(x) < 1e-12 ? 1.0 : std::sin(x) / x; }
+
+}  // namespace
+
+ObliqueSideAmplitudes HalbachField::ObliqueAmplitudes(double cos_phi, double sin_phi) const {
+  ObliqueSideAmplitudes out{};
+  const double p = config_.coil_effective_length_m;
+  const double a = config_.coil_side_width_m;
+  for (int h = 0; h < kMaxHarmonics; ++h) {
+    const double gn = 2.0 * kPi * kHarmonicN[h] / config_.pitch_m;
+    // X array: length projects by |cos phi|, width by |sin phi|; Y the reverse.
+    out.x_array_T[h] = thick_amp_[h] * Sinc(gn * p * std::fabs(cos_phi) / 2.0) * Sinc(gn * a * std::fabs(sin_phi) / 2.0);
+    out.y_array_T[h] = thick_amp_[h] * Sinc(gn * p * std::fabs(sin_phi) / 2.0) * Sinc(gn * a * std::fabs(cos_phi) / 2.0);
+  }
+  return out;
+}
+
+FieldXYZ HalbachField::ObliqueSideField(const ObliqueSideAmplitudes& amp, double x_m, double y_m,
+                                        double gap_m) const {
+  const double e1 = std::exp(-gamma1_ * gap_m);
+  const FieldSZ bx = SumHarmonicsFrom(amp.x_array_T, harmonics_, std::sin(gamma1_ * x_m), std::cos(gamma1_ * x_m), e1);
+  const FieldSZ by = SumHarmonicsFrom(amp.y_array_T, harmonics_, std::sin(gamma1_ * y_m), std::cos(gamma1_ * y_m), e1);
+  return {bx.b_s_T, by.b_s_T, bx.b_z_T + by.b_z_T};
 }
 
 namespace {

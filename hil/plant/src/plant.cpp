@@ -101,6 +101,33 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
   k_susp_ = config.suspension.stiffness_N_per_m -
             (config.suspension.subtract_magnetic_stiffness ? field_.gamma1_per_m() * weight : 0.0);
 
+  triangle_ = config.body.layout == BodyConfig::Layout::kTriangle;
+  if (triangle_) {
+    BuildTriangleSides();
+  } else {
+    BuildArraySides();
+  }
+  for (int f = 0; f < kForcers; ++f) {
+    if (config.forcer_errors.epsilon_tangential[f] != 0.0 || config.forcer_errors.epsilon_off_axis_z[f] != 0.0) {
+      forcer_errors_active_ = true;
+    }
+  }
+
+  // --- initial state ---------------------------------------------------------
+  body_.position_m = {config.initial.position_m[0], config.initial.position_m[1], config.initial.position_m[2]};
+  body_.attitude = Eigen::Quaterniond(
+      RotationFromAngles(config.initial.angles_rad[0], config.initial.angles_rad[1], config.initial.angles_rad[2]));
+
+  lsb_m_ = config.interferometer.wavelength_m /
+           (static_cast<double>(config.interferometer.fold) * config.interferometer.interpolation);
+  for (int a = 0; a < io::kInterferometerAxes; ++a) {
+    counter_adjust_[a] = 0;
+    last_count_[a] = static_cast<std::int64_t>(config.interferometer.start_count[a]);
+  }
+  UpdateTruth();
+}
+
+void Plant::BuildArraySides() {
   // --- coil geometry from eq (18) and kCoilPhase_rad (eq 19) ---------------
   // Coil j obeys (F_tangential, F_z) = b* i_j (sin psi_j, cos psi_j) with
   // psi_j = gamma_1 * base + phi_j. A side carrying current along u_ref
@@ -112,9 +139,9 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
   // coil is centred at 0 when its phase allows it, otherwise at +L/4 (pairs
   // 1&2, 3&4) or -L/4 (5&6, 7&8): the layout is symmetric under a 180 deg
   // turn, and the four sides of a pair are L/4 apart (Sec. III).
-  const double pitch = config.field.pitch_m;
+  const double pitch = config_.field.pitch_m;
   const double gamma1 = field_.gamma1_per_m();
-  const double l = config.body.lever_arm_m;
+  const double l = config_.body.lever_arm_m;
   int k = 0;
   for (int j = 0; j < kCoils; ++j) {
     const int f = j / 2;
@@ -127,8 +154,8 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
       centre = (f < 2) ? pitch / 4.0 : -pitch / 4.0;
     }
     const Eigen::Vector3d u_ref = fx_coil ? Eigen::Vector3d(0.0, -1.0, 0.0) : Eigen::Vector3d(1.0, 0.0, 0.0);
-    const Eigen::Vector2d fc = ForcerCentre(f, l, config.body.layout);
-    const double alpha = config.forcer_errors.misalignment_rad[f];
+    const Eigen::Vector2d fc = ForcerCentre(f, l, config_.body.layout);
+    const double alpha = config_.forcer_errors.misalignment_rad[f];
     const Eigen::Matrix3d rot_alpha = Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     for (int side = 0; side < 2; ++side) {
       const double s = centre + (side == 0 ? -pitch / 4.0 : pitch / 4.0);
@@ -171,30 +198,114 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
     c.q_half_pi = cs.quarter_turns * (kPi / 2.0);
     c.sel_x = cs.array_axis == 0 ? 1.0 : 0.0;
     c.sel_y = cs.array_axis == 0 ? 0.0 : 1.0;
-    c.eps_t_x = c.sel_x * config.forcer_errors.epsilon_tangential[cs.forcer];
-    c.eps_t_y = c.sel_y * config.forcer_errors.epsilon_tangential[cs.forcer];
-    c.eps_z = config.forcer_errors.epsilon_off_axis_z[cs.forcer];
+    c.eps_t_x = c.sel_x * config_.forcer_errors.epsilon_tangential[cs.forcer];
+    c.eps_t_y = c.sel_y * config_.forcer_errors.epsilon_tangential[cs.forcer];
+    c.eps_z = config_.forcer_errors.epsilon_off_axis_z[cs.forcer];
     c.ax = cs.array_axis;
     c.coil = cs.coil;
   }
-  for (int f = 0; f < kForcers; ++f) {
-    if (config.forcer_errors.epsilon_tangential[f] != 0.0 || config.forcer_errors.epsilon_off_axis_z[f] != 0.0) {
-      forcer_errors_active_ = true;
+}
+
+void Plant::TriangleForcer(int f, double centre[2], double thrust[2]) const {
+  // The kernel's LayoutGeometry (force_allocation.cpp), paper 003 eq (8).
+  const double l = config_.body.lever_arm_m;
+  const double sa = std::sin(config_.body.triangle_alpha_rad);
+  const double ca = std::cos(config_.body.triangle_alpha_rad);
+  switch (f) {
+    case 0: centre[0] = l * ca; centre[1] = l * sa; thrust[0] = -sa; thrust[1] = ca; break;
+    case 1: centre[0] = -l * ca; centre[1] = l * sa; thrust[0] = -sa; thrust[1] = -ca; break;
+    default: centre[0] = 0.0; centre[1] = -l; thrust[0] = 1.0; thrust[1] = 0.0; break;
+  }
+}
+
+// Triangle coil geometry. The kernel commutates coil j of forcer f as
+// (F_h, F_z) = b* i_j (sin psi_j, cos psi_j) along (h_f, Z), psi_j =
+// gamma_1 h_f . (x + x2_offset, y + y8_offset) + kCoilPhase_rad[j]: a travelling
+// wave along h_f. Over the matrix (an X and a Y array) an oblique side sees
+// two waves instead. A coil = a side at r1 with current along u = (h_y, -h_x)
+// (the cross layout's reference direction) and one at r1 + (L/2) h_f with the
+// opposite current; per unit current its fundamental force is
+//   F_h = -P_x sin(beta_x) - P_y sin(beta_y),
+//   F_z = -h_x P_x cos(beta_x) - h_y P_y cos(beta_y),
+// P_s = 2 A_s sin(pi h_s / 2) (A_s: that array's side-averaged amplitude for
+// this direction), beta_x = gamma_1 x1 + pi h_x / 2, beta_y likewise. The
+// position r1 sets beta_x and beta_y independently; each is chosen so that
+// its array's share points along the kernel's (sin psi_j, cos psi_j) at the
+// home pose, i.e. tan(beta_s) = h_s tan(psi_j) on the right branch. The
+// direction then matches the kernel exactly; the magnitude is what the
+// physics gives (docs/PLANT.md: 0.76 b* for the oblique forcers' vertical
+// coils, 0.98 b* horizontal at alpha = 30 deg), and away from home the two
+// waves drift from the kernel's single one by gamma_1 times the travel. Of
+// the periodic choices of r1 the one nearest the forcer centre (coil centre
+// r1 + L/4 h_f) is taken; an array that gives this coil no force (P_s = 0)
+// leaves r1 at the forcer centre's coordinate.
+void Plant::BuildTriangleSides() {
+  const double pitch = config_.field.pitch_m;
+  const double gamma1 = field_.gamma1_per_m();
+  auto wrap = [](double v) { return v - 2.0 * kPi * std::floor((v + kPi) / (2.0 * kPi)); };
+  for (CoilSide& cs : sides_) {
+    cs.coil = -1;
+    cs.forcer = -1;
+    cs.array_axis = -1;
+    cs.r_body_m = Eigen::Vector3d::Zero();
+    cs.u_body = Eigen::Vector3d::Zero();
+    cs.quarter_turns = 0;
+  }
+  int k = 0;
+  for (int f = 0; f < kTriangleForcers; ++f) {
+    double c[2], h[2];
+    TriangleForcer(f, c, h);
+    const double u_ref[2] = {h[1], -h[0]};
+    const ObliqueSideAmplitudes amp = field_.ObliqueAmplitudes(u_ref[0], u_ref[1]);
+    const double p_gain[2] = {2.0 * amp.x_array_T[0] * std::sin(kPi * h[0] / 2.0),
+                              2.0 * amp.y_array_T[0] * std::sin(kPi * h[1] / 2.0)};
+    const double p_floor = 1e-9 * std::fabs(amp.x_array_T[0] + amp.y_array_T[0]);
+    const double alpha = config_.forcer_errors.misalignment_rad[f];
+    const Eigen::Matrix3d rot_alpha = Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Vector3d centre3(c[0], c[1], -com_arm_m_);
+    for (int j = 2 * f; j < 2 * f + 2; ++j) {
+      const double psi = io::stage::kCoilPhase_rad[j] +
+                         gamma1 * (h[0] * io::stage::kBasePointX2_m + h[1] * io::stage::kBasePointY8_m);
+      double r1[2];
+      for (int s = 0; s < 2; ++s) {
+        const double target = c[s] - pitch / 4.0 * h[s];
+        if (std::fabs(p_gain[s]) <= p_floor || std::fabs(h[s]) < 1e-12) {
+          r1[s] = target;
+          continue;
+        }
+        const double beta = std::atan2(-std::sin(psi) / p_gain[s], -std::cos(psi) / (h[s] * p_gain[s]));
+        const double theta = beta - kPi * h[s] / 2.0;
+        r1[s] = target + wrap(theta - gamma1 * target) / gamma1;
+      }
+      for (int side = 0; side < 2; ++side) {
+        const double off = side == 0 ? 0.0 : pitch / 2.0;
+        Eigen::Vector3d r(r1[0] + off * h[0], r1[1] + off * h[1], -com_arm_m_);
+        r = centre3 + rot_alpha * (r - centre3);
+        const double sign = side == 0 ? 1.0 : -1.0;
+        CoilSide& cs = sides_[static_cast<std::size_t>(k)];
+        cs.coil = j;
+        cs.forcer = f;
+        cs.array_axis = -1;
+        cs.r_body_m = r;
+        cs.u_body = rot_alpha * Eigen::Vector3d(sign * u_ref[0], sign * u_ref[1], 0.0);
+        cs.quarter_turns = 0;
+        ObliqueSide& o = oblique_sides_[static_cast<std::size_t>(k)];
+        for (int a = 0; a < 3; ++a) o.rb[a] = r[a];
+        o.ux = cs.u_body.x();
+        o.uy = cs.u_body.y();
+        const Eigen::Vector3d hb = rot_alpha * Eigen::Vector3d(h[0], h[1], 0.0);
+        o.hx = hb.x();
+        o.hy = hb.y();
+        // The misalignment turns the side by a few 0.1 mrad: its averaging
+        // factors are those of the nominal direction (the change is second order).
+        o.amp = amp;
+        o.eps_t = config_.forcer_errors.epsilon_tangential[f];
+        o.eps_z = config_.forcer_errors.epsilon_off_axis_z[f];
+        o.coil = j;
+        ++k;
+      }
     }
   }
-
-  // --- initial state ---------------------------------------------------------
-  body_.position_m = {config.initial.position_m[0], config.initial.position_m[1], config.initial.position_m[2]};
-  body_.attitude = Eigen::Quaterniond(
-      RotationFromAngles(config.initial.angles_rad[0], config.initial.angles_rad[1], config.initial.angles_rad[2]));
-
-  lsb_m_ = config.interferometer.wavelength_m /
-           (static_cast<double>(config.interferometer.fold) * config.interferometer.interpolation);
-  for (int a = 0; a < io::kInterferometerAxes; ++a) {
-    counter_adjust_[a] = 0;
-    last_count_[a] = static_cast<std::int64_t>(config.interferometer.start_count[a]);
-  }
-  UpdateTruth();
 }
 
 void Plant::set_body_state(const BodyState& state) {
@@ -220,6 +331,22 @@ void Plant::set_beam_loss(int axis, bool lost) {
 // Forces
 // ---------------------------------------------------------------------------
 Eigen::Vector3d Plant::CoilForceWorld(const BodyState& state, int coil, double current_A) const {
+  if (triangle_) {
+    // The force loop itself, with only this coil's current.
+    Kinematics k;
+    const Eigen::Matrix3d r = state.attitude.normalized().toRotationMatrix();
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) k.r[a][b] = r(a, b);
+      k.p[a] = state.position_m[a];
+      k.v[a] = 0.0;
+      k.omega_w[a] = 0.0;
+    }
+    double currents[kCoils] = {};
+    if (coil >= 0 && coil < kCoils) currents[coil] = current_A;
+    Accum acc{};
+    AddMagneticOblique(k, currents, &acc);
+    return {acc.f[0], acc.f[1], acc.f[2]};
+  }
   Eigen::Vector3d total = Eigen::Vector3d::Zero();
   const Eigen::Matrix3d r = state.attitude.normalized().toRotationMatrix();
   for (const CoilSide& cs : sides_) {
@@ -303,7 +430,48 @@ inline double SmallExp(double x) {
 
 }  // namespace
 
+void Plant::AddMagneticOblique(const Kinematics& k, const double* currents_A, Accum* acc) const {
+  // World frame, every side on its own (full sin/cos per array): 12 sides.
+  const double rest_gap = config_.field.rest_gap_m;
+  const double(&r)[3][3] = k.r;
+  for (const ObliqueSide& c : oblique_sides_) {
+    const double* rb = c.rb;
+    double rw[3];
+    for (int a = 0; a < 3; ++a) rw[a] = r[a][0] * rb[0] + r[a][1] * rb[1] + r[a][2] * rb[2];
+    const double gap = rest_gap + k.p[2] + rw[2] - rb[2];
+    const FieldXYZ b = field_.ObliqueSideField(c.amp, k.p[0] + rw[0], k.p[1] + rw[1], gap);
+    const double uw[3] = {r[0][0] * c.ux + r[0][1] * c.uy, r[1][0] * c.ux + r[1][1] * c.uy,
+                          r[2][0] * c.ux + r[2][1] * c.uy};
+    const double bw[3] = {b.b_x_T, b.b_y_T, b.b_z_T};
+    double f[3];
+    Cross(uw, bw, f);
+    const double scale = side_force_per_A_ * currents_A[c.coil];
+    for (double& v : f) v *= scale;
+    if (forcer_errors_active_) {
+      // Paper 003 in the platen frame: F_t -> F_t (1 + eps_t) along the
+      // forcer's thrust axis, dF_z = eps_z F_t.
+      double fb[3];
+      for (int a = 0; a < 3; ++a) fb[a] = r[0][a] * f[0] + r[1][a] * f[1] + r[2][a] * f[2];
+      const double ft = c.hx * fb[0] + c.hy * fb[1];
+      fb[0] += c.eps_t * ft * c.hx;
+      fb[1] += c.eps_t * ft * c.hy;
+      fb[2] += c.eps_z * ft;
+      for (int a = 0; a < 3; ++a) f[a] = r[a][0] * fb[0] + r[a][1] * fb[1] + r[a][2] * fb[2];
+    }
+    double t[3];
+    Cross(rw, f, t);
+    for (int a = 0; a < 3; ++a) {
+      acc->f[a] += f[a];
+      acc->t[a] += t[a];
+    }
+  }
+}
+
 void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* acc) const {
+  if (triangle_) {
+    AddMagneticOblique(k, currents_A, acc);
+    return;
+  }
   // Evaluated in the PLATEN frame (the cheap frame: every side's r_body and
   // in-plane u_body are constants): a side's world field (B_s along its array
   // axis, B_z) is rotated into the platen frame with two rows of R, the
@@ -393,6 +561,29 @@ void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* ac
 
 void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
   if (!config_.suspension.enabled) {
+    return;
+  }
+  if (triangle_) {
+    // Three spring-dampers (k/3, c/3) at the triangle's forcer centres: their
+    // centroid is the CoM and sum(y^2) = sum(x^2) = 3 l^2 / 2, sum(x y) = 0
+    // for any alpha, so k_torsional = (k/2) l^2 about X and Y exactly as the
+    // cross layout's four (eqs (29)-(31)).
+    const double k3 = k_susp_ / 3.0;
+    const double c3 = config_.suspension.damping_Ns_per_m / 3.0;
+    const double h0 = config_.suspension.neutral_height_m;
+    for (int f = 0; f < kTriangleForcers; ++f) {
+      double c[2], h[2];
+      TriangleForcer(f, c, h);
+      const Eigen::Vector3d rb(c[0], c[1], -com_arm_m_);
+      double rw[3];
+      Rotate(k.r, rb, rw);
+      const double hgt = k.p[2] + rw[2] - rb.z();
+      const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
+      const double fz = -k3 * (hgt - h0) - c3 * hdot;
+      acc->f[2] += fz;
+      acc->t[0] += rw[1] * fz;
+      acc->t[1] -= rw[0] * fz;
+    }
     return;
   }
   const double k4 = k_susp_ / 4.0;

@@ -13,9 +13,13 @@ bool PlantConfigForProfile(const stage_profile::StageProfile& p, const PlantConf
   switch (p.halbach.layout) {
     case sp::ForcerLayout::kCross: c.body.layout = BodyConfig::Layout::kCross; break;
     case sp::ForcerLayout::kSquare: c.body.layout = BodyConfig::Layout::kSquare; break;
+    case sp::ForcerLayout::kTriangle:
+      c.body.layout = BodyConfig::Layout::kTriangle;
+      c.body.triangle_alpha_rad = p.halbach.triangle_alpha_rad;
+      break;
     default:
-      *why = "the bench plant models the cross and square layouts: the triangle's forcers thrust obliquely to the "
-             "Halbach arrays, whose per-coil-side field model is not built yet";
+      *why = "the bench plant models the cross, square and triangle layouts; a custom layout's actuators are not "
+             "built yet";
       return false;
   }
   c.body.mass_kg = p.body.mass_kg;

@@ -21,7 +21,7 @@ for p in nk2017-cross nk2020-square nk2020-triangle; do
   echo "$out" | grep -q "controller: accepts this profile" && ok "$p accepted" || bad "$p refused"
 done
 
-for p in nk2017-cross nk2020-square; do
+for p in nk2017-cross nk2020-square nk2020-triangle; do
   "$HIL" run x_steps_4um_8um --profile "$p" --out "$OUT/$p" --no-plots --quiet > "$OUT/$p.log" 2>&1 ||
     { bad "$p run failed"; cat "$OUT/$p.log"; continue; }
   grep -q "final state Ready, fault 0" "$OUT/$p.log" && ok "$p levitated (Ready, no fault)" || bad "$p not Ready"

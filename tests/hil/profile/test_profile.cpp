@@ -5,6 +5,7 @@
 #include <string>
 
 #include "maglev/controller/controller.hpp"
+#include "maglev/plant/plant_profile.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 
@@ -37,6 +38,33 @@ TEST(Profiles, TheShippedProfilesParseAndRun) {
     CHECK_TRUE(k.apply_config(kc) == kernel::ConfigError::kOk);
   }
   CHECK_TRUE(shipped("nk2020-triangle").profile.halbach.layout == sp::ForcerLayout::kTriangle);
+}
+
+// The bench builds every shipped profile's plant, each with its own layout
+// (the triangle with the profile's alpha: the plant places the coils where
+// the kernel's allocation assumes them).
+TEST(Profiles, TheBenchBuildsEveryShippedProfilesPlant) {
+  using Layout = hil::BodyConfig::Layout;
+  const struct {
+    const char* name;
+    Layout layout;
+  } expected[] = {{"nk2017-cross", Layout::kCross}, {"nk2020-square", Layout::kSquare},
+                  {"nk2020-triangle", Layout::kTriangle}};
+  for (const auto& e : expected) {
+    const auto p = shipped(e.name);
+    CHECK_TRUE(p.ok());
+    hil::PlantConfig plant{};
+    std::string why;
+    CHECK_TEXT(hil::PlantConfigForProfile(p.profile, hil::PlantConfig::Default(), &plant, &why), why.c_str());
+    CHECK_TRUE(plant.body.layout == e.layout);
+    DOUBLES_EQUAL(p.profile.halbach.lever_arm_m, plant.body.lever_arm_m, 0.0);
+  }
+  const auto tri = shipped("nk2020-triangle");
+  hil::PlantConfig plant{};
+  std::string why;
+  CHECK_TRUE(hil::PlantConfigForProfile(tri.profile, hil::PlantConfig::Default(), &plant, &why));
+  DOUBLES_EQUAL(tri.profile.halbach.triangle_alpha_rad, plant.body.triangle_alpha_rad, 0.0);
+  DOUBLES_EQUAL(0.5235987755982988, plant.body.triangle_alpha_rad, 1e-16);
 }
 
 TEST(Profiles, TheDefaultProfileIsTheKernelDefaultBitForBit) {

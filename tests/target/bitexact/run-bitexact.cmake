@@ -1,6 +1,7 @@
 # cmake -DRECORDER=<kernel-vector-recorder> -DCOMPARE=<kernel-bitexact-compare>
 #       -DQEMU=<qemu-system-arm> -DELF=<maglev-qemu-kernel-replay.elf>
-#       -DWORKDIR=<dir> -DTIMEOUT=<s> [-DICOUNT_SHIFT=<n>] [-DPROFILE=<file.profile>] -P run-bitexact.cmake
+#       -DWORKDIR=<dir> -DTIMEOUT=<s> [-DICOUNT_SHIFT=<n>] [-DPROFILE=<file.profile>] [-DNEAR_HOME=ON]
+#       -P run-bitexact.cmake
 #
 # 1. record: plant + host Controller<float> -> vectors.bin, host_outputs.bin
 # 2. replay: the same vectors through Controller<float> on QEMU's Cortex-M7
@@ -27,6 +28,9 @@ file(REMOVE ${_target})
 set(_profile_args)
 if(DEFINED PROFILE)
   set(_profile_args --profile ${PROFILE})
+endif()
+if(NEAR_HOME)
+  list(APPEND _profile_args --near-home)
 endif()
 execute_process(COMMAND ${RECORDER} ${_vectors} ${_host} ${_profile_args} RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _out)
 message("${_out}")

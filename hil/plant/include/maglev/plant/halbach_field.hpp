@@ -25,6 +25,26 @@ struct FieldSZ {
   double b_z_T;
 };
 
+// World field components of the whole magnet matrix (X array + Y array), T.
+struct FieldXYZ {
+  double b_x_T;
+  double b_y_T;
+  double b_z_T;
+};
+
+// Per-harmonic amplitudes (T, SumHarmonicsFrom order) of the field a straight
+// coil side sees on average when it runs along u = (cos phi, sin phi) at any
+// angle phi to X (the triangle's oblique forcers). The side's length p along
+// u and its width a across it project onto X by |cos phi| p and |sin phi| a,
+// onto Y by |sin phi| p and |cos phi| a; the mean of sin/cos(gamma_n s) over a
+// segment whose projection onto s has length w is the value at its midpoint
+// times sin(gamma_n w / 2) / (gamma_n w / 2), exactly, and the rectangle's
+// mean is the product of its two segments' factors.
+struct ObliqueSideAmplitudes {
+  double x_array_T[kMaxHarmonics];
+  double y_array_T[kMaxHarmonics];
+};
+
 // sum_h amp[h] e^{-gamma_n z} (sin, cos)(gamma_n s) from sin/cos(gamma_1 s)
 // and e^{-gamma_1 z} by recurrences (n = 1, 5, 9, 13: steps of e^{j 4 theta}).
 inline FieldSZ SumHarmonicsFrom(const double* amp, int harmonics, double s1, double c1, double e1) {
@@ -71,6 +91,16 @@ class HalbachField {
     return SumHarmonicsFrom(side_amp_, harmonics_, sin1, cos1, exp1);
   }
 
+  // Amplitudes for a side along (cos phi, sin phi), see ObliqueSideAmplitudes.
+  // Along Y (cos phi = 0) the X array's equal side_amplitudes_T() up to
+  // round-off; the Y array's then have the factor sin(gamma_n p/2)/(gamma_n p/2),
+  // which a coil's two sides (same y, opposite currents) cancel.
+  ObliqueSideAmplitudes ObliqueAmplitudes(double cos_phi, double sin_phi) const;
+  // The matrix's field averaged over such a side (midpoint at world x, y; the
+  // cross-section's bottom at gap above the magnets). N * I * p * (u x B_avg)
+  // is then the exact integral of I dl x B over the side's volume.
+  FieldXYZ ObliqueSideField(const ObliqueSideAmplitudes& amp, double x_m, double y_m, double gap_m) const;
+
   // b*(z) of eq (20) with n = 1 only, N/A (force amplitude of one coil).
   double BStar(double gap_m) const;
   // Amplitude of harmonic n's contribution to one coil's force, relative to
@@ -96,6 +126,8 @@ class HalbachField {
   // Per harmonic: signed amplitude (-1)^k c_n(0) for point and side-averaged field.
   double point_amp_[kMaxHarmonics];
   double side_amp_[kMaxHarmonics];
+  // Thickness factor (1 - e^{-gamma_n d}) / (gamma_n d) times point_amp_.
+  double thick_amp_[kMaxHarmonics];
 };
 
 }  // namespace maglev::hil

@@ -71,9 +71,9 @@ struct PlantState {
 
 // One straight coil side (effective length p) in the platen frame.
 struct CoilSide {
-  int coil;                  // 0..7 (coil j+1 of paper 000)
+  int coil;                  // 0..7 (coil j+1 of paper 000); -1: no such side (triangle: coils 7, 8)
   int forcer;                // 0..3 (coil pairs 1&2, 3&4, 5&6, 7&8)
-  int array_axis;            // 0: sees the X array (side along Y'), 1: the Y array
+  int array_axis;            // 0: sees the X array (side along Y'), 1: the Y array, -1: both (triangle)
   Eigen::Vector3d r_body_m;  // midpoint of the cross-section centre line
   Eigen::Vector3d u_body;    // unit direction of positive coil current
   // Nominal phase offset from the forcer's first side, in quarter pitches
@@ -153,6 +153,14 @@ class Plant {
     double t[3];
   };
   void AddMagnetic(const Kinematics& k, const double* currents_A, Accum* acc) const;
+  // Triangle layout: every side over both arrays (its own loop, so that the
+  // cross and square keep their arithmetic bit for bit).
+  void AddMagneticOblique(const Kinematics& k, const double* currents_A, Accum* acc) const;
+  void BuildTriangleSides();
+  // Cross and square: every side along one array (paper 000 eq (18)).
+  void BuildArraySides();
+  // Forcer centre and unit thrust axis (platen frame) of the triangle's forcer f.
+  void TriangleForcer(int f, double centre[2], double thrust[2]) const;
   void AddSuspension(const Kinematics& k, Accum* acc) const;
   void AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const;
   static Wrench ToWrench(const Kinematics& k, const Accum& acc);
@@ -184,6 +192,18 @@ class Plant {
     int coil;
   };
   std::array<SideConstants, 2 * kCoils> side_constants_{};
+  // Triangle layout: the 12 oblique sides of coils 1-6.
+  struct ObliqueSide {
+    double rb[3];                // midpoint, platen frame
+    double ux, uy;               // positive current direction, platen frame
+    double hx, hy;               // the forcer's thrust axis (tangential errors act along it)
+    ObliqueSideAmplitudes amp;   // both arrays' side-averaged harmonics for this direction
+    double eps_t, eps_z;         // the forcer's paper-003 errors
+    int coil;
+  };
+  static constexpr int kTriangleForcers = 3;
+  std::array<ObliqueSide, 2 * 2 * kTriangleForcers> oblique_sides_{};
+  bool triangle_ = false;
   bool forcer_errors_active_ = false;
 
   double mass_;

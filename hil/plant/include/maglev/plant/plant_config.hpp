@@ -45,10 +45,16 @@ struct BodyConfig {
   double payload_kg = 0.0;
   double payload_side_m = 0.10;
   double lever_arm_m = io::stage::kLeverArm_m;  // l of eq (18)
-  // Where the four forcers sit (paper 003 eqs (6)-(8)): cross (paper 000,
-  // forcers on the axes) or square (at the corners (+-l, +-l)). The coils of
+  // Where the forcers sit (paper 003 eqs (6)-(8)): cross (paper 000,
+  // forcers on the axes) or square (at the corners (+-l, +-l)): the coils of
   // x-thrust forcers lie along the x array, of y-thrust forcers along y.
-  enum class Layout : std::uint8_t { kCross = 0, kSquare = 1 } layout = Layout::kCross;
+  // Triangle (eq (8), Fig. 8): three forcers in a Y, coils 1-6 (7, 8 absent),
+  // 1&2 at l(cos a, sin a) thrusting along (-sin a, cos a), 3&4 at
+  // l(-cos a, sin a) along (-sin a, -cos a), 5&6 at (0, -l) along X, with
+  // a = triangle_alpha_rad: the kernel's geometry (force_allocation). The
+  // oblique coil sides see both arrays (docs/PLANT.md, "Triangle layout").
+  enum class Layout : std::uint8_t { kCross = 0, kSquare = 1, kTriangle = 2 } layout = Layout::kCross;
+  double triangle_alpha_rad = io::stage::kPi / 6.0;
   // (ours) height of the CoM above the coils' mid-plane. 0 = the paper's A
   // matrix (in-plane forces produce no tilt torque); > 0 adds the physical
   // tilt torque of in-plane thrust.
