@@ -65,6 +65,14 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     return std::nullopt;
   }
   const std::uint32_t rx_timeout_us = opt.can == "virtual" ? 0u : 100000u;
+  internal::CanLogTap tap;
+  if (!opt.can_log.empty()) {
+    std::string err;
+    if (!internal::open_can_log(link, opt.can, opt.can_log, &tap, &err)) {
+      if (errors != nullptr) errors->push_back({"--can-log: " + err});
+      return std::nullopt;
+    }
+  }
 
   can::BusLoadMeter meter;
   hil::Plant plant(ov.plant, ov.seed);
@@ -154,6 +162,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     injector.add(ex_axis, d_ex, node.status(), &applied);
     plant.apply(applied);
     plant.advance_tick();
+    tap.drain(n);  // this tick's frames, in bus order
 
     // --- record this tick (pose measured at t, currents at t).
     const auto& st = node.status();
@@ -172,6 +181,13 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     if (ready_t < 0 && st.state == kernel::SequencerState::kReady) ready_t = t;
   }
   const auto wall1 = std::chrono::steady_clock::now();
+  if (tap.port) {
+    std::string err;
+    if (!tap.log.close(&err)) {
+      R.warnings.push_back(err);
+      aborted = true;  // a run asked for its log and did not get it
+    }
+  }
   const double sim_s = internal::set_run_timing(&R, std::chrono::duration<double>(wall1 - wall0).count(), meter, dt);
   R.final_state = hil::to_string(node.status().state);
   R.fault = std::to_string(static_cast<int>(node.status().fault));

@@ -37,6 +37,9 @@ struct RunOptions {
   std::optional<std::uint64_t> seed;      // overrides the scenario's `seed`
   std::optional<std::string> profile;     // overrides the scenario's `profile` (NAME or FILE)
   bool verbose = true;                    // print command results while running
+  // Non-empty: run() writes every frame on the bus to this file as a candump
+  // log (candump_log.hpp), stamped with the tick's simulated time.
+  std::string can_log;
 };
 
 // The recorded time series: one row per servo tick (SI units). Every
