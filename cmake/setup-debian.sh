@@ -26,6 +26,8 @@ PACKAGES=(
   can-utils openocd
   # scripts and plots
   python3 python3-matplotlib python3-numpy
+  # independent readers of maglev-hil's --can-log: candump log + DBC decode (tests/can check_can_log.py)
+  python3-can python3-canmatrix
   # SocketCAN VM: initramfs building, serial/socket plumbing, kernel modules
   busybox-static cpio socat kmod xz-utils bc
   # apt-get source (CppUTest sources for the on-target kernel suites)

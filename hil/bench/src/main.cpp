@@ -2,7 +2,7 @@
 //
 //   maglev-hil list [--scenarios DIR]
 //   maglev-hil run NAME|FILE --out DIR [--can virtual|IFACE] [--kernel float32|q7.24]
-//                  [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet]
+//                  [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet] [--can-log FILE]
 //   maglev-hil suite --out DIR [same options]
 //   maglev-hil check NAME|FILE...             parse + validate only
 //   maglev-hil profiles                       the stage profiles (hil/profiles)
@@ -53,7 +53,8 @@ void usage() {
       "  maglev-hil list [--scenarios DIR]\n"
       "  maglev-hil run NAME|FILE --out DIR [--can virtual|vcan0] [--kernel float32|q7.24]\n"
       "                 [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet] [--scenarios DIR]\n"
-      "  maglev-hil suite --out DIR [run options]\n"
+      "                 [--can-log FILE]   the run's CAN traffic as a candump log (simulated time)\n"
+      "  maglev-hil suite --out DIR [run options but --can-log]\n"
       "  maglev-hil check NAME|FILE...\n"
       "  maglev-hil profiles                  the stage profiles; run/suite take --profile NAME|FILE\n"
       "  maglev-hil check-profile NAME|FILE   allocation, passive axes, loops, current headroom\n"
@@ -90,6 +91,8 @@ Args parse_args(int argc, char** argv) {
       value(&a.scenarios);
     } else if (s == "--can") {
       value(&a.run.can);
+    } else if (s == "--can-log") {
+      value(&a.run.can_log);
     } else if (s == "--kernel") {
       if (value(&v)) {
         maglev::hil::KernelKind k{};
@@ -206,6 +209,7 @@ int run_one(const maglev::scenario::Scenario& sc, const Args& a, const std::stri
     return 2;
   }
   const int rc = report_run(sc, *r, a, dir);
+  if (!a.run.can_log.empty()) std::printf("  CAN log (candump format, simulated time): %s\n", a.run.can_log.c_str());
   if (keep != nullptr) *keep = std::move(*r);
   return rc;
 }
@@ -219,6 +223,13 @@ int main(int argc, char** argv) {
   if (!a.error.empty()) {
     std::fprintf(stderr, "maglev-hil: %s\n", a.error.c_str());
     usage();
+    return 2;
+  }
+  // One log is one run's bus: `suite` would overwrite it per scenario, and the
+  // two-process bench runs on a real interface that `candump -l` records.
+  if (!a.run.can_log.empty() && a.cmd != "run") {
+    std::fprintf(stderr, "maglev-hil %s: --can-log is an option of 'run' only%s\n", a.cmd.c_str(),
+                 a.cmd == "plant" || a.cmd == "controller" ? " (record the interface with 'candump -l IFACE')" : "");
     return 2;
   }
   if (a.cmd == "list") {

@@ -47,6 +47,36 @@ Link open_link(const std::string& name, bool need_controller) {
   return l;
 }
 
+std::uint64_t CanLogTap::tick_time_us(std::uint64_t n) {
+  // 2500 Hz: 400 us per tick, an integer, so no rounding enters the log.
+  constexpr auto kPeriod_us = static_cast<std::uint64_t>(1e6 / io::stage::kServoRate_Hz);
+  static_assert(kPeriod_us * static_cast<std::uint64_t>(io::stage::kServoRate_Hz) == 1000000u,
+                "the servo period must be a whole number of microseconds");
+  return n * kPeriod_us;
+}
+
+void CanLogTap::drain(std::uint64_t n) {
+  if (!port) return;
+  can::CanFrame f{};
+  while (port->receive(f, 0) == can::PortStatus::kOk) log.write(tick_time_us(n), f);
+}
+
+bool open_can_log(const Link& link, const std::string& can_name, const std::string& path, CanLogTap* tap,
+                  std::string* error) {
+  if (link.bus) {
+    // Deep enough for far more than one tick's frames: drained every tick.
+    tap->port = link.bus->open_endpoint();
+  } else {
+    tap->port = can::open_can_port(can_name, error);
+  }
+  if (!tap->port) return false;
+  if (!tap->log.open(path, can_name, error)) {
+    tap->port.reset();
+    return false;
+  }
+  return true;
+}
+
 double set_run_timing(RunResult* R, double wall_s, const can::BusLoadMeter& meter, double dt) {
   R->wall_s = wall_s;
   R->ticks = R->trace.size();

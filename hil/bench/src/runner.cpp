@@ -76,6 +76,14 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     link.bus->set_fault_hook([hooks](const can::CanFrame& f, std::uint64_t seq) { return hooks->on_frame(f, seq); });
     hooks->attach(*link.bus);
   }
+  internal::CanLogTap tap;
+  if (!opt.can_log.empty()) {
+    std::string err;
+    if (!internal::open_can_log(link, opt.can, opt.can_log, &tap, &err)) {
+      if (errors != nullptr) errors->push_back({"--can-log: " + err});
+      return std::nullopt;
+    }
+  }
 
   can::BusLoadMeter meter;
   hil::Plant plant(ov.plant, ov.seed);
@@ -170,6 +178,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     plant.apply(applied);
     plant.advance_tick();
     if (hooks != nullptr) hooks->after_tick(n, t, plant, node.status());
+    tap.drain(n);  // this tick's frames, in bus order
 
     // --- record this tick (pose measured at t, currents at t).
     const auto& st = node.status();
@@ -188,6 +197,13 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     if (ready_t < 0 && st.state == kernel::SequencerState::kReady) ready_t = t;
   }
   const auto wall1 = std::chrono::steady_clock::now();
+  if (tap.port) {
+    std::string err;
+    if (!tap.log.close(&err)) {
+      R.warnings.push_back(err);
+      aborted = true;  // a run asked for its log and did not get it
+    }
+  }
   const double sim_s = internal::set_run_timing(&R, std::chrono::duration<double>(wall1 - wall0).count(), meter, dt);
   R.final_state = hil::to_string(node.status().state);
   R.fault = std::to_string(static_cast<int>(node.status().fault));

@@ -7,12 +7,14 @@
 # 2. replay: the same vectors through Controller<float> on QEMU's Cortex-M7
 #    -> target_outputs.bin (and, with ICOUNT_SHIFT, instructions per step())
 # 3. compare the two output files bit for bit.
-# A missing replay image FAILS (it is built by the qemu-m7 preset, which the
-# README's test command runs before the host one).
+# A missing replay image FAILS (the host build builds it with the default
+# MAGLEV_KERNEL_REPLAY_ELF; a path given by hand must exist).
 if(NOT EXISTS "${ELF}")
   message(FATAL_ERROR
     "kernel-bitexact: the M7 replay image ${ELF} does not exist.\n"
-    "Build it first:  cmake --workflow --preset qemu-m7\n"
+    "With the default MAGLEV_KERNEL_REPLAY_ELF the host build makes it: cmake --build --preset host\n"
+    "  (target maglev-qemu-kernel-replay-image); a path set by hand is not built. Directly:\n"
+    "  cmake --workflow --preset qemu-m7\n"
     "  (or: cmake --preset qemu-m7 && cmake --build --preset qemu-m7 --target maglev-qemu-kernel-replay)\n"
     "or point the host build at another image: -DMAGLEV_KERNEL_REPLAY_ELF=<path>.")
 endif()

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "maglev/bench/candump_log.hpp"
 #include "maglev/bench/overrides.hpp"
 #include "maglev/bench/runner.hpp"
 #include "maglev/can_link/bus_load.hpp"
@@ -28,6 +29,22 @@ struct Link {
   std::string error;
 };
 Link open_link(const std::string& name, bool need_controller);
+
+// --can-log: a listen-only port on the link's bus (another endpoint of the
+// virtual bus, or another socket on the interface): it receives every frame
+// the plant and the controller send and never sends, so the run is unchanged.
+// The log's interface name is the --can name ("virtual" for the in-process bus).
+struct CanLogTap {
+  std::unique_ptr<can::OwnedCanPort> port;
+  CandumpLogWriter log;
+  // Simulated time of tick n in microseconds, exact (n x the servo period).
+  static std::uint64_t tick_time_us(std::uint64_t n);
+  // Logs every frame the tap has received, stamped with tick n's time.
+  void drain(std::uint64_t n);
+};
+// false: *error says why (the tap is not open).
+bool open_can_log(const Link& link, const std::string& can_name, const std::string& path, CanLogTap* tap,
+                  std::string* error);
 
 // Wall time, tick count, real-time factor and bus load of a finished run.
 // Returns the simulated time [s].

@@ -40,6 +40,9 @@ struct RunOptions {
   // Fault injection and judging (maglev-hil campaign); nullptr: none. Only
   // the in-process run with --can virtual takes hooks.
   class RunHooks* hooks = nullptr;
+  // Non-empty: run() writes every frame on the bus to this file as a candump
+  // log (candump_log.hpp), stamped with the tick's simulated time.
+  std::string can_log;
 };
 
 // The recorded time series: one row per servo tick (SI units). Every
