@@ -1,9 +1,12 @@
 #include "maglev/bench/campaign.hpp"
 
+#include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -723,25 +726,50 @@ int campaign_main(int argc, char** argv) {
     ::close(fds[1]);
     workers.emplace_back(pid, fds[0]);
   }
+  // Read every worker's pipe as it fills (poll): a worker whose pipe is
+  // full would otherwise wait for the ones read before it.
   std::size_t done = 0;
-  for (auto& [pid, fd] : workers) {
-    FILE* in = ::fdopen(fd, "r");
-    char* buf = nullptr;
-    std::size_t cap = 0;
-    ssize_t len = 0;
-    while ((len = ::getline(&buf, &cap, in)) > 0) {
-      std::string s(buf, static_cast<std::size_t>(len));
-      if (!s.empty() && s.back() == '\n') s.pop_back();
-      const auto tab = s.find('\t');
-      if (tab == std::string::npos) continue;
-      lines[std::atoi(s.c_str())] = s.substr(tab + 1);
-      if (++done % 100 == 0) {
-        std::printf("  %zu / %zu runs\n", done, indices.size());
-        std::fflush(stdout);
+  std::vector<std::string> partial(workers.size());
+  std::vector<bool> open_fd(workers.size(), true);
+  for (std::size_t left = workers.size(); left > 0;) {
+    std::vector<pollfd> fds;
+    std::vector<std::size_t> which;
+    for (std::size_t w = 0; w < workers.size(); ++w) {
+      if (!open_fd[w]) continue;
+      fds.push_back(pollfd{workers[w].second, POLLIN, 0});
+      which.push_back(w);
+    }
+    if (::poll(fds.data(), fds.size(), -1) < 0) {
+      if (errno == EINTR) continue;
+      std::perror("poll");
+      return 2;
+    }
+    for (std::size_t k = 0; k < fds.size(); ++k) {
+      if ((fds[k].revents & (POLLIN | POLLHUP | POLLERR)) == 0) continue;
+      const std::size_t w = which[k];
+      char buf[65536];
+      const ssize_t r = ::read(fds[k].fd, buf, sizeof buf);
+      if (r <= 0) {
+        ::close(fds[k].fd);
+        open_fd[w] = false;
+        --left;
+        continue;
+      }
+      partial[w].append(buf, static_cast<std::size_t>(r));
+      for (std::size_t nl; (nl = partial[w].find('\n')) != std::string::npos;) {
+        const std::string s = partial[w].substr(0, nl);
+        partial[w].erase(0, nl + 1);
+        const auto tab = s.find('\t');
+        if (tab == std::string::npos) continue;
+        lines[std::atoi(s.c_str())] = s.substr(tab + 1);
+        if (++done % 100 == 0) {
+          std::printf("  %zu / %zu runs\n", done, indices.size());
+          std::fflush(stdout);
+        }
       }
     }
-    std::free(buf);
-    std::fclose(in);
+  }
+  for (auto& [pid, fd] : workers) {
     int status = 0;
     ::waitpid(pid, &status, 0);
   }
