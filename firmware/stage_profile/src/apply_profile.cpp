@@ -311,6 +311,19 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
         return fail(ProfileError::kLimitsOutsideHardware, a);
       }
     }
+    // The kernel applies the allocation in its own scalar type, and in Q7.24
+    // every constant (pinv(A) entries, gravity effort, 1/2b*) must stay below
+    // 128: triangle_alpha_rad = 1.52 passed the double tables above and the
+    // kernel refused it (ConfigError::kAllocation, found by fuzz_profile).
+    // Checked as the fixed-point kernel applies it, the stricter build.
+    {
+      kernel::ForceAllocationConfig alloc = c.allocation;
+      alloc.payload_kg = static_cast<double>(c.payload_mass_kg);
+      kernel::ForceAllocationState<numeric::Q7_24> state{};
+      const kernel::ForceAllocationError e = kernel::ApplyForceAllocationConfig<numeric::Q7_24>(alloc, &state);
+      if (e == kernel::ForceAllocationError::kScalarRange) return fail(ProfileError::kAllocationCondition);
+      if (e != kernel::ForceAllocationError::kOk) return fail(ProfileError::kAllocationRank);
+    }
     const kernel::ExcitationLimits& ex = c.excitation;
     if (!(ex.max_amplitude_A <= sv.peak_current_A) || !(ex.max_frequency_Hz < 0.5f * c.servo_rate_Hz)) {
       return fail(ProfileError::kLimitsOutsideHardware);

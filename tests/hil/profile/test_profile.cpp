@@ -165,3 +165,18 @@ TEST(Profiles, ANumberIsTheWholeValueAndTheCheckerAgreesWithTheKernel) {
   kernel::Controller<float> k;
   CHECK_TRUE(k.apply_config(kc) == kernel::ConfigError::kOk);
 }
+
+// Found by fuzz_profile: triangle_alpha_rad = 1.52 passed the checker's
+// double-precision allocation tables, and the kernel refused the allocation
+// (ConfigError::kAllocation: a constant beyond the fixed-point range).
+TEST(Profiles, TheCheckerAppliesTheAllocationAsTheKernelDoes) {
+  sp::StageProfile p = shipped("nk2020-triangle").profile;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kOk);
+  p.halbach.triangle_alpha_rad = 1.5235987755982988;
+  const sp::ProfileCheck c = sp::CheckStageProfile(p);
+  CHECK_TRUE(c.error != sp::ProfileError::kOk);
+  kernel::KernelConfig kc = kernel::default_kernel_config();
+  const kernel::KernelConfig before = kc;
+  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == c.error);
+  MEMCMP_EQUAL(&before, &kc, sizeof kc);
+}
