@@ -286,9 +286,10 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
   if (r.allocation_condition > 1e3) return fail(ProfileError::kAllocationCondition);
   // The kernel configuration this profile yields must pass the kernel's own
   // checks of what the profile sets: "runs" here means the kernel takes it.
-  // Found by fuzz_profile: a theta_y travel of +-200 rad, an x travel of
-  // +-0.2 m passed this check and the kernel refused the configuration
-  // (ConfigError::kReferenceLimits, kSupervisor). The supervisor and the
+  // Found by fuzz_profile: a theta_y travel of +-200 rad passed this check
+  // and the kernel refused the configuration (ConfigError::kReferenceLimits);
+  // an exploratory run also met kSupervisor refusals (e.g. an x travel of
+  // +-0.2 m, beyond the supervisor's +-0.1 m). The supervisor and the
   // sequencer are checked by their own validate(); the reference and
   // excitation rules are the kernel's apply_config rules.
   {
