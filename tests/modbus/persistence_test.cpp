@@ -166,6 +166,38 @@ TEST(Persistence, OutOfRangeStoredValueIsRefused) {
   CHECK(r.config == ConfigImage::defaults());
 }
 
+// Caught by fuzz_config_bank's "the next boot loads what was saved" check:
+// sequence numbers wrap (0xFFFFFFFF -> 0), and
+// load() compared them with '>': the record saved after the wrap lost to
+// the one before it, so a save that reported success was undone at the next
+// boot. Sequences compare in serial-number order now, and a save is always
+// one newer than the record that stays.
+TEST(Persistence, ASaveAfterTheSequenceWrapsIsTheOneLoaded) {
+  persistence::RamFlash flash(storage, kSector, 2);
+  {
+    persistence::ConfigStore store(flash, 0, 1);
+    store.load();
+    CHECK(store.save(variant(1000.0f)));  // bank A
+  }
+  wr32(storage + 12, 0xFFFFFFFFu);  // bank A's sequence at the end of its range
+  reseal(storage, modbus::kSchemaHash);
+  persistence::ConfigStore store(flash, 0, 1);
+  CHECK(store.load().status.flags & modbus::kLoadedBankA);
+  CHECK(store.save(variant(2000.0f)));  // bank B, sequence 0
+  persistence::ConfigStore next_boot(flash, 0, 1);
+  const auto r = next_boot.load();
+  DOUBLES_EQUAL(2000.0, r.config.get(RegId::gain_x_kp), 0.0);
+  CHECK(r.status.flags & modbus::kLoadedBankB);
+  LONGS_EQUAL(0, static_cast<long>(r.status.sequence));
+  // And the one after: bank A, sequence 1.
+  CHECK(next_boot.save(variant(3000.0f)));
+  persistence::ConfigStore third_boot(flash, 0, 1);
+  const auto r3 = third_boot.load();
+  DOUBLES_EQUAL(3000.0, r3.config.get(RegId::gain_x_kp), 0.0);
+  CHECK(r3.status.flags & modbus::kLoadedBankA);
+  LONGS_EQUAL(1, static_cast<long>(r3.status.sequence));
+}
+
 TEST(Persistence, PowerCutAtEveryStepLeavesAValidConfiguration) {
   const ConfigImage old_cfg = variant(1000.0f);
   const ConfigImage new_cfg = variant(2000.0f);

@@ -21,6 +21,15 @@ std::uint16_t get16(const std::uint8_t* p) { return static_cast<std::uint16_t>(p
 
 constexpr std::size_t kHeaderCrcBytes = 24;  // magic .. payload_crc
 
+// Record sequence numbers compare in serial-number arithmetic (RFC 1982):
+// a is newer than b when (a - b) mod 2^32 lies in 1 .. 2^31 - 1. Saves count
+// up by one and wrap 0xFFFFFFFF -> 0; with a plain '>' the record written
+// after the wrap lost to the one before it, so a save that reported success
+// was silently undone at the next boot (a flash image whose record carries
+// sequence 0xFFFFFFFF; fuzz_config_bank's save -> next boot check catches it,
+// regression input tests/fuzz/corpus/config_bank/regression_sequence_wrap).
+bool newer(std::uint32_t a, std::uint32_t b) { return static_cast<std::int32_t>(a - b) > 0; }
+
 }  // namespace
 
 std::uint32_t crc32(const std::uint8_t* data, std::size_t len, std::uint32_t crc) {
@@ -118,18 +127,16 @@ LoadResult ConfigStore::load() {
     status_.reason = static_cast<std::uint16_t>(Reason::kBankCorrupt);
   }
 
-  // Candidates, highest sequence first.
+  // Candidates, newest sequence first.
   int order[2] = {0, 1};
   if (bank_state_[1] == BankState::kValid &&
-      (bank_state_[0] != BankState::kValid || h[1].sequence > h[0].sequence)) {
+      (bank_state_[0] != BankState::kValid || newer(h[1].sequence, h[0].sequence))) {
     order[0] = 1;
     order[1] = 0;
   }
   LoadResult result{ConfigImage::defaults(), {}};
-  sequence_ = 0;
-  for (int b = 0; b < 2; ++b) {
-    if (bank_state_[b] == BankState::kValid && h[b].sequence > sequence_) sequence_ = h[b].sequence;
-  }
+  for (int b = 0; b < 2; ++b) bank_sequence_[b] = bank_state_[b] == BankState::kValid ? h[b].sequence : 0;
+  sequence_ = bank_sequence_[order[0]];
   active_bank_ = -1;
   for (int bank : order) {
     if (bank_state_[bank] != BankState::kValid) continue;
@@ -162,7 +169,12 @@ LoadResult ConfigStore::load() {
 bool ConfigStore::save(const ConfigImage& config) {
   const int target = active_bank_ == 0 ? 1 : 0;
   const std::size_t base = bank_offset(target);
-  const std::uint32_t sequence = sequence_ + 1;
+  // One newer than the record that stays (the other bank), so the next boot
+  // prefers the new record whatever sequence the old one carries; without a
+  // record there, one newer than the newest seen.
+  const int remaining = 1 - target;
+  const std::uint32_t sequence =
+      (bank_state_[remaining] == BankState::kValid ? bank_sequence_[remaining] : sequence_) + 1u;
   const auto fail = [this]() {
     status_.flags |= modbus::kSaveFailed;
     status_.reason = static_cast<std::uint16_t>(Reason::kFlashError);
@@ -214,6 +226,7 @@ bool ConfigStore::save(const ConfigImage& config) {
   Header h{};
   if (check_bank(target, h) != BankState::kValid || h.sequence != sequence) return fail();
   bank_state_[target] = BankState::kValid;
+  bank_sequence_[target] = sequence;
   active_bank_ = target;
   sequence_ = sequence;
   status_.flags = static_cast<std::uint16_t>(status_.flags & ~(modbus::kLoadedBankA | modbus::kLoadedBankB |

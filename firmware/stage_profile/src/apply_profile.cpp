@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <limits>
 
 #include "maglev/axis_loops/defaults.hpp"
 #include "maglev/axis_loops/loop_check.hpp"
@@ -183,6 +184,10 @@ LoopMargins AxisLoopMargins(const StageProfile& p, int a) {
   return kernel::Pid2DofLoopMargins(pid, plant, p.servo_rate_Hz, filters, kernel::kMaxBiquadStages);
 }
 
+namespace {
+kernel::KernelConfig config_of(const StageProfile& p);
+}  // namespace
+
 ProfileCheck CheckStageProfile(const StageProfile& p) {
   ProfileCheck r;
   auto fail = [&](ProfileError e, int axis = -1) {
@@ -285,6 +290,52 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
   rank_condition<kernel::kForcerForces>(t.a, use, &r.allocation_rank, &r.allocation_condition);
   if (r.allocation_rank < n_active) return fail(ProfileError::kAllocationRank);
   if (r.allocation_condition > 1e3) return fail(ProfileError::kAllocationCondition);
+  // The kernel configuration this profile yields must pass the kernel's own
+  // checks of what the profile sets: "runs" here means the kernel takes it.
+  // Found by fuzz_profile: a theta_y travel of +-200 rad passed this check
+  // and the kernel refused the configuration (ConfigError::kReferenceLimits);
+  // an exploratory run also met kSupervisor refusals (e.g. an x travel of
+  // +-0.2 m, beyond the supervisor's +-0.1 m). The supervisor and the
+  // sequencer are checked by their own validate(); the reference and
+  // excitation rules are the kernel's apply_config rules.
+  {
+    const kernel::KernelConfig c = config_of(p);
+    const kernel::SupervisorConfig& sv = c.supervisor;
+    if (kernel::validate(sv, c.servo_rate_Hz) != kernel::SupervisorConfigError::kOk ||
+        kernel::validate(c.sequencer, c.servo_rate_Hz) != kernel::SequencerConfigError::kOk ||
+        c.sequencer.nominal_height_m > sv.z_max_m) {
+      return fail(ProfileError::kLimitsOutsideHardware);
+    }
+    constexpr float kOpen = std::numeric_limits<float>::infinity();
+    const float window_min[kA] = {sv.x_min_m, sv.y_min_m, -sv.theta_z_limit_rad, sv.z_min_m, -sv.tilt_limit_rad,
+                                  -sv.tilt_limit_rad};
+    const float window_max[kA] = {sv.x_max_m, sv.y_max_m, sv.theta_z_limit_rad, sv.z_max_m, sv.tilt_limit_rad,
+                                  sv.tilt_limit_rad};
+    for (int a = 0; a < kA; ++a) {
+      const float lo = c.references.position_min[a];
+      const float hi = c.references.position_max[a];
+      if (!(lo < hi) || !(lo > -kOpen) || !(hi < kOpen) || lo < window_min[a] || hi > window_max[a]) {
+        return fail(ProfileError::kLimitsOutsideHardware, a);
+      }
+    }
+    // The kernel applies the allocation in its own scalar type, and in Q7.24
+    // every constant (pinv(A) entries, gravity effort, 1/2b*) must stay below
+    // 128: triangle_alpha_rad = 1.52 passed the double tables above and the
+    // kernel refused it (ConfigError::kAllocation, found by fuzz_profile).
+    // Checked as the fixed-point kernel applies it, the stricter build.
+    {
+      kernel::ForceAllocationConfig alloc = c.allocation;
+      alloc.payload_kg = static_cast<double>(c.payload_mass_kg);
+      kernel::ForceAllocationState<numeric::Q7_24> state{};
+      const kernel::ForceAllocationError e = kernel::ApplyForceAllocationConfig<numeric::Q7_24>(alloc, &state);
+      if (e == kernel::ForceAllocationError::kScalarRange) return fail(ProfileError::kAllocationCondition);
+      if (e != kernel::ForceAllocationError::kOk) return fail(ProfileError::kAllocationRank);
+    }
+    const kernel::ExcitationLimits& ex = c.excitation;
+    if (!(ex.max_amplitude_A <= sv.peak_current_A) || !(ex.max_frequency_Hz < 0.5f * c.servo_rate_Hz)) {
+      return fail(ProfileError::kLimitsOutsideHardware);
+    }
+  }
   // Every PID loop must cross over once with a positive phase margin.
   for (int a = 0; a < kA; ++a) {
     if (p.axis[a].controller.kind != ControllerKind::kPid2Dof) continue;
@@ -294,9 +345,10 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
   return r;
 }
 
-ProfileCheck MakeKernelConfig(const StageProfile& p, kernel::KernelConfig* out) {
-  const ProfileCheck check = CheckStageProfile(p);
-  if (check.error != ProfileError::kOk) return check;
+namespace {
+// The kernel configuration of a profile, unchecked (MakeKernelConfig's
+// mapping; CheckStageProfile validates what it yields).
+kernel::KernelConfig config_of(const StageProfile& p) {
   kernel::KernelConfig c = kernel::default_kernel_config();
   c.servo_rate_Hz = static_cast<float>(p.servo_rate_Hz);
   c.measurement.servo_rate_Hz = c.servo_rate_Hz;
@@ -375,7 +427,14 @@ ProfileCheck MakeKernelConfig(const StageProfile& p, kernel::KernelConfig* out) 
     }
   }
   c.measurement.pitch_m = p.halbach.pitch_m;
-  *out = c;
+  return c;
+}
+}  // namespace
+
+ProfileCheck MakeKernelConfig(const StageProfile& p, kernel::KernelConfig* out) {
+  const ProfileCheck check = CheckStageProfile(p);
+  if (check.error != ProfileError::kOk) return check;
+  *out = config_of(p);
   return check;
 }
 

@@ -40,7 +40,9 @@ bool number(const std::string& s, double* out) {
   if (s.empty()) return false;
   char* end = nullptr;
   const double v = std::strtod(s.c_str(), &end);
-  if (end == s.c_str() || *end != '\0' || !std::isfinite(v)) return false;
+  // The whole value must be the number: compared with the string's end, not
+  // with the first NUL, or "200<NUL>e-6" read as 200 (found by fuzz_profile).
+  if (end != s.c_str() + s.size() || !std::isfinite(v)) return false;
   *out = v;
   return true;
 }

@@ -11,10 +11,16 @@
 namespace maglev::scenario {
 namespace {
 
+// Every character tokens() splits on (std::isspace in the "C" locale): a
+// line that trims to something non-empty always has a first token. Trimming
+// fewer (it once left '\v' and '\f') let a line of only those reach
+// tok[0] on an empty token list.
+constexpr const char* kSpace = " \t\r\n\v\f";
+
 std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
+  const auto b = s.find_first_not_of(kSpace);
   if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t\r");
+  const auto e = s.find_last_not_of(kSpace);
   return s.substr(b, e - b + 1);
 }
 

@@ -18,7 +18,6 @@ bool set_nonblocking(int fd) {
   const int flags = ::fcntl(fd, F_GETFL, 0);
   return flags >= 0 && ::fcntl(fd, F_SETFL, flags | O_NONBLOCK) == 0;
 }
-constexpr std::size_t kMbap = 7;  // transaction(2) protocol(2) length(2) unit(1)
 }  // namespace
 
 TcpServer::TcpServer(maglev::modbus::RegisterServer& registers, const std::string& host, int port,
@@ -102,59 +101,47 @@ void TcpServer::accept_new(Clock::time_point now) {
   }
 }
 
-bool TcpServer::answer(Client& c, std::size_t frame_len) {
-  const std::uint8_t* q = c.buf;
-  const std::uint8_t unit = q[6];
-  if (unit != unit_id_ && unit != 0xFF && unit != 0) {
+bool TcpServer::answer(Client& c, std::size_t frame_bytes) {
+  std::uint8_t reply[kMaxAdu];
+  const MbapAnswer a = mbap_answer(registers_, unit_id_, c.stream.data(), frame_bytes, reply);
+  if (a.other_unit) {
     ++stats_.other_unit;
     return true;
   }
-  std::uint8_t reply[kMaxAdu];
-  // Modbus/TCP has no broadcast: unit 0 is answered like our own unit.
-  const std::size_t pdu = registers_.handle_pdu(q + kMbap, frame_len - kMbap, reply + kMbap, false);
-  if (pdu == 0) return true;
-  std::memcpy(reply, q, 4);  // transaction id, protocol id
-  const std::size_t len = pdu + 1;
-  reply[4] = static_cast<std::uint8_t>(len >> 8);
-  reply[5] = static_cast<std::uint8_t>(len & 0xFF);
-  reply[6] = unit;
-  const std::size_t total = kMbap + pdu;
+  if (a.reply_bytes == 0) return true;
   ++stats_.requests;
   // Non-blocking: a client that does not read its replies is dropped.
   ++syscalls_;
-  return ::send(c.fd, reply, total, MSG_NOSIGNAL | MSG_DONTWAIT) == static_cast<ssize_t>(total);
+  return ::send(c.fd, reply, a.reply_bytes, MSG_NOSIGNAL | MSG_DONTWAIT) == static_cast<ssize_t>(a.reply_bytes);
 }
 
 bool TcpServer::serve(Client& c, Clock::time_point now, int* answered) {
   // One bounded read: whatever fits in the frame buffer.
-  if (c.used < sizeof c.buf) {
-    const ssize_t r = ::recv(c.fd, c.buf + c.used, sizeof c.buf - c.used, MSG_DONTWAIT);
+  if (c.stream.free_bytes() > 0) {
+    const ssize_t r = ::recv(c.fd, c.stream.free_space(), c.stream.free_bytes(), MSG_DONTWAIT);
     ++syscalls_;
     if (r == 0) return false;  // closed by the client
     if (r < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) return false;
     if (r > 0) {
-      if (c.used == 0) c.frame_started = now;
-      c.used += static_cast<std::size_t>(r);
+      if (c.stream.used() == 0) c.frame_started = now;
+      c.stream.received(static_cast<std::size_t>(r));
       c.last_activity = now;
     }
   }
-  for (int n = 0; n < kMaxFramesPerClient && c.used >= kMbap; ++n) {
-    const std::uint16_t protocol = static_cast<std::uint16_t>((c.buf[2] << 8) | c.buf[3]);
-    const std::size_t len = static_cast<std::size_t>((c.buf[4] << 8) | c.buf[5]);  // unit + PDU
-    if (protocol != 0 || len < 2 || len > kMaxAdu - 6) {
+  for (int n = 0; n < kMaxFramesPerClient; ++n) {
+    const MbapHead head = c.stream.head();
+    if (head.verdict == MbapVerdict::kBroken) {
       ++stats_.bad_frames;
       return false;
     }
-    const std::size_t frame = 6 + len;
-    if (c.used < frame) break;  // wait for the rest (bounded by frame_timeout)
-    if (!answer(c, frame)) return false;
+    if (head.verdict == MbapVerdict::kNeedMore) break;  // bounded by frame_timeout
+    if (!answer(c, head.frame_bytes)) return false;
     ++*answered;
     ++c.answered;
-    std::memmove(c.buf, c.buf + frame, c.used - frame);
-    c.used -= frame;
+    c.stream.pop(head.frame_bytes);
     c.frame_started = now;
   }
-  if (c.used > 0 && now - c.frame_started > limits_.frame_timeout) {
+  if (c.stream.used() > 0 && now - c.frame_started > limits_.frame_timeout) {
     ++stats_.slow_closed;
     return false;
   }

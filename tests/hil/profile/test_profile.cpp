@@ -215,3 +215,57 @@ TEST(Profiles, TheBuiltInDatabaseLoadsEveryShippedProfile) {
   CHECK_TRUE(sp::LoadStageRecord(corrupt, &out) == sp::ProfileError::kChecksum);
   CHECK_EQUAL(0, out.name[0]);
 }
+
+// Found by fuzz_profile: "travel = -200e-6 200<NUL>...e-6" read as +-200
+// (the number ended at the NUL), and the checker passed a theta_y travel far
+// beyond the supervisor's tilt window, which the kernel then refused. The
+// whole value must be the number, and "runs" means the kernel takes it.
+TEST(Profiles, ANumberIsTheWholeValueAndTheCheckerAgreesWithTheKernel) {
+  std::string text = "[stage]\nname = nul\nservo_rate_Hz = 2500\n";
+  text += std::string("[body]\nmass_kg = 1") + '\0' + "e-3\n";
+  const auto bad = profile::parse_profile(text, "nul.profile");
+  bool reported = false;
+  for (const auto& e : bad.errors) reported = reported || e.find("nul.profile:5: mass_kg: not a number") == 0;
+  CHECK_TRUE(reported);
+
+  const auto base = shipped("nk2017-cross").profile;
+  kernel::KernelConfig kc = kernel::default_kernel_config();
+  const kernel::KernelConfig before = kc;
+  sp::StageProfile p = base;
+  p.axis[5].travel_min = -200.0;  // theta_y, rad: the supervisor allows 300 urad
+  p.axis[5].travel_max = 200.0;
+  sp::ProfileCheck c = sp::MakeKernelConfig(p, &kc);
+  CHECK_TRUE(c.error == sp::ProfileError::kLimitsOutsideHardware);
+  LONGS_EQUAL(5, c.axis);
+  MEMCMP_EQUAL(&before, &kc, sizeof kc);  // nothing made
+  p = base;
+  p.axis[0].travel_max = 0.2;  // x window would end at 0.201 m; the supervisor's is +-0.1 m
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kLimitsOutsideHardware);
+  p = base;
+  p.limits.peak_current_A = 0.3;  // below the kernel's 0.5 A excitation bound
+  p.limits.rms_current_A = 0.2;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kLimitsOutsideHardware);
+  // What passes, the kernel takes.
+  p = base;
+  p.axis[5].travel_min = -250e-6;
+  p.axis[5].travel_max = 250e-6;
+  c = sp::MakeKernelConfig(p, &kc);
+  CHECK_TRUE(c.error == sp::ProfileError::kOk);
+  kernel::Controller<float> k;
+  CHECK_TRUE(k.apply_config(kc) == kernel::ConfigError::kOk);
+}
+
+// Found by fuzz_profile: triangle_alpha_rad = 1.52 passed the checker's
+// double-precision allocation tables, and the kernel refused the allocation
+// (ConfigError::kAllocation: a constant beyond the fixed-point range).
+TEST(Profiles, TheCheckerAppliesTheAllocationAsTheKernelDoes) {
+  sp::StageProfile p = shipped("nk2020-triangle").profile;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kOk);
+  p.halbach.triangle_alpha_rad = 1.5235987755982988;
+  const sp::ProfileCheck c = sp::CheckStageProfile(p);
+  CHECK_TRUE(c.error != sp::ProfileError::kOk);
+  kernel::KernelConfig kc = kernel::default_kernel_config();
+  const kernel::KernelConfig before = kc;
+  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == c.error);
+  MEMCMP_EQUAL(&before, &kc, sizeof kc);
+}

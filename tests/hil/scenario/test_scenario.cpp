@@ -86,3 +86,16 @@ TEST(Scenario, MissingFileIsAnError) {
   CHECK_FALSE(r.ok());
   STRCMP_CONTAINS("cannot open", r.errors[0].message.c_str());
 }
+
+// Found by fuzz_scenario: a [timeline] or [metrics] line of only vertical
+// tab / form feed trimmed to non-empty but split into no token, and the
+// parser read the first token of an empty list (UBSan: vector index out of
+// range). Such a line is blank now, like one of spaces.
+TEST(Scenario, LinesOfOtherWhitespaceAreBlank) {
+  const auto r = parse_scenario("[scenario]\nname = ws\nduration_s = 1\n[timeline]\n\v\n0.5 levitate\f\n[metrics]\n\f \v\n",
+                                "mem");
+  CHECK_TRUE(r.ok());
+  LONGS_EQUAL(1, r.scenario->timeline.size());
+  STRCMP_EQUAL("levitate", r.scenario->timeline[0].verb.c_str());
+  LONGS_EQUAL(0, r.scenario->metrics.size());
+}

@@ -8,8 +8,9 @@
 //            raw value u32} (12 bytes), padded with 0xFF to whole words.
 // Save always writes the OTHER bank (erase, payload words, header last), so a
 // power cut at any step leaves the previous record intact and loadable.
-// Load picks the valid bank with the highest sequence; a damaged bank is
-// flagged (persist.flags) and the other bank, then defaults, are used.
+// Load picks the valid bank with the newest sequence (serial-number order:
+// 0 follows 0xFFFFFFFF); a damaged bank is flagged (persist.flags) and the
+// other bank, then defaults, are used.
 // A record of another schema is migrated by name (defaults for new entries)
 // or refused with a reason (persist.reason) when a stored entry changed type
 // or holds a value outside the current range.
@@ -90,7 +91,8 @@ class ConfigStore {
   std::size_t sector_[2];
   BankState bank_state_[2] = {BankState::kEmpty, BankState::kEmpty};
   int active_bank_ = -1;  // bank holding the record in use, -1: none
-  std::uint32_t sequence_ = 0;
+  std::uint32_t sequence_ = 0;                // newest valid record's sequence
+  std::uint32_t bank_sequence_[2] = {0, 0};  // each valid bank's sequence
   modbus::PersistStatus status_;
 };
 

@@ -169,15 +169,27 @@ constexpr int persisted_slot(RegId id) {
   return -1;
 }
 
-constexpr const RegisterDef& persisted_def(std::size_t slot) {
+namespace detail {
+// Table index of each persisted slot, computed once at compile time:
+// persisted_def() runs per slot inside every load, save and defaults(), and
+// a table scan per call made those quadratic.
+struct PersistedIndex {
+  std::uint16_t table_index[kPersistedCount];
+};
+constexpr PersistedIndex make_persisted_index() {
+  PersistedIndex x{};
   std::size_t s = 0;
   for (std::size_t i = 0; i < kRegisterCount; ++i) {
-    if (detail::kTable[i].persisted) {
-      if (s == slot) return detail::kTable[i];
-      ++s;
-    }
+    if (kTable[i].persisted) x.table_index[s++] = static_cast<std::uint16_t>(i);
   }
-  return detail::kTable[0];
+  return x;
+}
+inline constexpr PersistedIndex kPersistedIndex = make_persisted_index();
+}  // namespace detail
+
+// The def of a persisted slot (the table's first def for a slot out of range).
+constexpr const RegisterDef& persisted_def(std::size_t slot) {
+  return slot < kPersistedCount ? detail::kTable[detail::kPersistedIndex.table_index[slot]] : detail::kTable[0];
 }
 
 // FNV-1a, 32 bit: stable, constexpr, tiny.

@@ -6,7 +6,8 @@
 // never wait on a client (docs/RELIABILITY.md "Modbus TCP"):
 //   * every socket is non-blocking; poll() reads what has arrived into a
 //     per-client buffer and answers only COMPLETE frames (MBAP framing is
-//     ours: protocol id 0, length 2..254, the unit id, then the PDU);
+//     ours: protocol id 0, length 2..254, the unit id, then the PDU; the
+//     framing itself, without sockets, is mbap_framing.hpp);
 //   * a frame that breaks the MBAP rules closes that connection;
 //   * a partial frame older than frame_timeout (a client that sends a byte a
 //     second, or announces 100 bytes and sends 3) closes the connection;
@@ -31,6 +32,7 @@
 #include <vector>
 
 #include "maglev/modbus/register_server.hpp"
+#include "maglev/modbus_tcp/mbap_framing.hpp"
 
 namespace maglev::modbus_tcp {
 
@@ -59,7 +61,7 @@ class TcpServer {
  public:
   static constexpr int kMaxFramesPerClient = 4;
   static constexpr int kMaxAcceptsPerPoll = 4;
-  static constexpr std::size_t kMaxAdu = 260;  // MBAP 7 + PDU 253
+  static constexpr std::size_t kMaxAdu = kMaxAduBytes;  // MBAP 7 + PDU 253
 
   // Listens on host:port (port 0: an ephemeral port, see port()).
   TcpServer(maglev::modbus::RegisterServer& registers, const std::string& host, int port, std::uint8_t unit_id = 1,
@@ -84,8 +86,7 @@ class TcpServer {
   using Clock = std::chrono::steady_clock;
   struct Client {
     int fd = -1;
-    std::uint8_t buf[kMaxAdu] = {};
-    std::size_t used = 0;
+    MbapStream stream;  // received bytes, at most one maximal ADU
     Clock::time_point last_activity{};
     Clock::time_point frame_started{};  // first byte of the pending partial frame
     std::uint64_t answered = 0;         // requests answered on this connection
@@ -93,7 +94,7 @@ class TcpServer {
   void accept_new(Clock::time_point now);
   // false: close this client.
   bool serve(Client& c, Clock::time_point now, int* answered);
-  bool answer(Client& c, std::size_t frame_len);
+  bool answer(Client& c, std::size_t frame_bytes);
 
   maglev::modbus::RegisterServer& registers_;
   int listen_fd_ = -1;
