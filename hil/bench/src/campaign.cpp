@@ -302,8 +302,10 @@ class CampaignHooks final : public RunHooks {
   can::FaultAction on_frame(const can::CanFrame& frame, std::uint64_t) override {
     can::FaultAction a{};
     for (const FaultEvent& e : plan_.faults) {
-      if (!active(e)) continue;
-      const bool target = frame.id == can::message(kTargetFrames[e.target]).can_id;
+      if (!active(e) || std::string(category_of(e.kind)) != "can") continue;
+      // Only the CAN kinds carry a frame-kind index in `target`.
+      const bool target = e.target >= 0 && e.target < static_cast<int>(std::size(kTargetFrames)) &&
+                          frame.id == can::message(kTargetFrames[e.target]).can_id;
       switch (e.kind) {
         case CampaignFault::kCanBurstLoss:
           a.kind = can::FaultAction::kDrop;
@@ -671,6 +673,9 @@ int campaign_main(int argc, char** argv) {
       if (!value(0, 256, &v)) return 2;
       // 0: one worker per online CPU.
       o.jobs = v == 0 ? static_cast<int>(std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN))) : static_cast<int>(v);
+    } else if (a == "--start") {
+      if (!value(0, 999999, &v)) return 2;
+      o.start = static_cast<int>(v);
     } else if (a == "--only") {
       if (!value(0, 999999, &v)) return 2;
       o.only = static_cast<int>(v);
@@ -681,7 +686,8 @@ int campaign_main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "maglev-hil campaign: unknown option '%s'\n"
-                   "usage: maglev-hil campaign --runs N [--seed S] [--jobs J] [--out DIR] [--only I] [--verbose]\n",
+                   "usage: maglev-hil campaign --runs N [--start I] [--seed S] [--jobs J] [--out DIR] [--only I] "
+                   "[--verbose]\n",
                    a.c_str());
       return 2;
     }
@@ -690,7 +696,7 @@ int campaign_main(int argc, char** argv) {
   if (o.only >= 0) {
     indices.push_back(o.only);
   } else {
-    for (int i = 0; i < o.runs; ++i) indices.push_back(i);
+    for (int i = 0; i < o.runs; ++i) indices.push_back(o.start + i);
   }
   const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(indices.size())));
   std::printf("maglev-hil campaign: %zu runs, seed %llu, %d jobs, %.1f s each\n", indices.size(),

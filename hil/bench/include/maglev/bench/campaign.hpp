@@ -86,6 +86,7 @@ struct CampaignOptions {
   std::uint64_t seed = 1;
   int jobs = 1;
   int only = -1;        // >= 0: run this index alone
+  int start = 0;        // first run index (runs start .. start + runs - 1)
   std::string out_dir;  // campaign.json when set
   bool verbose = false;
 };
