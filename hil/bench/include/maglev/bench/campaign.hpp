@@ -1,7 +1,7 @@
 // maglev-hil campaign: randomized fault runs on the bench, judged from the
 // plant's own truth (docs/RELIABILITY.md "Fault campaign").
 //
-//   maglev-hil campaign --runs N [--seed S] [--jobs J] [--out DIR] [--only I]
+//   maglev-hil campaign --runs N [--start I] [--seed S] [--jobs J] [--out DIR] [--only I]
 //
 // Run i (seeded by S and i: reproducible alone with --only i) levitates the
 // default stage, makes a random mix of the suite's motions, and meets one or
