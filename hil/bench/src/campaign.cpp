@@ -302,7 +302,7 @@ class CampaignHooks final : public RunHooks {
   can::FaultAction on_frame(const can::CanFrame& frame, std::uint64_t) override {
     can::FaultAction a{};
     for (const FaultEvent& e : plan_.faults) {
-      if (!active(e) || std::string(category_of(e.kind)) != "can") continue;
+      if (!active(e) || std::strcmp(category_of(e.kind), "can") != 0) continue;
       // Only the CAN kinds carry a frame-kind index in `target`.
       const bool target = e.target >= 0 && e.target < static_cast<int>(std::size(kTargetFrames)) &&
                           frame.id == can::message(kTargetFrames[e.target]).can_id;
@@ -452,8 +452,8 @@ class CampaignHooks final : public RunHooks {
   bool active(const FaultEvent& e) const { return t_ >= e.t_s && t_ < e.t_s + e.duration_s; }
   bool forced_contact() const {
     for (const FaultEvent& e : plan_.faults) {
-      const std::string c = category_of(e.kind);
-      if ((c == "actuator" || c == "plant") && t_ >= e.t_s && t_ < e.t_s + e.duration_s + kForcedContactWindow_s) {
+      const char* c = category_of(e.kind);
+      if ((std::strcmp(c, "actuator") == 0 || std::strcmp(c, "plant") == 0) && t_ >= e.t_s && t_ < e.t_s + e.duration_s + kForcedContactWindow_s) {
         return true;
       }
     }

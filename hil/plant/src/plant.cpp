@@ -574,15 +574,7 @@ void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
     for (int f = 0; f < kTriangleForcers; ++f) {
       double c[2], h[2];
       TriangleForcer(f, c, h);
-      const Eigen::Vector3d rb(c[0], c[1], -com_arm_m_);
-      double rw[3];
-      Rotate(k.r, rb, rw);
-      const double hgt = k.p[2] + rw[2] - rb.z();
-      const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
-      const double fz = -k3 * (hgt - h0) - c3 * hdot;
-      acc->f[2] += fz;
-      acc->t[0] += rw[1] * fz;
-      acc->t[1] -= rw[0] * fz;
+      AddSpring(k, c[0], c[1], k3, c3, h0, acc);
     }
     return;
   }
@@ -591,16 +583,23 @@ void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
   const double h0 = config_.suspension.neutral_height_m;
   for (int f = 0; f < kForcers; ++f) {
     const Eigen::Vector2d fc = ForcerCentre(f, config_.body.lever_arm_m, config_.body.layout);
-    const Eigen::Vector3d rb(fc.x(), fc.y(), -com_arm_m_);
-    double rw[3];
-    Rotate(k.r, rb, rw);
-    const double h = k.p[2] + rw[2] - rb.z();
-    const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
-    const double fz = -k4 * (h - h0) - c4 * hdot;
-    acc->f[2] += fz;
-    acc->t[0] += rw[1] * fz;
-    acc->t[1] -= rw[0] * fz;
+    AddSpring(k, fc.x(), fc.y(), k4, c4, h0, acc);
   }
+}
+
+// One suspension spring-damper under the forcer at (x, y) of the platen frame
+// (at the coils' plane): its vertical force and the tilt torques it makes.
+void Plant::AddSpring(const Kinematics& k, double x, double y, double k_spring, double c_spring, double h0,
+                      Accum* acc) const {
+  const Eigen::Vector3d rb(x, y, -com_arm_m_);
+  double rw[3];
+  Rotate(k.r, rb, rw);
+  const double h = k.p[2] + rw[2] - rb.z();
+  const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
+  const double fz = -k_spring * (h - h0) - c_spring * hdot;
+  acc->f[2] += fz;
+  acc->t[0] += rw[1] * fz;
+  acc->t[1] -= rw[0] * fz;
 }
 
 void Plant::AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const {

@@ -20,6 +20,11 @@ struct Trip {
   float value = 0.0f;
 };
 
+// A run counter of consecutive ticks a condition held (saturating).
+std::uint16_t next_run(bool holds, std::uint16_t run) {
+  return holds ? static_cast<std::uint16_t>(run < 0xFFFF ? run + 1 : run) : 0;
+}
+
 void note(Trip& t, bool tripped, FaultCode code, std::uint8_t axis, float value) {
   // Branch-light: every check is computed; only the first tripping one is kept.
   if (tripped && t.code == FaultCode::kNone) {
@@ -111,7 +116,7 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   }
   have_previous_ = true;
   const bool stale = (flags & io::kStaleFrame) != 0;
-  stale_run_ = stale ? static_cast<std::uint16_t>(stale_run_ < 0xFFFF ? stale_run_ + 1 : stale_run_) : 0;
+  stale_run_ = next_run(stale, stale_run_);
   const bool stale_fault = stale_run_ > config_.max_consecutive_stale_frames;
   note(t, stale_fault, FaultCode::kStaleFrames, kNoAxis, static_cast<float>(stale_run_));
   const bool adc_fault = (flags & io::kAdcFault) != 0;
@@ -129,32 +134,27 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   }
 
   // --- timing ----------------------------------------------------------------
-  overrun_run_ = in.tick_overrun
-                     ? static_cast<std::uint16_t>(overrun_run_ < 0xFFFF ? overrun_run_ + 1 : overrun_run_)
-                     : 0;
+  overrun_run_ = next_run(in.tick_overrun, overrun_run_);
   note(t, overrun_run_ > config_.max_consecutive_overruns, FaultCode::kTickOverrun, kNoAxis,
        static_cast<float>(overrun_run_));
 
   // --- currents ----------------------------------------------------------------
-  saturated_run_ = in.current_limited
-                       ? static_cast<std::uint16_t>(saturated_run_ < 0xFFFF ? saturated_run_ + 1 : saturated_run_)
-                       : 0;
+  saturated_run_ = next_run(in.current_limited, saturated_run_);
   note(t, saturated_run_ >= config_.max_saturated_ticks, FaultCode::kCurrentSaturation, kNoAxis,
        static_cast<float>(saturated_run_));
   const float measured_limit = config_.peak_current_A + config_.measured_current_margin_A;
-  bool measured_over = false;
+  bool actuator_failed = false;
   for (int j = 0; j < io::kCoils; ++j) {
     const bool off = abs_f(in.coil_current_measured_A[j] - in.coil_current_cmd_A[j]) > config_.current_mismatch_A;
-    mismatch_run_[j] = off ? static_cast<std::uint16_t>(mismatch_run_[j] < 0xFFFF ? mismatch_run_[j] + 1 : mismatch_run_[j])
-                           : 0;
+    mismatch_run_[j] = next_run(off, mismatch_run_[j]);
     const bool broken = mismatch_run_[j] >= config_.current_mismatch_ticks;
-    measured_over = measured_over || broken;  // the actuator does not follow: it cannot land the stage
+    actuator_failed = actuator_failed || broken;  // the actuator does not follow: it cannot land the stage
     note(t, broken, FaultCode::kCurrentMismatch, static_cast<std::uint8_t>(j), in.coil_current_measured_A[j]);
   }
   for (int j = 0; j < io::kCoils; ++j) {
     const float m = in.coil_current_measured_A[j];
     const bool over = abs_f(m) > measured_limit;
-    measured_over = measured_over || over;
+    actuator_failed = actuator_failed || over;
     note(t, over, FaultCode::kPeakCurrentMeasured, static_cast<std::uint8_t>(j), m);
   }
   const float rms2_limit = config_.rms_current_A * config_.rms_current_A;
@@ -200,7 +200,7 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   if (status_.first_fault.code != FaultCode::kNone) {
     // Landing needs the in-plane loops (they stabilise the floating platen)
     // and an actuator that follows its commands.
-    const bool can_land = status_.in_plane_sensors_valid && !measured_over;
+    const bool can_land = status_.in_plane_sensors_valid && !actuator_failed;
     const FaultReaction wanted = can_land ? FaultReaction::kLand : FaultReaction::kCurrentsOff;
     if (static_cast<std::uint8_t>(wanted) > static_cast<std::uint8_t>(status_.reaction)) {
       status_.reaction = wanted;

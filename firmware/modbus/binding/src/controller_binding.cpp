@@ -12,6 +12,19 @@ namespace maglev::modbus {
 namespace {
 // A KernelConfig field as a register value: floats, and enums (the filter
 // type) through their underlying integer.
+// The kernel's verdict on a configuration as the register server's.
+Device::ApplyResult to_apply_result(kernel::ConfigError e) {
+  switch (e) {
+    case kernel::ConfigError::kOk:
+      return Device::ApplyResult::kApplied;
+    case kernel::ConfigError::kLockedWhileLevitated:
+    case kernel::ConfigError::kGainsLockedWhileLevitated:
+      return Device::ApplyResult::kBusy;
+    default:
+      return Device::ApplyResult::kRefused;
+  }
+}
+
 template <typename T>
 double load_field(const T& f) {
   if constexpr (std::is_enum_v<T>) {
@@ -208,15 +221,8 @@ Device::ApplyResult ControllerDevice<Scalar>::apply_config(ConfigImage& config, 
     kernel::KernelConfig cfg{};
     if (KernelConfigOfProfile(index, &cfg) != stage_profile::ProfileError::kOk) return ApplyResult::kRefused;
     cfg.live_tuning = live_tuning;
-    switch (controller_.apply_config(cfg)) {
-      case kernel::ConfigError::kOk:
-        break;
-      case kernel::ConfigError::kLockedWhileLevitated:
-      case kernel::ConfigError::kGainsLockedWhileLevitated:
-        return ApplyResult::kBusy;
-      default:
-        return ApplyResult::kRefused;
-    }
+    const ApplyResult r = to_apply_result(controller_.apply_config(cfg));
+    if (r != ApplyResult::kApplied) return r;
     active_profile_ = index;
     controller_.set_stage_profile_error(0);
     config = image_from_kernel(cfg);
@@ -226,15 +232,7 @@ Device::ApplyResult ControllerDevice<Scalar>::apply_config(ConfigImage& config, 
   kernel::KernelConfig cfg = controller_.config();
   image_to_kernel(config, cfg);
   cfg.live_tuning = live_tuning;
-  switch (controller_.apply_config(cfg)) {
-    case kernel::ConfigError::kOk:
-      return ApplyResult::kApplied;
-    case kernel::ConfigError::kLockedWhileLevitated:
-    case kernel::ConfigError::kGainsLockedWhileLevitated:
-      return ApplyResult::kBusy;
-    default:
-      return ApplyResult::kRefused;
-  }
+  return to_apply_result(controller_.apply_config(cfg));
 }
 
 template <typename Scalar>

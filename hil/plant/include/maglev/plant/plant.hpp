@@ -162,6 +162,8 @@ class Plant {
   // Forcer centre and unit thrust axis (platen frame) of the triangle's forcer f.
   void TriangleForcer(int f, double centre[2], double thrust[2]) const;
   void AddSuspension(const Kinematics& k, Accum* acc) const;
+  void AddSpring(const Kinematics& k, double x, double y, double k_spring, double c_spring, double h0,
+                 Accum* acc) const;
   void AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const;
   static Wrench ToWrench(const Kinematics& k, const Accum& acc);
   ContactResult ContactWrench(const BodyState& state) const;
