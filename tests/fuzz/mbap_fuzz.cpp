@@ -19,6 +19,7 @@
 #include <cstring>
 #include <vector>
 
+#include "maglev_test/fuzz_device.hpp"
 #include "maglev/modbus_tcp/mbap_framing.hpp"
 #include "maglev/modbus_tcp/tcp_server.hpp"
 
@@ -29,27 +30,7 @@ using namespace maglev::modbus_tcp;
 
 constexpr std::uint8_t kUnitId = 17;
 
-// The device behind the register map: accepts everything and cycles its
-// answers so the map's write paths are exercised (the map itself is the RTU
-// fuzzer's subject; here it only has to produce every kind of reply).
-class FuzzDevice final : public Device {
- public:
-  Activity activity() const override { return static_cast<Activity>(calls_ % 3); }
-  double read_status(RegId id) const override { return static_cast<double>(static_cast<int>(id)) * 1e-6; }
-  ApplyResult apply_config(ConfigImage& c, bool) override {
-    ++calls_;
-    return static_cast<ApplyResult>(c.raw[0] % 3);
-  }
-  std::uint16_t command(std::uint16_t code, std::uint16_t axis, float) override {
-    ++calls_;
-    return static_cast<std::uint16_t>(static_cast<unsigned>(code) + axis);
-  }
-  bool save_config(const ConfigImage&) override { return (++calls_ & 1u) != 0; }
-  PersistStatus persist_status() const override { return {}; }
-
- private:
-  unsigned calls_ = 0;
-};
+using maglev::test::FuzzDevice;  // tests/support/include/maglev_test/fuzz_device.hpp
 
 FuzzDevice g_device;
 RegisterServer g_registers(g_device, ConfigImage::defaults());

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "maglev_test/fuzz_device.hpp"
 #include "maglev/modbus/crc16.hpp"
 #include "maglev/modbus/rtu_server.hpp"
 #include "maglev/persistence/config_store.hpp"
@@ -17,26 +18,7 @@ namespace {
 
 using namespace maglev::modbus;
 
-// Device behind the map: accepts everything, cycles its activity so every
-// write condition is exercised.
-class FuzzDevice final : public Device {
- public:
-  Activity activity() const override { return static_cast<Activity>(calls_ % 3); }
-  double read_status(RegId id) const override { return static_cast<double>(static_cast<int>(id)) * 1e-6; }
-  ApplyResult apply_config(ConfigImage& c, bool) override {
-    ++calls_;
-    return static_cast<ApplyResult>(c.raw[0] % 3);
-  }
-  std::uint16_t command(std::uint16_t code, std::uint16_t axis, float) override {
-    ++calls_;
-    return static_cast<std::uint16_t>(static_cast<unsigned>(code) + axis);
-  }
-  bool save_config(const ConfigImage&) override { return (++calls_ & 1u) != 0; }
-  PersistStatus persist_status() const override { return {}; }
-
- private:
-  unsigned calls_ = 0;
-};
+using maglev::test::FuzzDevice;  // tests/support/include/maglev_test/fuzz_device.hpp
 
 FuzzDevice g_device;
 RegisterServer g_server(g_device, ConfigImage::defaults());
