@@ -380,9 +380,16 @@ class CampaignHooks final : public RunHooks {
   void after_tick(std::uint64_t, double t_s, const hil::Plant& plant, const kernel::ControllerStatus& status) override {
     const hil::PlantState& truth = plant.truth();
     for (double i : truth.coil_current_A) v_.max_current_A = std::max(v_.max_current_A, std::fabs(i));
-    // Touchdown: the first tick of contact after flight, at the speed it came down with.
+    // Touchdown: every tick of contact after flight, at the speed the platen
+    // comes DOWN with. `in_contact` means one corner touches: a tilted platen
+    // lands corner by corner, and the centre's descent while in contact is
+    // what the other corners come down with. An upward speed is no impact:
+    // counting |vz| judged a platen lifted off its pads by amplifiers coming
+    // back after a link outage (+0.224 mm/s) as a landing too fast (seed 1,
+    // run 2716, whose real touchdowns were 0.062 mm/s landing and 0.256 mm/s
+    // amplifiers off).
     if (truth.in_contact && was_flying_) {
-      const double speed = std::max(std::fabs(last_vz_), std::fabs(truth.velocity_m_per_s[2]));
+      const double speed = std::max(0.0, -std::min(last_vz_, truth.velocity_m_per_s[2]));
       if (speed > v_.touchdown_speed_m_per_s) {
         v_.touchdown_speed_m_per_s = speed;
         v_.touchdown_amplifiers_on = truth.amplifier_enable;
