@@ -22,6 +22,7 @@ const char* type_name(RegType t) {
     case RegType::kU16: return "u16";
     case RegType::kI32: return "i32";
     case RegType::kF32: return "f32";
+    case RegType::kBlock: return "block";
   }
   return "?";
 }
@@ -76,7 +77,7 @@ std::string table() {
   for (std::size_t i = 0; i < kRegisterCount; ++i) {
     const RegisterDef& d = kRegisters[i];
     std::string addr = std::to_string(d.address);
-    if (width(d.type) == 2) addr += "-" + std::to_string(d.address + 1);
+    if (width(d.type) > 1) addr += "-" + std::to_string(d.address + width(d.type) - 1);
     const bool ro = d.access == Access::kReadOnly;
     std::string def = ro ? "-" : num(d.default_value, d.type);
     o << "| " << addr << " | `" << d.name << "` | " << type_name(d.type) << " | " << cell(d.unit) << " | "

@@ -570,6 +570,20 @@ void Controller<Scalar>::excite(Tick& t) {
   }
   for (int a = 0; a < kAxisCount; ++a) t.excitation[a] = (ex.active && a == ex.axis) ? d_sum : Traits::zero();
   ex.tick += ex.active ? 1u : 0u;
+  // External injection (lab wave generator): same rule as kExcite (motion
+  // allowed), clamped here whatever the generator checked.
+  const Injection& in = injection_;
+  if (in.active && t.so->motion_allowed && in.axis < kAxisCount) {
+    t.injecting = true;
+    if (in.at_reference) {
+      const float lim = config_.references.max_step[in.axis];
+      t.reference_injection_m[in.axis] = in.value > lim ? lim : (in.value < -lim ? -lim : in.value);
+    } else {
+      const float lim = config_.excitation.max_amplitude_A;
+      const float d = in.value > lim ? lim : (in.value < -lim ? -lim : in.value);
+      t.excitation[in.axis] += Traits::from_float(d);
+    }
+  }
 }
 
 // 6. axis loops (all run; outputs selected by the closed mask).
@@ -585,7 +599,10 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
   for (int a = 0; a < kAxisCount; ++a) {
     AxisLoop<Scalar> l = loop(a);
     // Only the error (and this tick's explicit step) become Scalar: +-128 um.
-    const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_.pico[a] - measured_.pico[a]);
+    // The external reference injection enters the error in pico (m or rad
+    // x 1e12), before the Scalar conversion and its +-128 um saturation.
+    const std::int64_t inj_pm = t.injecting ? static_cast<std::int64_t>(static_cast<double>(t.reference_injection_m[a]) * 1e12) : 0;
+    const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_.pico[a] + inj_pm - measured_.pico[a]);
     const Scalar dr_um = numeric::pico_to_micro<Scalar>(t.step_pm[a]);
     const Scalar ff = a == axis_index(Axis::kZ) ? gravity_A + t.accel_ff[a] : t.accel_ff[a];
     const Scalar v_loop = l.update(e_um, dr_um, ff);
@@ -660,7 +677,9 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
     status_.applied_effort_A[a] = enable ? Traits::to_float(t.out.applied_effort_A[a]) : 0.0f;
     status_.excitation_A[a] = Traits::to_float(t.excitation[a]);
     status_.reference_acceleration[a] = profile_accel_[a];
+    status_.reference_injection[a] = t.reference_injection_m[a];
   }
+  status_.injection_active = t.injecting;
   status_.excitation_active = excitation_.active;
   status_.excitation_tick = excitation_.tick;
   status_.motion_active = motion_active();
@@ -668,7 +687,7 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
 
 template <typename Scalar>
 bool Controller<Scalar>::motion_active() const {
-  if (excitation_.active) return true;
+  if (excitation_.active || injection_.active) return true;
   for (int a = 0; a < kAxisCount; ++a) {
     if (profile_[a].kind != ProfileKind::kNone || pending_step_pm_[a] != 0) return true;
   }
