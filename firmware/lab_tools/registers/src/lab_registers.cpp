@@ -21,7 +21,7 @@ std::uint32_t raw_f32(float v) { return std::bit_cast<std::uint32_t>(v); }
 
 LabRegisters::LabRegisters(Recorder& recorder, WaveGenerator& wave, const kernel::KernelConfig& kernel_config,
                            const LabRegistersHooks& hooks)
-    : recorder_(recorder), wave_(wave), kernel_config_(kernel_config), hooks_(hooks), rec_(recorder.config()) {
+    : recorder_(recorder), wave_(wave), kernel_config_(kernel_config), hooks_(hooks) {
   // The wave.* registers start at their register-map defaults.
   wave_cfg_.axis = static_cast<std::uint16_t>(modbus::def(RegId::wave_axis).default_value);
   wave_cfg_.point = static_cast<InjectionPoint>(modbus::def(RegId::wave_point).default_value);
@@ -34,6 +34,7 @@ LabRegisters::LabRegisters(Recorder& recorder, WaveGenerator& wave, const kernel
 }
 
 std::uint32_t LabRegisters::read(RegId id) const {
+  const RecorderConfig& rec_ = recorder_.config();  // the rec.* registers are the recorder's configuration
   switch (id) {
     case RegId::rec_state: return static_cast<std::uint32_t>(recorder_.state());
     case RegId::rec_channel_count: return rec_.channel_count;
@@ -56,7 +57,7 @@ std::uint32_t LabRegisters::read(RegId id) const {
     case RegId::rec_captured: return recorder_.captured();
     case RegId::rec_trigger_index: return recorder_.trigger_index();
     case RegId::rec_sample_rate:
-      return raw_f32(kernel_config_.servo_rate_Hz / static_cast<float>(recorder_.config().decimation == 0 ? 1u : recorder_.config().decimation));
+      return raw_f32(kernel_config_.servo_rate_Hz / static_cast<float>(rec_.decimation == 0 ? 1u : rec_.decimation));
     case RegId::rec_capture_id: return recorder_.capture_id();
     case RegId::rec_error: return rec_error_;
     case RegId::rec_read_offset: return read_offset_;
@@ -89,7 +90,7 @@ ExceptionCode LabRegisters::read_block(RegId id, std::uint16_t first, std::uint1
 }
 
 ExceptionCode LabRegisters::write(const modbus::PendingWrite* writes, std::size_t n, bool commit) {
-  RecorderConfig rc = rec_;
+  RecorderConfig rc = recorder_.config();
   WaveConfig wc = wave_cfg_;
   std::uint32_t offset = read_offset_;
   bool rec_config = false, wave_config = false;
@@ -177,7 +178,6 @@ ExceptionCode LabRegisters::write(const modbus::PendingWrite* writes, std::size_
       rec_error_ = static_cast<std::uint16_t>(e);
       return ExceptionCode::kServerDeviceBusy;  // the recorder changed state since the check
     }
-    rec_ = rc;
     rec_error_ = 0;
   }
   if (rec_control != 0) {

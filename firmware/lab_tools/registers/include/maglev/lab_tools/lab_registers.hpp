@@ -58,7 +58,6 @@ class LabRegisters final : public modbus::LabTools {
   WaveGenerator& wave_;
   const kernel::KernelConfig& kernel_config_;
   LabRegistersHooks hooks_;
-  RecorderConfig rec_{};   // what the rec.* registers hold
   WaveConfig wave_cfg_{};  // what the wave.* registers hold
   std::uint32_t read_offset_ = 0;
   std::uint16_t rec_error_ = 0;
