@@ -50,11 +50,12 @@ namespace maglev::stagectl {
 const char* const kLabHelp = R"(lab tools (docs/LAB-TOOLS.md):
   record --out DIR [--channels SIG,SIG,...] [--duration S | --length N] [--decimation N]
          [--trigger immediate|command|fault|level:SIGNAL:LEVEL[:rising|falling|either]]
-         [--pretrigger S] [--timeout S] [--resume] [--max-blocks N] [--signals]
+         [--pretrigger S] [--timeout S] [--download] [--resume] [--max-blocks N] [--signals]
                            arm the on-board recorder, wait for the trigger, download (progress
                            on stderr), write DIR/record.csv (t_s + one column per channel) and
-                           DIR/record.png. --resume: continue an interrupted download of the
-                           same capture (no new recording). --signals: list the signal names.
+                           DIR/record.png. --download: only download the finished capture (e.g.
+                           the fault watch's after a fault); --resume: continue an interrupted
+                           download of the same capture. --signals: list the signal names.
                            --max-blocks N: stop after N download blocks (an interrupted link)
   frf AXIS --out DIR [--amplitude A] [--f-min HZ] [--f-max HZ] [--tones N] [--periods N]
          [--settle S]      open/closed-loop response of the running loop (Ready): multisine at
@@ -346,7 +347,7 @@ int record(Lab& lab, const std::vector<std::string>& args) {
   std::vector<std::uint16_t> channels;
   double duration_s = -1, pretrigger_s = 0, timeout_s = 60;
   long length = -1, decimation = 1, max_blocks = -1;
-  bool resume = false;
+  bool resume = false, download_only = false;
   std::string trigger = "immediate";
   for (std::size_t i = 1; i < args.size(); ++i) {
     const std::string& a = args[i];
@@ -369,6 +370,7 @@ int record(Lab& lab, const std::vector<std::string>& args) {
     else if (a == "--timeout") timeout_s = number(a, next());
     else if (a == "--max-blocks") max_blocks = std::lround(number(a, next()));
     else if (a == "--resume") resume = true;
+    else if (a == "--download") download_only = true;
     else if (a == "--signals") {
       char buf[40];
       for (std::uint16_t id = 1; id < lab::kSignalIdEnd; ++id) {
@@ -378,7 +380,7 @@ int record(Lab& lab, const std::vector<std::string>& args) {
     } else fail(kUsage, "record: unknown option '" + a + "'");
   }
   make_dir(dir);
-  if (!resume) {
+  if (!resume && !download_only) {
     if (channels.empty()) {
       for (const char* s : {"x.pose", "x.reference", "x.error", "x.effort", "z.pose", "z.effort", "state", "fault"}) {
         channels.push_back(lab::find_signal(s));

@@ -11,6 +11,7 @@ using modbus::RegId;
 constexpr std::uint16_t channel_of(RegId id) {
   return static_cast<std::uint16_t>(static_cast<std::uint16_t>(id) - static_cast<std::uint16_t>(RegId::rec_channel_0));
 }
+constexpr bool is_channel(RegId id) { return id >= RegId::rec_channel_0 && id <= RegId::rec_channel_7; }
 static_assert(static_cast<int>(RegId::rec_channel_7) - static_cast<int>(RegId::rec_channel_0) == kMaxChannels - 1,
               "rec.channel.N registers: one per recorder channel, in order");
 
@@ -35,17 +36,10 @@ LabRegisters::LabRegisters(Recorder& recorder, WaveGenerator& wave, const kernel
 
 std::uint32_t LabRegisters::read(RegId id) const {
   const RecorderConfig& rec_ = recorder_.config();  // the rec.* registers are the recorder's configuration
+  if (is_channel(id)) return rec_.channel[channel_of(id)];
   switch (id) {
     case RegId::rec_state: return static_cast<std::uint32_t>(recorder_.state());
     case RegId::rec_channel_count: return rec_.channel_count;
-    case RegId::rec_channel_0:
-    case RegId::rec_channel_1:
-    case RegId::rec_channel_2:
-    case RegId::rec_channel_3:
-    case RegId::rec_channel_4:
-    case RegId::rec_channel_5:
-    case RegId::rec_channel_6:
-    case RegId::rec_channel_7: return rec_.channel[channel_of(id)];
     case RegId::rec_decimation: return rec_.decimation;
     case RegId::rec_length: return rec_.length;
     case RegId::rec_pretrigger: return rec_.pretrigger;
@@ -101,16 +95,13 @@ ExceptionCode LabRegisters::write(const modbus::PendingWrite* writes, std::size_
     const std::uint32_t raw = writes[i].raw;
     const auto u16 = static_cast<std::uint16_t>(raw);
     bool rec_field = true, wave_field = false;
+    if (is_channel(d.id)) {
+      rc.channel[channel_of(d.id)] = u16;
+      rec_config = true;
+      continue;
+    }
     switch (d.id) {
       case RegId::rec_channel_count: rc.channel_count = u16; break;
-      case RegId::rec_channel_0:
-      case RegId::rec_channel_1:
-      case RegId::rec_channel_2:
-      case RegId::rec_channel_3:
-      case RegId::rec_channel_4:
-      case RegId::rec_channel_5:
-      case RegId::rec_channel_6:
-      case RegId::rec_channel_7: rc.channel[channel_of(d.id)] = u16; break;
       case RegId::rec_decimation: rc.decimation = u16; break;
       case RegId::rec_length: rc.length = raw; break;
       case RegId::rec_pretrigger: rc.pretrigger = raw; break;
