@@ -475,8 +475,12 @@ int main(int argc, char** argv) {
   }
   if (cmd == "dump") {
     need(0);
+    // A controller without the lab tools answers 02 for rec.* / wave.*: left out.
+    std::uint16_t probe = 0;
+    const bool lab = modbus_read_registers(c.context(), def(RegId::rec_state).address, 1, &probe) == 1;
     for (std::size_t i = 0; i < kRegisterCount; ++i) {
       if (kRegisters[i].type == RegType::kBlock) continue;  // a download window (stagectl record), not a value
+      if (kRegisters[i].kind == Kind::kLab && !lab) continue;
       std::cout << line_of(kRegisters[i], c.read(kRegisters[i])) << "\n";
     }
     return kOk;
