@@ -9,7 +9,7 @@
 #      gives the complete capture;
 #   4. bad input: unknown signal (exit 3), 9 channels (exit 3), wave amplitude
 #      above wave.limit and a sweep past Nyquist refused with 03 (exit 4),
-#      nothing started (wave.state 0);
+#      nothing started (wave.state 0); a 2 um reference sine: recorded, x follows;
 #   5. stagectl frf x: frf.csv columns, coherence, and crossover within 1 Hz,
 #      phase margin within 2 deg of the bench's figures from step 1.
 # usage: record_frf_bench.sh STAGECTL MAGLEV_HIL WORKDIR
@@ -91,6 +91,34 @@ expect 0 "wave.f_end 1300 Hz" set wave.f_end 1300
 expect 4 "sweep past Nyquist refused (03)" set wave.control 1
 [ "$(val wave.state)" = 0 ] && [ "$(val wave.error)" = 6 ] && pass "nothing started (wave.error 6 Nyquist)" || fail "wave.state $(val wave.state) error $(val wave.error)"
 expect 0 "wave.f_end back to 400 Hz" set wave.f_end 400
+
+# 4b. A reference injection: 2 um 20 Hz sine on x's reference for 1.5 s,
+# recorded: the injected reference and x following it.
+expect 0 "wave: x reference sine 2 um 20 Hz 1.5 s" set wave.point 1
+expect 0 "wave.shape sine" set wave.shape 0
+expect 0 "wave.amplitude 2 um" set wave.amplitude 2e-6
+expect 0 "wave.f_start 20 Hz" set wave.f_start 20
+expect 0 "wave.duration 1.5 s" set wave.duration 1.5
+expect 0 "wave start" set wave.control 1
+expect 0 "record the reference injection" record --out "$WORK/refinj" --duration 0.5 --channels x.ref_injection,x.pose,x.reference
+$PY - "$WORK/refinj/record.csv" <<'PYEOF' && pass "reference injection: 2 um peak at 20 Hz, x follows it" || fail "reference injection content"
+import csv, sys, math
+rows = list(csv.reader(open(sys.argv[1])))
+col = {h: [float(r[i]) for r in rows[1:]] for i, h in enumerate(rows[0])}
+inj, x = col["x.ref_injection"], col["x.pose"]
+assert abs(max(inj) - 2e-6) < 0.05e-6 and abs(min(inj) + 2e-6) < 0.05e-6, (max(inj), min(inj))
+assert len(set(col["x.reference"])) == 1, "the stored reference moved"
+n = len(x); mx = sum(x) / n
+# x's 20 Hz component (the loop tracks the injected reference; |T(20 Hz)| ~ 1.2)
+c = sum((x[i] - mx) * math.cos(2 * math.pi * 20 * i / 2500) for i in range(n)) * 2 / n
+s_ = sum((x[i] - mx) * math.sin(2 * math.pi * 20 * i / 2500) for i in range(n)) * 2 / n
+a = math.hypot(c, s_)
+print(f"x 20 Hz amplitude {a * 1e6:.3f} um for a 2 um reference sine")
+assert 1.0e-6 < a < 4e-6, a
+PYEOF
+sleep 1.2
+[ "$(val wave.state)" = 2 ] && pass "generator finished after its duration (wave.state 2)" || fail "wave.state $(val wave.state), expected 2"
+expect 0 "wave.point back to effort" set wave.point 0
 
 # 5. frf x against the bench's own figures.
 expect 0 "frf x" frf x --out "$WORK/frf"

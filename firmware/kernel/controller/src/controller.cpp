@@ -577,7 +577,8 @@ void Controller<Scalar>::excite(Tick& t) {
     t.injecting = true;
     if (in.at_reference) {
       const float lim = config_.references.max_step[in.axis];
-      t.reference_injection_m[in.axis] = in.value > lim ? lim : (in.value < -lim ? -lim : in.value);
+      t.reference_injection = in.value > lim ? lim : (in.value < -lim ? -lim : in.value);
+      t.reference_injection_pm = static_cast<std::int64_t>(static_cast<double>(t.reference_injection) * 1e12);
     } else {
       const float lim = config_.excitation.max_amplitude_A;
       const float d = in.value > lim ? lim : (in.value < -lim ? -lim : in.value);
@@ -596,13 +597,15 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
   // so it scales the full lift effort precomputed at apply time
   // (GravityFeedForward_A would clamp the ramp to [0, 1]).
   const Scalar gravity_A = ff_fraction * ap.allocation.gravity_effort_A;
+  // The external reference injection enters the loop's error in pico (before
+  // the Scalar conversion and its +-128 um saturation): added to the stored
+  // reference for the loops only, taken off again below (exact integers).
+  const int inj_axis = injection_.axis;
+  if (t.reference_injection_pm != 0) reference_.pico[inj_axis] += t.reference_injection_pm;
   for (int a = 0; a < kAxisCount; ++a) {
     AxisLoop<Scalar> l = loop(a);
     // Only the error (and this tick's explicit step) become Scalar: +-128 um.
-    // The external reference injection enters the error in pico (m or rad
-    // x 1e12), before the Scalar conversion and its +-128 um saturation.
-    const std::int64_t inj_pm = t.injecting ? static_cast<std::int64_t>(static_cast<double>(t.reference_injection_m[a]) * 1e12) : 0;
-    const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_.pico[a] + inj_pm - measured_.pico[a]);
+    const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_.pico[a] - measured_.pico[a]);
     const Scalar dr_um = numeric::pico_to_micro<Scalar>(t.step_pm[a]);
     const Scalar ff = a == axis_index(Axis::kZ) ? gravity_A + t.accel_ff[a] : t.accel_ff[a];
     const Scalar v_loop = l.update(e_um, dr_um, ff);
@@ -616,6 +619,7 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
     t.effort[a] = closed ? t.loop_out[a] + t.excitation[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
     if (!closed) l.reset(e_um);
   }
+  if (t.reference_injection_pm != 0) reference_.pico[inj_axis] -= t.reference_injection_pm;
 }
 
 // 7. force allocation with the whole-vector current limit, then 8. the
@@ -677,9 +681,11 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
     status_.applied_effort_A[a] = enable ? Traits::to_float(t.out.applied_effort_A[a]) : 0.0f;
     status_.excitation_A[a] = Traits::to_float(t.excitation[a]);
     status_.reference_acceleration[a] = profile_accel_[a];
-    status_.reference_injection[a] = t.reference_injection_m[a];
   }
   status_.injection_active = t.injecting;
+  status_.injection_at_reference = injection_.at_reference;
+  status_.injection_axis = injection_.axis;
+  status_.reference_injection = t.reference_injection;
   status_.excitation_active = excitation_.active;
   status_.excitation_tick = excitation_.tick;
   status_.motion_active = motion_active();

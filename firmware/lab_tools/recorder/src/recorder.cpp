@@ -44,7 +44,8 @@ float signal_value(SignalRef s, const kernel::ControllerStatus& st, const io::Se
     case SignalGroup::kEffort: return st.total_effort_A[i];
     case SignalGroup::kLoopEffort: return st.loop_effort_A[i];
     case SignalGroup::kExcitation: return st.excitation_A[i];
-    case SignalGroup::kRefInjection: return st.reference_injection[i];
+    case SignalGroup::kRefInjection:
+      return st.injection_active && st.injection_axis == i ? st.reference_injection : 0.0f;
     case SignalGroup::kCoilCurrentCmd: return st.coil_current_A[i];
     case SignalGroup::kCoilCurrent: return static_cast<float>(sample.coil_current_adc[i]) * kMonitorA_per_code;
     case SignalGroup::kState: return static_cast<float>(static_cast<int>(st.state));

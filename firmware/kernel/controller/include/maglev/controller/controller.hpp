@@ -212,8 +212,11 @@ struct ControllerStatus {
   // Modbus map's "not moving" write rule and status.moving read it.
   bool motion_active = false;
   // --- lab tools: the external injection applied this tick (0 when none) ---
-  float reference_injection[kAxisCount] = {};  // m or rad, added to the loop's reference
+  // (one axis at a time: the values below are for injection_axis)
   bool injection_active = false;
+  bool injection_at_reference = false;
+  std::uint8_t injection_axis = 0;
+  float reference_injection = 0.0f;  // m or rad, added to that axis loop's reference
 };
 
 template <typename Scalar>
@@ -281,7 +284,10 @@ class Controller {
     Scalar accel_ff[kAxisCount] = {};
     std::int64_t step_pm[kAxisCount] = {};
     Scalar excitation[kAxisCount] = {};
-    float reference_injection_m[kAxisCount] = {};  // m or rad (external injection at the reference)
+    // External injection at the reference: added to reference_ around the
+    // axis loops (no per-axis cost), in pm / prad.
+    std::int64_t reference_injection_pm = 0;
+    float reference_injection = 0.0f;  // the same, m or rad (status)
     bool injecting = false;
     Scalar effort[kAxisCount] = {};
     Scalar loop_out[kAxisCount] = {};
