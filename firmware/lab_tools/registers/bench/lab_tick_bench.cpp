@@ -15,6 +15,7 @@
 
 #include "maglev/lab_tools/recorder.hpp"
 #include "maglev/lab_tools/wave_generator.hpp"
+#include "lab_tick_setup.hpp"
 
 namespace {
 
@@ -56,31 +57,9 @@ int main(int argc, char** argv) {
   io::SensorSample s{};
   lab::Recorder idle(g_pool, lab::kBoardPoolWords);
   static lab::Recorder rec(g_pool, lab::kBoardPoolWords);
-  lab::RecorderConfig c{};
-  c.channel_count = 8;
-  const char* names[8] = {"x.pose", "x.reference", "x.error", "x.effort", "coil1.current", "coil1.current_cmd", "state", "fault"};
-  for (int i = 0; i < 8; ++i) c.channel[i] = lab::find_signal(names[i]);
-  c.length = 16384;
-  c.pretrigger = 1000;
-  c.mode = lab::TriggerMode::kLevel;
-  c.trigger_signal = lab::find_signal("z.pose");
-  c.level = 1.0f;  // never reached
-  if (rec.configure(c) != lab::RecorderError::kOk || rec.arm() != lab::RecorderError::kOk) return 1;
-  const kernel::KernelConfig k = kernel::default_kernel_config();
   static lab::WaveGenerator multi(g_table, lab::kWaveTableLen), sine(g_table, lab::kWaveTableLen),
       sweep(g_table, lab::kWaveTableLen);
-  lab::WaveConfig w{};
-  w.shape = lab::WaveShape::kMultisine;
-  w.amplitude = 0.1f;
-  w.f_start_Hz = 5.0f;
-  w.f_end_Hz = 400.0f;
-  w.tones = 28;
-  if (multi.start(w, k) != lab::WaveError::kOk) return 1;
-  w.shape = lab::WaveShape::kSine;
-  if (sine.start(w, k) != lab::WaveError::kOk) return 1;
-  w.shape = lab::WaveShape::kSweep;
-  w.duration_s = 600.0f;
-  if (sweep.start(w, k) != lab::WaveError::kOk) return 1;
+  if (!lab::setup_lab_tick_scenario(rec, multi, sine, sweep)) return 1;
   double sum = 0;
   for (long n = 0; n < ticks; ++n) {
     st.pose.pico[0] = n * 1000;

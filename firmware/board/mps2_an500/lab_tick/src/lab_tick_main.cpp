@@ -14,6 +14,7 @@
 #include "maglev/board/mps2_an500/semihosting.hpp"
 #include "maglev/lab_tools/recorder.hpp"
 #include "maglev/lab_tools/wave_generator.hpp"
+#include "lab_tick_setup.hpp"
 
 namespace {
 
@@ -46,6 +47,15 @@ struct Stats {
   }
 };
 
+// SysTick counts around one call.
+template <typename F>
+void measure(Stats& s, F f) {
+  const std::uint32_t t0 = systick_now();
+  f();
+  const std::uint32_t t1 = systick_now();
+  s.add(systick_elapsed(t0, t1));
+}
+
 void print(const char* label, const Stats& s, const Calibration& cal) {
   hw::semihost_write("lab_tick_instructions ");
   hw::semihost_write(label);
@@ -65,29 +75,7 @@ void print(const char* label, const Stats& s, const Calibration& cal) {
 int main() {
   const bool have_line = hw::semihost_command_line(g_command_line, sizeof(g_command_line));
   const bool icount = have_line && std::strstr(g_command_line, "--icount") != nullptr;
-  lab::RecorderConfig c{};
-  c.channel_count = 8;
-  const char* names[8] = {"x.pose", "x.reference", "x.error", "x.effort", "coil1.current", "coil1.current_cmd", "state", "fault"};
-  for (int i = 0; i < 8; ++i) c.channel[i] = lab::find_signal(names[i]);
-  c.length = 16384;
-  c.pretrigger = 1000;
-  c.mode = lab::TriggerMode::kLevel;
-  c.trigger_signal = lab::find_signal("z.pose");
-  c.level = 1.0f;  // never reached: the armed steady state
-  if (g_rec.configure(c) != lab::RecorderError::kOk || g_rec.arm() != lab::RecorderError::kOk) return 1;
-  const kernel::KernelConfig k = kernel::default_kernel_config();
-  lab::WaveConfig w{};
-  w.shape = lab::WaveShape::kMultisine;
-  w.amplitude = 0.1f;
-  w.f_start_Hz = 5.0f;
-  w.f_end_Hz = 400.0f;
-  w.tones = 28;
-  if (g_multi.start(w, k) != lab::WaveError::kOk) return 1;
-  w.shape = lab::WaveShape::kSine;
-  if (g_sine.start(w, k) != lab::WaveError::kOk) return 1;
-  w.shape = lab::WaveShape::kSweep;
-  w.duration_s = 600.0f;
-  if (g_sweep.start(w, k) != lab::WaveError::kOk) return 1;
+  if (!lab::setup_lab_tick_scenario(g_rec, g_multi, g_sine, g_sweep)) return 1;
 
   systick_start();
   Calibration cal;
@@ -100,26 +88,11 @@ int main() {
     g_status.pose.pico[0] = static_cast<std::int64_t>(n) * 1000;
     g_status.coil_current_A[0] = static_cast<float>(n & 7u);
     g_sample.coil_current_adc[0] = static_cast<std::int16_t>(n & 1023u);
-    std::uint32_t t0 = systick_now();
-    g_idle.sample(g_status, g_sample);
-    std::uint32_t t1 = systick_now();
-    idle.add(systick_elapsed(t0, t1));
-    t0 = systick_now();
-    g_rec.sample(g_status, g_sample);
-    t1 = systick_now();
-    rec.add(systick_elapsed(t0, t1));
-    t0 = systick_now();
-    g_sink = g_multi.step(true).value;
-    t1 = systick_now();
-    multi.add(systick_elapsed(t0, t1));
-    t0 = systick_now();
-    g_sink = g_sine.step(true).value;
-    t1 = systick_now();
-    sine.add(systick_elapsed(t0, t1));
-    t0 = systick_now();
-    g_sink = g_sweep.step(true).value;
-    t1 = systick_now();
-    sweep.add(systick_elapsed(t0, t1));
+    measure(idle, [] { g_idle.sample(g_status, g_sample); });
+    measure(rec, [] { g_rec.sample(g_status, g_sample); });
+    measure(multi, [] { g_sink = g_multi.step(true).value; });
+    measure(sine, [] { g_sink = g_sine.step(true).value; });
+    measure(sweep, [] { g_sink = g_sweep.step(true).value; });
   }
   if (!icount) {
     hw::semihost_write("lab_tick_instructions: not measured (run QEMU with -icount shift=6 and pass --icount)\n");
