@@ -62,6 +62,7 @@ void usage() {
       "  maglev-hil suite --out DIR [run options but --can-log]\n"
       "  maglev-hil check NAME|FILE...\n"
       "  maglev-hil profiles                  the stage profiles; run/suite take --profile NAME|FILE\n"
+      "  maglev-hil error-terms               the as-built error terms (markdown, docs/PLANT.md)\n"
       "  maglev-hil check-profile NAME|FILE   allocation, passive axes, loops, current headroom\n"
       "  maglev-hil campaign --runs N [--seed S] [--jobs J] [--out DIR] [--only I]   randomized faults, judged\n"
       "  maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S]\n"
@@ -337,6 +338,17 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (a.cmd == "profiles") return maglev::bench::list_profiles_main();
+  if (a.cmd == "error-terms") {
+    // The as-built error terms as a markdown table (docs/PLANT.md is made
+    // from this output: kErrorTerms is the one source).
+    static const char* kDraw[] = {"uniform +-M", "normal, sigma M", "+-[lo M, M]", "[lo M, M]"};
+    std::printf("| [plant] key | draw | M (as-built default) | lo | refused above | source |\n|---|---|---|---|---|---|\n");
+    for (const auto& t : maglev::hil::kErrorTerms) {
+      std::printf("| `%s` | %s | %g | %s | %g | %s |\n", t.key, kDraw[static_cast<int>(t.draw)], t.magnitude,
+                  t.lo_fraction > 0 ? std::to_string(t.lo_fraction).substr(0, 5).c_str() : "-", t.max, t.source);
+    }
+    return 0;
+  }
   if (a.cmd == "check-profile") {
     if (a.positional.size() != 1) {
       std::fprintf(stderr, "maglev-hil check-profile: needs one profile NAME|FILE\n");
