@@ -113,25 +113,18 @@ Args parse_args(int argc, char** argv) {
       }
     } else if (s == "--profile") {
       if (value(&v)) a.run.profile = v;
-    } else if (s == "--seed") {
+    } else if (s == "--seed" || s == "--error-seed") {
       if (value(&v)) {
         char* end = nullptr;
         const unsigned long long n = std::strtoull(v.c_str(), &end, 10);
-        if (end == v.c_str() || *end != '\0') a.error = "--seed: not an integer: '" + v + "'";
-        a.run.seed = n;
+        if (end == v.c_str() || *end != '\0') a.error = s + ": not an integer: '" + v + "'";
+        (s == "--seed" ? a.run.seed : a.run.error_seed) = n;
       }
     } else if (s == "--plant") {
       if (value(&v)) {
         maglev::hil::PlantModel m{};
         if (!maglev::hil::parse_plant_model(v, &m)) a.error = "--plant: expected default, ideal, nominal or as-built, got '" + v + "'";
         a.run.plant = m;
-      }
-    } else if (s == "--error-seed") {
-      if (value(&v)) {
-        char* end = nullptr;
-        const unsigned long long n = std::strtoull(v.c_str(), &end, 10);
-        if (end == v.c_str() || *end != '\0') a.error = "--error-seed: not an integer: '" + v + "'";
-        a.run.error_seed = n;
       }
     } else if (s == "--seeds") {
       if (value(&v)) {
