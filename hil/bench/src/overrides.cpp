@@ -198,6 +198,14 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       o->drawn_errors = hil::DrawAsBuilt(o->error_set, &o->plant);
     }
   }
+  // The supervisor's frozen-sample check (FaultCode::kFrozenSample) rests on
+  // live sensors never repeating every bit of a sample. A plant whose sensors
+  // read without noise (model = ideal, sensor_noise = off) breaks that
+  // assumption, not the stage: once the loops settle its samples repeat, and
+  // the check would land it. On such a plant the check is off, and
+  // metrics.json says so (frozen_sample_check = 0).
+  if (!o->plant.sensor_noise_enabled) o->controller.supervisor.max_identical_samples = 0;
+
   // [controller] preset first, so that AXIS.FIELD keys refine it.
   if (const auto it = sc.controller.find("preset"); it != sc.controller.end()) {
     if (it->second == "paper") {

@@ -42,6 +42,8 @@ RunResult new_result(const scenario::Scenario& sc, const Overrides& ov) {
     R.metrics["plant_displacement_noise_m"] = ov.plant.displacement.noise_m;
   }
   for (const auto& [name, value] : ov.drawn_errors) R.metrics["plant_error_" + name] = value;
+  // Off only on a plant whose sensors read without noise (overrides.cpp).
+  if (ov.controller.supervisor.max_identical_samples == 0) R.metrics["frozen_sample_check"] = 0.0;
   return R;
 }
 
