@@ -25,15 +25,22 @@ STATUS_NAMES = ("status.state", "status.fault", "status.moving", "status.x", "st
                 "status.theta_x", "status.theta_y", "status.theta_z", "status.scale_k")
 
 
+# Every address the map serves: a read may span a gap between wanted
+# registers only when each address in between is mapped (else exception 02).
+_MAPPED = frozenset(a for r in REGISTERS.values() for a in range(r.address, r.address + r.width))
+
+
 def _blocks(regs: Sequence[Register]) -> List[List[Register]]:
-    """Split address-sorted, de-duplicated registers into contiguous runs of at most
-    125 words (a gap would read an unmapped address: exception 02)."""
+    """Group registers into runs that one 0x03 request can read: at most 125 words,
+    no unmapped address inside (the words between wanted registers are read and
+    dropped)."""
     runs: List[List[Register]] = []
     for r in sorted(set(regs), key=lambda r: r.address):
         if runs:
             last = runs[-1][-1]
+            gap = range(last.address + last.width, r.address)
             span = r.address + r.width - runs[-1][0].address
-            if r.address == last.address + last.width and span <= _MAX_READ_WORDS:
+            if span <= _MAX_READ_WORDS and all(a in _MAPPED for a in gap):
                 runs[-1].append(r)
                 continue
         runs.append([r])
