@@ -53,6 +53,7 @@ connection:
   --engineer            write the engineer key first (needed for engineer registers)
   --wait SECONDS        after home/levitate/land/move: wait until the stage gets there,
                         printing its progress (state changes, distance to go) on stderr
+                        (config import/export print theirs too)
   --json                get, dump, status, registers, watch: JSON on stdout (watch: one
                         object per line), for scripts
   --count N             watch: N refreshes, then exit (default: until interrupted)
@@ -476,7 +477,14 @@ int config_import(Client& c, const std::string& path) {
     for (const auto& e : errors) std::cerr << e << "\n";
     die(kFile, std::to_string(errors.size()) + " error(s) in " + path + "; nothing written");
   }
-  for (const Entry& e : entries) c.write(*e.d, e.v, e.text);
+  Progress progress("config import");
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    c.write(*entries[i].d, entries[i].v, entries[i].text);
+    // A line per 25% (RTU: ~10 ms per entry, a full image takes seconds).
+    if ((i + 1) * 4 / entries.size() != i * 4 / entries.size()) {
+      progress.update(std::to_string(i + 1) + "/" + std::to_string(entries.size()) + " written");
+    }
+  }
   std::cout << "imported " << entries.size() << " entries from " << path << "\n";
   return kOk;
 }
@@ -501,33 +509,6 @@ std::string json_str(const std::string& text) {
 // JSON has no NaN/inf: null.
 std::string json_num(double v) { return std::isfinite(v) ? fmt(v) : "null"; }
 
-const char* access_text(Access a) {
-  switch (a) {
-    case Access::kReadOnly: return "read-only";
-    case Access::kOperator: return "operator";
-    case Access::kEngineer: return "engineer";
-  }
-  return "?";
-}
-const char* when_text(WriteWhen w) {
-  switch (w) {
-    case WriteWhen::kNever: return "never";
-    case WriteWhen::kAlways: return "always";
-    case WriteWhen::kNotMoving: return "not-moving";
-    case WriteWhen::kIdle: return "idle";
-    case WriteWhen::kGains: return "gains";
-  }
-  return "?";
-}
-const char* type_text(RegType t) {
-  switch (t) {
-    case RegType::kU16: return "u16";
-    case RegType::kI32: return "i32";
-    case RegType::kF32: return "f32";
-  }
-  return "?";
-}
-
 int json_get(Client& c, const RegisterDef& d) {
   std::cout << "{\"name\": " << json_str(d.name) << ", \"value\": " << json_num(c.read(d)) << ", \"unit\": "
             << json_str(d.unit) << "}\n";
@@ -549,10 +530,10 @@ int json_registers() {
   for (std::size_t i = 0; i < kRegisterCount; ++i) {
     const RegisterDef& d = kRegisters[i];
     std::cout << (i == 0 ? "\n  " : ",\n  ") << "{\"name\": " << json_str(d.name) << ", \"address\": " << d.address
-              << ", \"type\": " << json_str(type_text(d.type)) << ", \"unit\": " << json_str(d.unit)
+              << ", \"type\": " << json_str(type_name(d.type)) << ", \"unit\": " << json_str(d.unit)
               << ", \"min\": " << json_num(d.min) << ", \"max\": " << json_num(d.max)
-              << ", \"default\": " << json_num(d.default_value) << ", \"access\": " << json_str(access_text(d.access))
-              << ", \"writable_when\": " << json_str(when_text(d.when))
+              << ", \"default\": " << json_num(d.default_value) << ", \"access\": " << json_str(access_name(d.access))
+              << ", \"writable_when\": " << json_str(when_name(d.when))
               << ", \"persisted\": " << (d.persisted ? "true" : "false")
               << ", \"description\": " << json_str(d.description) << "}";
   }
@@ -748,7 +729,13 @@ int main(int argc, char** argv) {
       if (!out) die(kFile, "cannot write " + o.args[2]);
       out << "# maglev stage configuration (stagectl config export); schema hash 0x" << std::hex << kSchemaHash
           << std::dec << "\n";
-      for (std::size_t s = 0; s < kPersistedCount; ++s) out << line_of(persisted_def(s), c.read(persisted_def(s))) << "\n";
+      Progress progress("config export");
+      for (std::size_t s = 0; s < kPersistedCount; ++s) {
+        out << line_of(persisted_def(s), c.read(persisted_def(s))) << "\n";
+        if ((s + 1) * 4 / kPersistedCount != s * 4 / kPersistedCount) {
+          progress.update(std::to_string(s + 1) + "/" + std::to_string(kPersistedCount) + " read");
+        }
+      }
       if (!out) die(kFile, "cannot write " + o.args[2]);
       std::cout << "exported " << kPersistedCount << " entries to " << o.args[2] << "\n";
       return kOk;

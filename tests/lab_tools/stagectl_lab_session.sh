@@ -66,5 +66,13 @@ S --wait 20 land 2>"$WORK/land.err"; rc=$?
 [ "$rc" = 0 ] && grep -q "land: .* Landing" "$WORK/land.err" && grep -q "land: .* Idle (done)" "$WORK/land.err" && pass "land --wait progress" ||
   fail "land --wait (exit $rc): $(cat "$WORK/land.err")"
 
+# config export/import: progress on stderr (a line per quarter), the result on stdout.
+S config export "$WORK/cfg.txt" >"$WORK/export.out" 2>"$WORK/export.err"; rc=$?
+[ "$rc" = 0 ] && [ "$(grep -c "config export: " "$WORK/export.err")" = 4 ] && grep -Eq "config export: .* ([0-9]+)/\1 read$" "$WORK/export.err" &&
+  grep -q "^exported" "$WORK/export.out" && pass "config export progress" || fail "config export (exit $rc): $(cat "$WORK/export.err")"
+S --engineer config import "$WORK/cfg.txt" >"$WORK/import.out" 2>"$WORK/import.err"; rc=$?
+[ "$rc" = 0 ] && grep -Eq "config import: .* ([0-9]+)/\1 written$" "$WORK/import.err" && grep -q "^imported" "$WORK/import.out" &&
+  pass "config import progress" || fail "config import (exit $rc): $(cat "$WORK/import.err")"
+
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -149,7 +149,10 @@ class Test2Levitated(unittest.TestCase):
         self.assertAlmostEqual(after.mean() - before.mean(), delta, delta=0.5e-6)
 
     def test_e_frf_low_frequency_is_unity(self):
-        r = self.stage.frf("x", [3.0], amplitude=2e-6, cycles=3, settle_cycles=1, rate_Hz=300)
+        seen = []
+        r = self.stage.frf("x", [3.0], amplitude=2e-6, cycles=3, settle_cycles=1, rate_Hz=300,
+                           progress=lambda i, n, f: seen.append((i, n, f)))
+        self.assertEqual(seen, [(0, 1, 3.0)])
         self.assertEqual(r.f_Hz.tolist(), [3.0])
         self.assertAlmostEqual(abs(r.h[0]), 1.0, delta=0.15)
         self.assertLess(abs(r.phase_deg[0]), 30.0)

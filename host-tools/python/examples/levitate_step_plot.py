@@ -62,7 +62,8 @@ fig.savefig(out_png, dpi=100)
 print("plot:", out_png)
 
 # %% A closed-loop FRF, reference -> x, host-driven stepped sine (2 um).
-frf = stage.frf("x", [2.0, 5.0, 10.0, 20.0], amplitude=2e-6, cycles=4, settle_cycles=1, rate_Hz=400)
+frf = stage.frf("x", [2.0, 5.0, 10.0, 20.0], amplitude=2e-6, cycles=4, settle_cycles=1, rate_Hz=400,
+                progress=lambda i, n, f: print(f"  sweep {i + 1}/{n}: {f:g} Hz"))
 for f, mag, ph, coh in zip(frf.f_Hz, frf.magnitude_dB, frf.phase_deg, frf.coherence):
     print(f"  {f:5.1f} Hz  {mag:+6.2f} dB  {ph:+7.1f} deg  (fit explains {coh * 100:.1f} %)")
 

@@ -229,6 +229,7 @@ class Stage:
         return time.monotonic() - t0
 
     def home(self, wait: bool = True, timeout_s: float = 30.0, progress=None) -> None:
+        """Hall homing (landed); with ``wait``, until it is back in Idle."""
         self.command("home")
         if wait:
             time.sleep(0.05)  # Idle -> Homing happens on the next servo ticks
@@ -330,18 +331,23 @@ class Stage:
         return self.poll(names, duration_s, rate_Hz, at=[(pre_s, step)])
 
     def frf(self, axis, frequencies_Hz: Sequence[float], amplitude: float, cycles: int = 6,
-            settle_cycles: int = 2, rate_Hz: float = 400.0) -> FrfResult:
+            settle_cycles: int = 2, rate_Hz: float = 400.0,
+            progress: Optional[Callable[[int, int, float], None]] = None) -> FrfResult:
         """HOST-DRIVEN stepped-sine FRF of the closed loop, reference -> measured position,
         on ``axis``: for each frequency the host writes reference steps so that the
         reference follows amplitude*sin(2 pi f t) as a staircase updated at the poll rate,
         reads the pose between updates, and fits sines to both (after ``settle_cycles``).
         The reference staircase is assigned to the middle of each hold interval (its
         zero-order hold), so the phase is right to about the link's jitter: keep
-        f well below rate_Hz / 10. The reference returns to its start between frequencies."""
+        f well below rate_Hz / 10. The reference returns to its start between frequencies.
+        ``progress(index, count, f_Hz)`` is called before each frequency of the sweep."""
         ax = _axis_index(axis)
         pose_name = POSE_REGISTERS[AXES[ax]]
         result_f, result_h, result_c = [], [], []
-        for f in frequencies_Hz:
+        frequencies_Hz = list(frequencies_Hz)
+        for index, f in enumerate(frequencies_Hz):
+            if progress is not None:
+                progress(index, len(frequencies_Hz), f)
             total_s = (settle_cycles + cycles) / f
             applied = 0.0
             t_cmd: List[float] = []

@@ -47,42 +47,6 @@ std::string py_str(const char* text) {
   return out + "\"";
 }
 
-const char* type_name(RegType t) {
-  switch (t) {
-    case RegType::kU16: return "u16";
-    case RegType::kI32: return "i32";
-    case RegType::kF32: return "f32";
-  }
-  return "?";
-}
-const char* access_name(Access a) {
-  switch (a) {
-    case Access::kReadOnly: return "read-only";
-    case Access::kOperator: return "operator";
-    case Access::kEngineer: return "engineer";
-  }
-  return "?";
-}
-const char* when_name(WriteWhen w) {
-  switch (w) {
-    case WriteWhen::kNever: return "never";
-    case WriteWhen::kAlways: return "always";
-    case WriteWhen::kNotMoving: return "not-moving";
-    case WriteWhen::kIdle: return "idle";
-    case WriteWhen::kGains: return "gains";
-  }
-  return "?";
-}
-const char* kind_name(Kind k) {
-  switch (k) {
-    case Kind::kIdent: return "ident";
-    case Kind::kStatus: return "status";
-    case Kind::kConfig: return "config";
-    case Kind::kControl: return "control";
-    case Kind::kStage: return "stage";
-  }
-  return "?";
-}
 const char* quantity_name(maglev::can::ArgQuantity q) {
   using Q = maglev::can::ArgQuantity;
   switch (q) {
