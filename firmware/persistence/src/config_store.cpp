@@ -91,25 +91,46 @@ Reason ConfigStore::decode_bank(int bank, const Header& h, ConfigImage& out, boo
   if (h.format_version != kFormatVersion) return Reason::kUnknownFormat;
   migrated = h.schema_hash != modbus::kSchemaHash || h.entry_count != modbus::kPersistedCount;
   out = ConfigImage::defaults();
+  // Stored entries are matched to the schema's by name hash in one pass over
+  // the flash (each entry read once), then decoded in schema order. Looking
+  // every register up by scanning the stored entries read the flash
+  // kPersistedCount x entry_count times: ~40 000 reads per load with the
+  // filter registers, 2.8 ms per fuzzer execution. 1.2 KiB of stack, at boot.
+  std::uint32_t name_hash[modbus::kPersistedCount];
+  std::int16_t entry_of[modbus::kPersistedCount];
+  for (std::size_t s = 0; s < modbus::kPersistedCount; ++s) {
+    name_hash[s] = modbus::fnv1a(modbus::persisted_def(s).name);
+    entry_of[s] = -1;
+  }
+  std::uint8_t entry[kEntryBytes];
+  for (std::size_t e = 0; e < h.entry_count; ++e) {
+    if (flash_.read(bank_offset(bank) + kFlashWordBytes + e * kEntryBytes, entry, kEntryBytes) != FlashError::kOk) {
+      return Reason::kFlashError;
+    }
+    const std::uint32_t hash = get32(entry);
+    for (std::size_t s = 0; s < modbus::kPersistedCount; ++s) {
+      if (name_hash[s] == hash) {
+        if (entry_of[s] < 0) entry_of[s] = static_cast<std::int16_t>(e);  // the first stored entry wins
+        break;
+      }
+    }
+  }
   std::size_t matched = 0;
   for (std::size_t s = 0; s < modbus::kPersistedCount; ++s) {
     const RegisterDef& d = modbus::persisted_def(s);
-    const std::uint32_t name_hash = modbus::fnv1a(d.name);
-    bool found = false;
-    for (std::size_t e = 0; e < h.entry_count && !found; ++e) {
-      std::uint8_t entry[kEntryBytes];
-      if (flash_.read(bank_offset(bank) + kFlashWordBytes + e * kEntryBytes, entry, kEntryBytes) != FlashError::kOk) {
-        return Reason::kFlashError;
-      }
-      if (get32(entry) != name_hash) continue;
-      found = true;
-      if (entry[4] != static_cast<std::uint8_t>(d.type)) return Reason::kTypeChanged;
-      const std::uint32_t raw = get32(entry + 8);
-      if (!modbus::value_in_range(d, modbus::decode(d.type, raw))) return Reason::kValueOutOfRange;
-      out.raw[s] = raw;
-      ++matched;
+    if (entry_of[s] < 0) {
+      migrated = true;  // new entry: its default stays
+      continue;
     }
-    if (!found) migrated = true;  // new entry: its default stays
+    const auto e = static_cast<std::size_t>(entry_of[s]);
+    if (flash_.read(bank_offset(bank) + kFlashWordBytes + e * kEntryBytes, entry, kEntryBytes) != FlashError::kOk) {
+      return Reason::kFlashError;
+    }
+    if (entry[4] != static_cast<std::uint8_t>(d.type)) return Reason::kTypeChanged;
+    const std::uint32_t raw = get32(entry + 8);
+    if (!modbus::value_in_range(d, modbus::decode(d.type, raw))) return Reason::kValueOutOfRange;
+    out.raw[s] = raw;
+    ++matched;
   }
   if (matched != h.entry_count) migrated = true;  // stored entries we no longer have
   return Reason::kNone;

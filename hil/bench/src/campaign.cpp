@@ -184,6 +184,15 @@ CampaignPlan MakePlan(std::uint64_t seed, int index) {
       case CampaignFault::kCommandOutOfRange:
         e.target = pick(4);
         break;
+      case CampaignFault::kConfigWrite:
+        // 0: gains while levitated, live tuning off (must be refused);
+        // 1: live tuning on, gains x0.7-1.4 (applied if the loop check passes);
+        // 2: live tuning on, gains x20 (the loop check must refuse them);
+        // 3: a supervisor limit while levitated (must be refused).
+        // target = variant * 10 + axis; magnitude = the gain factor.
+        e.target = pick(4) * 10 + pick(kernel::kAxisCount);
+        e.magnitude = e.target / 10 == 1 ? uni(0.7, 1.4) : e.target / 10 == 2 ? 20.0 : 1.5;
+        break;
       case CampaignFault::kCount:
         break;
     }
@@ -215,6 +224,7 @@ struct RunVerdict {
   double max_controlled_touchdown_m_per_s = 0.0;  // contacts judged as controlled landings
   bool landed_at_end = false;
   std::uint64_t missed_actuator_frames = 0;
+  std::string config_write;  // the kernel's answer to a host configuration write
 };
 
 class CampaignHooks final : public RunHooks {
@@ -229,6 +239,65 @@ class CampaignHooks final : public RunHooks {
   }
 
   void attach(can::VirtualBus& bus) override { babbler_ = bus.open_endpoint(64); }
+
+  // --- a host configuration write mid-motion -----------------------------------
+  bool config_write_due(std::uint64_t, double t_s) override {
+    // The plan's faults are in time order: the next write not yet made.
+    std::size_t k = 0;
+    for (const FaultEvent& e : plan_.faults) {
+      if (e.kind != CampaignFault::kConfigWrite) continue;
+      if (k++ < config_writes_done_) continue;
+      if (t_s < e.t_s) return false;
+      config_event_ = &e;
+      ++config_writes_done_;
+      return true;
+    }
+    return false;
+  }
+
+  void make_config_write(kernel::KernelConfig* c) override {
+    const FaultEvent& e = *config_event_;
+    const int axis = e.target % 10;
+    const auto factor = static_cast<float>(e.magnitude);
+    before_ = *c;
+    kernel::Pid2DofConfig& pid = c->axis[axis].pid;
+    switch (e.target / 10) {
+      case 0:
+        pid.kp *= factor;
+        break;
+      case 1:
+      case 2:
+        c->live_tuning = true;
+        pid.kp *= factor;
+        pid.kd *= factor;
+        break;
+      default:
+        c->supervisor.z_max_m *= 0.5f;
+        break;
+    }
+    written_ = *c;
+    config_axis_ = axis;
+  }
+
+  void config_result(kernel::ConfigError r, const kernel::KernelConfig& in_force) override {
+    v_.config_write += (v_.config_write.empty() ? "" : ",") + std::string(hil::to_string(r));
+    const kernel::Pid2DofConfig& now = in_force.axis[config_axis_].pid;
+    const kernel::KernelConfig& expect = r == kernel::ConfigError::kOk ? written_ : before_;
+    const kernel::Pid2DofConfig& want = expect.axis[config_axis_].pid;
+    // A refused write changes nothing; an accepted one is what was written.
+    if (now.kp != want.kp || now.kd != want.kd || in_force.live_tuning != expect.live_tuning ||
+        in_force.supervisor.z_max_m != expect.supervisor.z_max_m) {
+      unsafe(std::string("configuration write ") + v_.config_write + " left a different configuration in force");
+    }
+    // Gains without live tuning, and a supervisor limit, are locked while
+    // the stage is off its rest. Gains x20 with live tuning are judged by
+    // what they do to the plant (the loop check should refuse them).
+    const FaultEvent& e = *config_event_;
+    const bool off_rest = last_state_ != kernel::SequencerState::kIdle && last_state_ != kernel::SequencerState::kFault;
+    if (off_rest && (e.target / 10 == 0 || e.target / 10 == 3) && r == kernel::ConfigError::kOk) {
+      unsafe("a configuration write that must be refused while levitated was applied");
+    }
+  }
 
   void before_tick(std::uint64_t n, double t_s, hil::Plant& plant) override {
     n_ = n;
@@ -379,10 +448,18 @@ class CampaignHooks final : public RunHooks {
 
   void after_tick(std::uint64_t, double t_s, const hil::Plant& plant, const kernel::ControllerStatus& status) override {
     const hil::PlantState& truth = plant.truth();
+    last_state_ = status.state;
     for (double i : truth.coil_current_A) v_.max_current_A = std::max(v_.max_current_A, std::fabs(i));
-    // Touchdown: the first tick of contact after flight, at the speed it came down with.
+    // Touchdown: every tick of contact after flight, at the speed the platen
+    // comes DOWN with. `in_contact` means one corner touches: a tilted platen
+    // lands corner by corner, and the centre's descent while in contact is
+    // what the other corners come down with. An upward speed is no impact:
+    // counting |vz| judged a platen lifted off its pads by amplifiers coming
+    // back after a link outage (+0.224 mm/s) as a landing too fast (seed 1,
+    // run 2716, whose real touchdowns were 0.062 mm/s landing and 0.256 mm/s
+    // amplifiers off).
     if (truth.in_contact && was_flying_) {
-      const double speed = std::max(std::fabs(last_vz_), std::fabs(truth.velocity_m_per_s[2]));
+      const double speed = std::max(0.0, -std::min(last_vz_, truth.velocity_m_per_s[2]));
       if (speed > v_.touchdown_speed_m_per_s) {
         v_.touchdown_speed_m_per_s = speed;
         v_.touchdown_amplifiers_on = truth.amplifier_enable;
@@ -482,6 +559,12 @@ class CampaignHooks final : public RunHooks {
   std::mt19937_64 rng_;
   double rated_A_;
   double landing_speed_;
+  const FaultEvent* config_event_ = nullptr;
+  std::size_t config_writes_done_ = 0;
+  kernel::KernelConfig before_{};
+  kernel::KernelConfig written_{};
+  int config_axis_ = 0;
+  kernel::SequencerState last_state_ = kernel::SequencerState::kIdle;
   double codes_per_A_ = 0.0;
   double first_fault_s_ = 0.0;
   std::uint64_t n_ = 0;
@@ -597,7 +680,8 @@ std::string to_json(const RunVerdict& v, const CampaignPlan& p, std::uint64_t se
     << ", \"touchdown_amplifiers_on\": " << (v.touchdown_amplifiers_on ? "true" : "false")
     << ", \"max_controlled_touchdown_m_per_s\": " << v.max_controlled_touchdown_m_per_s
     << ", \"landed_at_end\": " << (v.landed_at_end ? "true" : "false")
-    << ", \"missed_actuator_frames\": " << v.missed_actuator_frames << ", \"invalid\": \"" << json_escape(v.invalid)
+    << ", \"missed_actuator_frames\": " << v.missed_actuator_frames << ", \"config_write\": \"" << v.config_write
+    << "\", \"invalid\": \"" << json_escape(v.invalid)
     << "\", \"unsafe\": [";
   for (std::size_t i = 0; i < v.unsafe.size(); ++i) o << (i ? ", " : "") << "\"" << json_escape(v.unsafe[i]) << "\"";
   o << "]}";

@@ -156,6 +156,13 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     for (int j = 0; j < 8; ++j) current_before_A[j] = plant.amplifiers().current_A(j);
     const std::uint8_t counter = endpoint.send_tick(n, t, s);
 
+    if (hooks != nullptr && hooks->config_write_due(n, t)) {
+      kernel::KernelConfig next = node.config();
+      hooks->make_config_write(&next);
+      const kernel::ConfigError result = node.apply_config(next);
+      hooks->config_result(result, node.config());
+    }
+
     // --- controller node: one tick.
     // With fault hooks a lost sensor frame is a stale tick for the kernel
     // (its link-loss handling), not the end of the run.

@@ -25,9 +25,11 @@ struct FakeStage {
   double z_m = 0.0;
   std::uint32_t base[3] = {1000u, 2000u, 3000u};
   io::ActuatorCommand last = io::kSafeActuatorCommand;  // what the amplifiers follow
-  io::SensorSample sample() const {
+  std::uint32_t ticks = 0;
+  io::SensorSample sample() {
     io::SensorSample s = test::stage_sample_at(x_m, z_m, base);
     test::set_monitored_currents(last, &s);
+    test::add_live_noise(++ticks, &s);
     return s;
   }
   // z: a first-order lag towards 23 um per A of z effort beyond the weight

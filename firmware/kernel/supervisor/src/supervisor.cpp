@@ -25,6 +25,16 @@ std::uint16_t next_run(bool holds, std::uint16_t run) {
   return holds ? static_cast<std::uint16_t>(run < 0xFFFF ? run + 1 : run) : 0;
 }
 
+// Field by field (no memcmp over padding bytes, whose value is unspecified).
+bool same_sample(const io::SensorSample& a, const io::SensorSample& b) {
+  bool same = a.status_flags == b.status_flags;
+  for (int k = 0; k < io::kInterferometerAxes; ++k) same = same && a.interferometer_counts[k] == b.interferometer_counts[k];
+  for (int k = 0; k < io::kDisplacementSensors; ++k) same = same && a.displacement_adc[k] == b.displacement_adc[k];
+  for (int k = 0; k < io::kHallChannels; ++k) same = same && a.hall_adc[k] == b.hall_adc[k];
+  for (int k = 0; k < io::kCoils; ++k) same = same && a.coil_current_adc[k] == b.coil_current_adc[k];
+  return same;
+}
+
 void note(Trip& t, bool tripped, FaultCode code, std::uint8_t axis, float value) {
   // Branch-light: every check is computed; only the first tripping one is kept.
   if (tripped && t.code == FaultCode::kNone) {
@@ -80,6 +90,7 @@ void Supervisor::reset() {
   status_ = SupervisorStatus{};
   have_previous_ = false;
   stale_run_ = 0;
+  identical_run_ = 0;
   for (auto& r : mismatch_run_) r = 0;
   overrun_run_ = 0;
   for (float& v : i2_filtered_) v = 0.0f;
@@ -114,11 +125,19 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
          static_cast<float>(delta) * config_.interferometer_lsb_m);
     previous_counts_[a] = s.interferometer_counts[a];
   }
-  have_previous_ = true;
   const bool stale = (flags & io::kStaleFrame) != 0;
   stale_run_ = next_run(stale, stale_run_);
-  const bool stale_fault = stale_run_ > config_.max_consecutive_stale_frames;
-  note(t, stale_fault, FaultCode::kStaleFrames, kNoAxis, static_cast<float>(stale_run_));
+  // Only while a loop is closed: a landed stage's sensors may legitimately
+  // sit still (and the check is armed again before the first loop closes).
+  const bool identical = have_previous_ && in.closed_axes != 0 && same_sample(s, previous_sample_);
+  identical_run_ = next_run(identical, identical_run_);
+  previous_sample_ = s;
+  have_previous_ = true;
+  const bool frozen = config_.max_identical_samples != 0 && identical_run_ > config_.max_identical_samples;
+  const bool stale_fault = stale_run_ > config_.max_consecutive_stale_frames || frozen;
+  note(t, stale_run_ > config_.max_consecutive_stale_frames, FaultCode::kStaleFrames, kNoAxis,
+       static_cast<float>(stale_run_));
+  note(t, frozen, FaultCode::kFrozenSample, kNoAxis, static_cast<float>(identical_run_));
   const bool adc_fault = (flags & io::kAdcFault) != 0;
   note(t, adc_fault, FaultCode::kAdcFault, kNoAxis, 0.0f);
   bool lds_bad = (flags & lds_bits) != 0;

@@ -32,6 +32,14 @@ inline io::SensorSample stage_sample_at(double x_m, double z_m, const std::uint3
   return s;
 }
 
+// Live sensors are never bit-for-bit still: the supervisor takes a whole
+// sample that repeats for more than max_identical_samples ticks while a loop
+// is closed as a frozen sensor node (FaultCode::kFrozenSample). A synthetic
+// stage held at a pose adds the one-LSB Hall noise that a real one has.
+inline void add_live_noise(std::uint32_t tick, io::SensorSample* s) {
+  s->hall_adc[0] = static_cast<std::int16_t>(s->hall_adc[0] + static_cast<std::int16_t>(tick & 1u));
+}
+
 // Amplifiers that follow: the current monitor reads what `command` asked
 // for (the supervisor's current-mismatch check compares the two).
 inline void set_monitored_currents(const io::ActuatorCommand& command, io::SensorSample* s) {

@@ -53,7 +53,8 @@ namespace maglev::bench {
   X(kPayloadAdded, "payload_added", "plant")       \
   X(kBrownoutDuringSave, "brownout_during_save", "power") \
   X(kCommandStorm, "command_storm", "host")        \
-  X(kCommandOutOfRange, "command_out_of_range", "host")
+  X(kCommandOutOfRange, "command_out_of_range", "host") \
+  X(kConfigWrite, "config_write", "host")
 
 enum class CampaignFault : std::uint8_t {
 #define MAGLEV_CAMPAIGN_ENUM(name, text, category) name,

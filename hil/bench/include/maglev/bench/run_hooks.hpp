@@ -30,6 +30,14 @@ class RunHooks {
   virtual can::FaultAction on_frame(const can::CanFrame& frame, std::uint64_t seq) = 0;
   // The actuator command the amplifiers are about to apply (actuator faults).
   virtual void on_actuator(std::uint64_t n, double t_s, io::ActuatorCommand* applied) = 0;
+  // Before tick n's controller step: a host's configuration write (the
+  // Modbus path ends in the same Controller::apply_config). When
+  // config_write_due() says so, the runner hands the present configuration to
+  // make_config_write(), applies the result, and reports the kernel's answer
+  // and the configuration in force afterwards to config_result().
+  virtual bool config_write_due(std::uint64_t /*n*/, double /*t_s*/) { return false; }
+  virtual void make_config_write(kernel::KernelConfig* /*config*/) {}
+  virtual void config_result(kernel::ConfigError /*result*/, const kernel::KernelConfig& /*in_force*/) {}
   // After tick n: the plant's truth and the controller's status (judging).
   virtual void after_tick(std::uint64_t n, double t_s, const hil::Plant& plant,
                           const kernel::ControllerStatus& status) = 0;

@@ -36,6 +36,7 @@ class BenchServer {
   std::string error() const { return flash_.ok() ? tcp_.error() : "flash file refused: " + flash_.error(); }
   int port() const { return tcp_.port(); }
   int poll(int timeout_ms) { return tcp_.poll(timeout_ms); }
+  const TcpServer& tcp() const { return tcp_; }
   modbus::RegisterServer& registers() { return registers_; }
 
  private:

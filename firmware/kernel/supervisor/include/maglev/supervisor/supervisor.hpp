@@ -42,7 +42,8 @@ namespace maglev::kernel {
   X(kCurrentMonitorOutOfRange, 16, "CurrentMonitorOutOfRange")  /* coil current monitor ADC at a rail */ \
   X(kCurrentSaturation, 17, "CurrentSaturation")  /* the current limit acted for max_saturated_ticks in a row */ \
   X(kStageProfileInvalid, 18, "StageProfileInvalid")  /* the selected stage profile failed its boot check (value: ProfileError) */ \
-  X(kCurrentMismatch, 19, "CurrentMismatch")  /* a coil's monitored current left its command for current_mismatch_ticks: amplifier shorted or open */
+  X(kCurrentMismatch, 19, "CurrentMismatch")  /* a coil's monitored current left its command for current_mismatch_ticks: amplifier shorted or open */ \
+  X(kFrozenSample, 20, "FrozenSample")  /* the whole sample bit-identical for more than max_identical_samples ticks while a loop is closed */
 
 enum class FaultCode : std::uint8_t {
   MAGLEV_FAULT_CODES(MAGLEV_ENUMERATOR)
@@ -91,6 +92,15 @@ struct SupervisorConfig {
   float max_interferometer_speed_m_per_s = 0.3f;
   float interferometer_lsb_m = 0.618e-9f;   // io::stage::kInterferometerLsb_m
   std::uint16_t max_consecutive_stale_frames = 2;
+  // A sample bit-identical to the previous one, in every field, for more
+  // than this many ticks while a loop is closed is a frozen sensor node whose
+  // transport does not flag it (a stale value): live sensors never repeat
+  // three interferometer counts, three displacement codes, four Hall codes
+  // and eight current-monitor codes exactly. 10 ticks = 4 ms at 2.5 kHz.
+  // Without it a frozen sample also froze the current monitor, and an
+  // amplifier shorted 9 ms later threw the platen out of its travel
+  // unseen (campaign seed 1, run 1747). 0 disables the check.
+  std::uint16_t max_identical_samples = 10;
   std::uint16_t max_consecutive_overruns = 2;
   // The whole-vector current limit acting without pause for this many ticks
   // is a fault: the coils cannot give what the loops ask (50 ms at 2.5 kHz).
@@ -156,6 +166,8 @@ class Supervisor {
   std::uint32_t previous_counts_[io::kInterferometerAxes] = {};
   bool have_previous_ = false;
   std::uint16_t stale_run_ = 0;
+  std::uint16_t identical_run_ = 0;
+  io::SensorSample previous_sample_{};
   std::uint16_t overrun_run_ = 0;
   std::uint16_t saturated_run_ = 0;
   std::uint16_t mismatch_run_[io::kCoils] = {};
