@@ -490,6 +490,7 @@ FAULT_CODES = (
     (17, "kCurrentSaturation", "CurrentSaturation"),
     (18, "kStageProfileInvalid", "StageProfileInvalid"),
     (19, "kCurrentMismatch", "CurrentMismatch"),
+    (20, "kFrozenSample", "FrozenSample"),
 )
 
 # controller.hpp MAGLEV_COMMAND_RESULTS (cmd.result)
