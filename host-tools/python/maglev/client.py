@@ -188,9 +188,16 @@ class Stage:
         words = [ax, *value_reg.encode(value), spec.code]
         base = register("cmd.axis").address
         assert register("cmd.code").address == base + 3  # the one-request layout stagectl uses too
-        r = self._execute(lambda: self._client.readwrite_registers(
-            read_address=register("cmd.result").address, read_count=1, write_address=base,
-            write_registers=words, slave=self.unit), f"cmd.code ({name})", 0x17)
+        from pymodbus.register_read_message import ReadWriteMultipleRegistersRequest
+
+        request = ReadWriteMultipleRegistersRequest(read_address=register("cmd.result").address, read_count=1,
+                                                    write_address=base, write_registers=words)
+        # readwrite_registers() of pymodbus 3.0 drops slave= (the request went to
+        # unit 0, an RTU broadcast nobody answers): address the request itself
+        # (3.0 calls it unit_id, later versions slave_id).
+        request.unit_id = self.unit
+        request.slave_id = self.unit
+        r = self._execute(lambda: self._client.execute(request), f"cmd.code ({name})", 0x17)
         result = CommandResult(r.registers[0])
         if result != CommandResult.ACCEPTED:
             raise errors.CommandRejected(name, result)
