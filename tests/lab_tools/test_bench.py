@@ -95,6 +95,13 @@ class Test1Landed(unittest.TestCase):
         with self.assertRaises(maglev.ValueOutOfRange):
             self.stage.command("step", "w", 1e-6)
 
+    def test_home_waits_with_progress(self):
+        seen = []
+        self.stage.home(timeout_s=20, progress=lambda st, t: seen.append(st))
+        self.assertEqual(self.stage.state(), maglev.SequencerState.IDLE)
+        self.assertEqual(seen[-1], maglev.SequencerState.IDLE)
+        self.assertEqual(self.stage.read("status.moving"), 0)
+
     def test_poll_returns_arrays(self):
         rec = self.stage.poll(("status.x", "status.z", "status.state"), duration_s=0.3, rate_Hz=200)
         self.assertGreater(len(rec), 30)  # 60 asked for; a loaded CI machine may lose some
