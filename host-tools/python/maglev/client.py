@@ -127,13 +127,18 @@ class Stage:
     def read_many(self, names: Iterable[str]) -> Dict[str, float]:
         """Several registers, in as few requests as contiguous addresses allow."""
         regs = [register(n) for n in names]
+        out = self._read_runs(_blocks(regs))
+        return {r.name: out[r.name] for r in regs}
+
+    def _read_runs(self, runs: List[List[Register]]) -> Dict[str, float]:
+        """One 0x03 request per run (see _blocks), decoded by name."""
         out: Dict[str, float] = {}
-        for run in _blocks(regs):
+        for run in runs:
             base = run[0].address
             words = self.read_words(base, run[-1].address + run[-1].width - base, run[0].name)
             for r in run:
                 out[r.name] = r.decode(words[r.address - base:r.address - base + r.width])
-        return {r.name: out[r.name] for r in regs}
+        return out
 
     def write(self, name: str, value: float) -> None:
         """Write one register. Checked here first (ValueOutOfRange, nothing sent); the
@@ -308,12 +313,7 @@ class Stage:
                 action()
                 events.append(((ta + time.monotonic()) / 2 - t0, getattr(action, "__name__", "action")))
             ta = time.monotonic()
-            values: Dict[str, float] = {}
-            for run in runs:
-                base = run[0].address
-                words = self.read_words(base, run[-1].address + run[-1].width - base, run[0].name)
-                for r in run:
-                    values[r.name] = r.decode(words[r.address - base:r.address - base + r.width])
+            values = self._read_runs(runs)
             t_list.append((ta + time.monotonic()) / 2 - t0)
             rows.append([values[n] for n in names])
             next_t += period
