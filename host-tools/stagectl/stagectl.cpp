@@ -22,26 +22,16 @@
 #include "maglev/controller/controller.hpp"
 #include "maglev/register_schema/register_map.hpp"
 #include "maglev/supervisor/supervisor.hpp"
+#include "exit_codes.hpp"
+#include "lab_commands.hpp"
 
 namespace {
 
 using namespace maglev::modbus;
 using maglev::can::HostCommandCode;  // cmd.code values: the one command table
 
-// Exit codes (also in --help and host-tools/stagectl/README.md).
-enum Exit : int {
-  kOk = 0,
-  kUsage = 1,          // bad command line
-  kConnect = 2,        // cannot open the serial device / connect
-  kBadValue = 3,       // unknown register, unparsable value, wrong unit, out of range (checked locally)
-  kRefused = 4,        // the controller answered 02/03/04 (address/value refused, flash failed)
-  kBusy = 5,           // 06: not allowed in the present state (e.g. gains while levitated)
-  kAccess = 6,         // 01 / engineer register without --engineer
-  kCommandRejected = 7,  // the kernel rejected a motion command (cmd.result != 0)
-  kComm = 8,           // timeout, CRC, broken connection
-  kFile = 9,           // config file cannot be read/written or has errors
-  kTimeout = 10,       // --wait elapsed before the stage got there
-};
+// Exit codes: host-tools/stagectl/exit_codes.hpp (also in --help and README.md).
+using enum maglev::stagectl::Exit;
 
 const char* kHelp = R"(usage: stagectl (--rtu DEVICE[,BAUD] | --tcp HOST:PORT) [--unit N] [--engineer] [--wait SECONDS]
                 [--json] [--count N] [--interval SECONDS] COMMAND
@@ -205,11 +195,13 @@ class Client {
     modbus_close(ctx_);
     modbus_free(ctx_);
   }
+  modbus_t* context() { return ctx_; }
   Client(const Client&) = delete;
   Client& operator=(const Client&) = delete;
 
   std::uint32_t read_raw(const RegisterDef& d) {
     std::uint16_t w[2] = {};
+    if (d.type == RegType::kBlock) die(kBadValue, std::string(d.name) + " is a download window: use stagectl record");
     if (modbus_read_registers(ctx_, d.address, width(d.type), w) < 0) fail(d, "read", "");
     return width(d.type) == 1 ? w[0] : join_words(w);
   }
@@ -515,11 +507,20 @@ int json_get(Client& c, const RegisterDef& d) {
   return kOk;
 }
 
-// Every register: {"name": value, ...} in address order (units: registers --json).
-int json_dump(Client& c) {
+// What dump prints: every value register; not a download window (kBlock:
+// stagectl record), not the lab registers of a controller without them.
+bool dumped(const RegisterDef& d, bool lab) {
+  return d.type != RegType::kBlock && (d.kind != Kind::kLab || lab);
+}
+
+// Every dumped register: {"name": value, ...} in address order (units: registers --json).
+int json_dump(Client& c, bool lab) {
   std::cout << "{";
+  bool first = true;
   for (std::size_t i = 0; i < kRegisterCount; ++i) {
-    std::cout << (i == 0 ? "\n  " : ",\n  ") << json_str(kRegisters[i].name) << ": " << json_num(c.read(kRegisters[i]));
+    if (!dumped(kRegisters[i], lab)) continue;
+    std::cout << (first ? "\n  " : ",\n  ") << json_str(kRegisters[i].name) << ": " << json_num(c.read(kRegisters[i]));
+    first = false;
   }
   std::cout << "\n}\n";
   return kOk;
@@ -621,7 +622,7 @@ Options parse_args(int argc, char** argv) {
       return argv[++i];
     };
     if (a == "--help" || a == "-h") {
-      std::cout << kHelp;
+      std::cout << kHelp << "\n" << maglev::stagectl::kLabHelp;
       std::exit(kOk);
     } else if (a == "--rtu") {
       std::string v = next();
@@ -695,12 +696,19 @@ int main(int argc, char** argv) {
   }
   if (cmd == "dump") {
     need(0);
-    if (o.json) return json_dump(c);
-    for (std::size_t i = 0; i < kRegisterCount; ++i) std::cout << line_of(kRegisters[i], c.read(kRegisters[i])) << "\n";
+    // A controller without the lab tools answers 02 for rec.* / wave.*: left out.
+    std::uint16_t probe = 0;
+    const bool lab = modbus_read_registers(c.context(), def(RegId::rec_state).address, 1, &probe) == 1;
+    if (o.json) return json_dump(c, lab);
+    for (std::size_t i = 0; i < kRegisterCount; ++i) {
+      if (!dumped(kRegisters[i], lab)) continue;
+      std::cout << line_of(kRegisters[i], c.read(kRegisters[i])) << "\n";
+    }
     return kOk;
   }
   if (cmd == "status") return o.json ? json_status(c) : do_status(c);
   if (cmd == "watch") return do_watch(c, o, std::vector<std::string>(o.args.begin() + 1, o.args.end()));
+  if (cmd == "record" || cmd == "frf") return maglev::stagectl::run_lab_command(c.context(), o.args);
   if (cmd == "home") return run_command(c, HostCommandCode::kHome, 0, 0.0f, o);
   if (cmd == "levitate") return run_command(c, HostCommandCode::kLevitate, 0, 0.0f, o);
   if (cmd == "land") return run_command(c, HostCommandCode::kLand, 0, 0.0f, o);

@@ -1,5 +1,6 @@
 #include "maglev/modbus/register_server.hpp"
 
+#include <algorithm>
 #include <bit>
 
 namespace maglev::modbus {
@@ -45,6 +46,8 @@ std::uint32_t RegisterServer::read_raw(const RegisterDef& d) const {
           return encode(d.type, device_.read_status(d.id));
       }
     }
+    case Kind::kLab:
+      return lab_ != nullptr ? lab_->read(d.id) : 0u;
     case Kind::kControl:
       switch (d.id) {
         case RegId::cmd_axis:
@@ -68,12 +71,23 @@ ExceptionCode RegisterServer::read_registers(std::uint16_t start, std::uint16_t 
   if (count == 0 || count > kMaxReadCount) return ExceptionCode::kIllegalDataValue;
   if (static_cast<std::uint32_t>(start) + count > 0x10000u) return ExceptionCode::kIllegalDataAddress;
   // Check the whole range first: a gap anywhere refuses the whole read.
-  for (std::uint32_t a = start; a < static_cast<std::uint32_t>(start) + count; ++a) {
-    if (find_by_address(static_cast<std::uint16_t>(a)) == nullptr) return ExceptionCode::kIllegalDataAddress;
+  const std::uint32_t end = static_cast<std::uint32_t>(start) + count;
+  for (std::uint32_t a = start; a < end; ++a) {
+    const RegisterDef* d = find_by_address(static_cast<std::uint16_t>(a));
+    if (d == nullptr || (d->kind == Kind::kLab && lab_ == nullptr)) return ExceptionCode::kIllegalDataAddress;
   }
-  for (std::uint32_t a = start; a < static_cast<std::uint32_t>(start) + count; ++a) {
+  for (std::uint32_t a = start; a < end; ++a) {
     const RegisterDef* d = find_by_address(static_cast<std::uint16_t>(a));
     if (d == nullptr) return ExceptionCode::kIllegalDataAddress;  // checked above; keeps the analyser sure
+    if (d->type == RegType::kBlock) {
+      // One call for the part of the block inside the range.
+      const std::uint32_t block_end = std::min<std::uint32_t>(end, static_cast<std::uint32_t>(d->address) + width(d->type));
+      const auto n = static_cast<std::uint16_t>(block_end - a);
+      const ExceptionCode e = lab_->read_block(d->id, static_cast<std::uint16_t>(a - d->address), n, out + (a - start));
+      if (e != ExceptionCode::kNone) return e;
+      a = block_end - 1u;
+      continue;
+    }
     const std::uint32_t raw = read_raw(*d);
     if (width(d->type) == 1) {
       out[a - start] = static_cast<std::uint16_t>(raw);
@@ -117,6 +131,7 @@ ExceptionCode RegisterServer::validate_write(std::uint16_t start, std::uint16_t 
     const std::uint16_t w = width(d->type);
     if (a + w > end) return ExceptionCode::kIllegalDataAddress;
     if (d->access == Access::kReadOnly || d->when == WriteWhen::kNever) return ExceptionCode::kIllegalDataAddress;
+    if (d->kind == Kind::kLab && lab_ == nullptr) return ExceptionCode::kIllegalDataAddress;
     const std::uint32_t raw = w == 1 ? values[a - start]
                                      : (static_cast<std::uint32_t>(values[a - start]) << 16) | values[a - start + 1];
     pending_[n_pending++] = Pending{d, raw};
@@ -138,6 +153,10 @@ ExceptionCode RegisterServer::validate_write(std::uint16_t start, std::uint16_t 
   for (std::size_t i = 0; i < n_pending; ++i) {
     if (!may_write_now(*pending_[i].def)) return ExceptionCode::kServerDeviceBusy;
   }
+  // 5. the lab tools check their part whole (signals, channel count, limits, Nyquist, busy).
+  lab_pending_ = false;
+  for (std::size_t i = 0; i < n_pending; ++i) lab_pending_ = lab_pending_ || pending_[i].def->kind == Kind::kLab;
+  if (lab_pending_) return lab_->write(pending_, n_pending, false);
   return ExceptionCode::kNone;
 }
 
@@ -161,6 +180,11 @@ ExceptionCode RegisterServer::apply_pending(std::size_t n_pending) {
         return ExceptionCode::kIllegalDataValue;
     }
     config_ = candidate;
+  }
+  // The lab tools (checked in validate_write): before the commands.
+  if (lab_pending_) {
+    const ExceptionCode e = lab_->write(pending_, n_pending, true);
+    if (e != ExceptionCode::kNone) return e;
   }
   // Control registers in address order; the command itself last so one 0x10
   // can carry axis, value and code.
@@ -294,7 +318,8 @@ std::size_t RegisterServer::handle_pdu(const std::uint8_t* req, std::size_t len,
       // The read range is checked before the write so a bad read never
       // leaves a half-done transaction behind.
       for (std::uint32_t a = rstart; a < static_cast<std::uint32_t>(rstart) + rcount; ++a) {
-        if (a > 0xFFFFu || find_by_address(static_cast<std::uint16_t>(a)) == nullptr) {
+        const RegisterDef* rd = a > 0xFFFFu ? nullptr : find_by_address(static_cast<std::uint16_t>(a));
+        if (rd == nullptr || (rd->kind == Kind::kLab && lab_ == nullptr)) {
           e = ExceptionCode::kIllegalDataAddress;
           break;
         }

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "generated_section.hpp"
 #include "maglev/register_schema/register_map.hpp"
 
 namespace {
@@ -61,7 +62,7 @@ std::string table() {
   for (std::size_t i = 0; i < kRegisterCount; ++i) {
     const RegisterDef& d = kRegisters[i];
     std::string addr = std::to_string(d.address);
-    if (width(d.type) == 2) addr += "-" + std::to_string(d.address + 1);
+    if (width(d.type) > 1) addr += "-" + std::to_string(d.address + width(d.type) - 1);
     const bool ro = d.access == Access::kReadOnly;
     std::string def = ro ? "-" : num(d.default_value, d.type);
     o << "| " << addr << " | `" << d.name << "` | " << type_name(d.type) << " | " << cell(d.unit) << " | "
@@ -76,43 +77,7 @@ std::string table() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string t = table();
-  if (argc < 3) {
-    std::cout << t << "\n";
-    return 0;
-  }
-  const std::string mode = argv[1];
-  const std::string path = argv[2];
-  std::ifstream in(path);
-  if (!in) {
-    std::cerr << "cannot read " << path << "\n";
-    return 2;
-  }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string doc = ss.str();
-  const auto b = doc.find(kBegin);
-  const auto e = doc.find(kEnd);
-  if (b == std::string::npos || e == std::string::npos || e < b) {
-    std::cerr << path << ": generated-table markers missing\n";
-    return 2;
-  }
-  const std::string current = doc.substr(b, e + std::string(kEnd).size() - b);
-  if (mode == "--check") {
-    if (current != t) {
-      std::cerr << path << " drifted from registers.def; regenerate with: maglev_gen_registers_md --write " << path
-                << "\n";
-      return 1;
-    }
-    std::cout << path << " matches registers.def (" << kRegisterCount << " registers)\n";
-    return 0;
-  }
-  if (mode == "--write") {
-    doc.replace(b, current.size(), t);
-    std::ofstream out(path);
-    out << doc;
-    return out ? 0 : 2;
-  }
-  std::cerr << "usage: maglev_gen_registers_md [--check|--write FILE]\n";
-  return 2;
+  return maglev::docs::generated_section_main(
+      argc, argv, maglev::docs::GeneratedSection{"maglev_gen_registers_md", "registers.def", kBegin, kEnd}, table(),
+      " (" + std::to_string(kRegisterCount) + " registers)");
 }

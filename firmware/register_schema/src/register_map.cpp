@@ -13,6 +13,8 @@ std::uint32_t encode(RegType type, double value) {
       return static_cast<std::uint32_t>(static_cast<std::int32_t>(value));
     case RegType::kF32:
       return std::bit_cast<std::uint32_t>(static_cast<float>(value));
+    case RegType::kBlock:
+      return 0;  // read-only window: no value of its own
   }
   return 0;
 }
@@ -25,12 +27,14 @@ double decode(RegType type, std::uint32_t raw) {
       return static_cast<double>(static_cast<std::int32_t>(raw));
     case RegType::kF32:
       return static_cast<double>(std::bit_cast<float>(raw));
+    case RegType::kBlock:
+      return 0.0;
   }
   return 0.0;
 }
 
 bool value_in_range(const RegisterDef& d, double value) {
-  if (!std::isfinite(value)) return false;
+  if (!std::isfinite(value) || d.type == RegType::kBlock) return false;
   if (d.type == RegType::kF32) {
     // Compare in float: 0.056f is above the double 0.056 and must still pass.
     const float v = static_cast<float>(value);

@@ -19,6 +19,26 @@
 
 namespace maglev::bench {
 
+void apply_paper_controller(kernel::KernelConfig* c) {
+  // Paper 000's published PIDs, (27) x and y, (28) theta_z, (32) z, (33)
+  // theta_x and theta_y, C(s) = kp + kd s + ki / s on the error r - y: the
+  // proportional and derivative terms both see the reference (setpoint
+  // weights b = c = 1), no acceleration feed-forward, no output filters.
+  // Our defaults use the same gains with b < 1, c = 0 and feed-forward.
+  // Kept from the defaults: the derivative's 1 kHz filter (a pure derivative
+  // cannot be discretized; the paper does not give its realization) and the
+  // back-calculation anti-windup, which acts only while the current limit
+  // does.
+  for (int a = 0; a < kernel::kAxisCount; ++a) {
+    kernel::AxisLoopConfig& axis = c->axis[a];
+    axis.type = kernel::LoopType::kPid2Dof;
+    axis.pid.setpoint_weight_p = 1.0f;
+    axis.pid.setpoint_weight_d = 1.0f;
+    for (kernel::BiquadConfig& f : axis.filters) f = kernel::BiquadConfig{};
+  }
+  c->acceleration_feedforward = false;
+}
+
 bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<ScenarioError>* errs) {
   const std::size_t before = errs->size();
   auto fail = [&](const std::string& what) { errs->push_back({sc.source + ": " + what}); };
@@ -100,9 +120,18 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
            "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick)");
     }
   }
+  // [controller] preset first, so that AXIS.FIELD keys refine it.
+  if (const auto it = sc.controller.find("preset"); it != sc.controller.end()) {
+    if (it->second == "paper") {
+      apply_paper_controller(&o->controller);
+    } else if (it->second != "default") {
+      fail("[controller] preset = " + it->second + ": expected default or paper");
+    }
+  }
   // [controller]: kernel config fields, SI. Per-axis gains as AXIS.FIELD.
   for (const auto& [k, v] : sc.controller) {
     auto& c = o->controller;
+    if (k == "preset") continue;
     if (k == "payload_kg") {
       double m = 0;
       if (num("controller", k, v, Dim::kMass, &m)) c.payload_mass_kg = static_cast<float>(m);
@@ -112,7 +141,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     Axis p{};
     if (dot == std::string::npos || !parse_axis(k.substr(0, dot), &p)) {
       fail("[controller] unknown key '" + k +
-           "' (payload_kg, AXIS.kp|ki|kd|b|derivative_filter_Hz, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
+           "' (preset, payload_kg, AXIS.kp|ki|kd|b|derivative_filter_Hz, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
       continue;
     }
     const std::string field = k.substr(dot + 1);

@@ -56,6 +56,8 @@
 #include "maglev/stage_profile/stage_database.hpp"
 #include "maglev/io/stage_parameters.hpp"
 #include "maglev/modbus_tcp/bench_server.hpp"
+#include "maglev/lab_tools/lab_registers.hpp"
+#include "maglev/lab_tools/lab_tick.hpp"
 #include "maglev/scenario/scenario.hpp"
 #include "maglev/virtual_can/virtual_can.hpp"
 
@@ -69,6 +71,10 @@ namespace {
 namespace fs = std::filesystem;
 
 volatile std::sig_atomic_t g_stop = 0;
+
+// The lab tools' memory: static, as on the board (there: .axi_bss / .bss).
+float g_recorder_pool[lab::kBoardPoolWords];
+float g_wave_table[lab::kWaveTableLen];
 void on_signal(int) { g_stop = 1; }
 
 constexpr std::int64_t kNsPerS = 1'000'000'000;
@@ -273,7 +279,19 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
   hil::Plant plant(stage_plant, seed);
   app::CanSensorSource sensors(*ctrl_port, app::CanSensorConfig{});
   app::CanActuatorSink actuators(*ctrl_port, sensors);
-  app::ServoLoop<Kernel> loop(sensors, actuators, *controller, app::ServoConfig{}, app::ServoHooks{});
+  // Lab tools (recorder, wave generator) as on the board: rec.* / wave.*
+  // registers, the recorder armed in fault-watch mode from the start.
+  lab::Recorder recorder(g_recorder_pool, lab::kBoardPoolWords);
+  lab::WaveGenerator wave(g_wave_table, lab::kWaveTableLen);
+  (void)recorder.configure(lab::fault_watch_config(controller->config().servo_rate_Hz));
+  (void)recorder.arm();
+  lab::LabRegisters lab_registers(recorder, wave, controller->config());
+  modbus->registers().set_lab_tools(&lab_registers);
+  lab::LabTick<Scalar>::bind(controller.get(), &recorder, &wave);
+  app::ServoHooks servo_hooks{};
+  servo_hooks.before_step = lab::LabTick<Scalar>::before_step;
+  servo_hooks.record = lab::LabTick<Scalar>::record;
+  app::ServoLoop<Kernel> loop(sensors, actuators, *controller, app::ServoConfig{}, servo_hooks);
 
   std::printf("maglev-hil serve: Modbus TCP listening on %s:%d (unit 1), kernel %s, flash %s, %.0f Hz real time\n",
               o.host.c_str(), modbus->port(), hil::to_string(o.kernel), o.flash.c_str(), io::stage::kServoRate_Hz);

@@ -194,6 +194,37 @@ std::vector<std::complex<double>> frequency_response(std::span<const double> inp
   return h;
 }
 
+std::vector<FrfPoint> frequency_response_segments(std::span<const double> input, std::span<const double> output,
+                                                  double fs_Hz, std::span<const double> freqs_Hz,
+                                                  std::size_t segment) {
+  std::vector<FrfPoint> out;
+  out.reserve(freqs_Hz.size());
+  const std::size_t n_all = std::min(input.size(), output.size());
+  const std::size_t segments = segment == 0 ? 0 : n_all / segment;
+  for (double f : freqs_Hz) {
+    std::complex<double> sxy{0, 0};
+    double sxx = 0.0, syy = 0.0;
+    for (std::size_t s = 0; s < segments; ++s) {
+      std::complex<double> x{0, 0}, y{0, 0};
+      for (std::size_t i = 0; i < segment; ++i) {
+        const std::size_t k = s * segment + i;
+        const double ph = 2.0 * std::numbers::pi * f * static_cast<double>(i) / fs_Hz;
+        const std::complex<double> e{std::cos(ph), -std::sin(ph)};
+        x += input[k] * e;
+        y += output[k] * e;
+      }
+      sxy += y * std::conj(x);
+      sxx += std::norm(x);
+      syy += std::norm(y);
+    }
+    FrfPoint p{};
+    p.h = sxx > 0 ? sxy / sxx : std::complex<double>{0, 0};
+    p.coherence = sxx > 0 && syy > 0 ? std::norm(sxy) / (sxx * syy) : 0.0;
+    out.push_back(p);
+  }
+  return out;
+}
+
 LoopMargins loop_margins(std::span<const double> f, std::span<const std::complex<double>> L) {
   LoopMargins m{};
   const std::size_t n = std::min(f.size(), L.size());
@@ -232,6 +263,38 @@ LoopMargins loop_margins(std::span<const double> f, std::span<const std::complex
       m.bandwidth_found = true;
       break;
     }
+  }
+  // Phase crossover: where the unwrapped phase of L (starting in (-360, 0])
+  // crosses -180 deg, either way (a conditionally stable loop, e.g. PID on a
+  // double integrator, starts below -180 and crosses upwards at low
+  // frequency); log-interpolated in f, |L| in dB. The crossing nearest the
+  // gain crossover (in log f) is reported; gain margin = -|L| there in dB
+  // (negative: the gain may only be LOWERED by that much, a lower margin).
+  double prev = 0.0;
+  double best = 1e300;
+  for (std::size_t k = 0; k < n; ++k) {
+    double ph = std::arg(L[k]);
+    if (k == 0) {
+      while (ph > 0) ph -= 2 * std::numbers::pi;
+      while (ph <= -2 * std::numbers::pi) ph += 2 * std::numbers::pi;
+    } else {
+      while (ph - prev > std::numbers::pi) ph -= 2 * std::numbers::pi;
+      while (ph - prev < -std::numbers::pi) ph += 2 * std::numbers::pi;
+      const double a = prev + std::numbers::pi, b = ph + std::numbers::pi;  // relative to -180 deg
+      if ((a > 0 && b <= 0) || (a <= 0 && b > 0)) {
+        const double s = a / (a - b);
+        const double fp = std::exp(std::log(f[k - 1]) + s * (std::log(f[k]) - std::log(f[k - 1])));
+        const double g0 = 20.0 * std::log10(std::abs(L[k - 1])), g1 = 20.0 * std::log10(std::abs(L[k]));
+        const double distance = m.crossover_found ? std::abs(std::log(fp / m.crossover_Hz)) : fp;
+        if (distance < best) {
+          best = distance;
+          m.phase_crossover_Hz = fp;
+          m.gain_margin_dB = -(g0 + s * (g1 - g0));
+          m.gain_margin_found = true;
+        }
+      }
+    }
+    prev = ph;
   }
   return m;
 }

@@ -27,7 +27,9 @@ STATUS_NAMES = ("status.state", "status.fault", "status.moving", "status.x", "st
 
 # Every address the map serves: a read may span a gap between wanted
 # registers only when each address in between is mapped (else exception 02).
-_MAPPED = frozenset(a for r in REGISTERS.values() for a in range(r.address, r.address + r.width))
+# A download window (type "block") is never read as a filler.
+_MAPPED = frozenset(a for r in REGISTERS.values() if r.type != "block"
+                    for a in range(r.address, r.address + r.width))
 
 
 def _blocks(regs: Sequence[Register]) -> List[List[Register]]:

@@ -19,7 +19,8 @@ class Register:
 
     name: str
     address: int
-    type: str  # "u16" | "i32" | "f32"; i32/f32 span two registers, ABCD word order
+    type: str  # "u16" | "i32" | "f32" | "block"; i32/f32 span two registers, ABCD word order;
+    # a block is a download window of BLOCK_WORDS registers (the recorder's data)
     unit: str
     min: float
     max: float
@@ -27,23 +28,28 @@ class Register:
     access: str  # "read-only" | "operator" | "engineer"
     writable_when: str  # "never" | "always" | "not-moving" | "idle" | "gains"
     persisted: bool
-    kind: str  # "ident" | "status" | "config" | "control" | "stage"
+    kind: str  # "ident" | "status" | "config" | "control" | "stage" | "lab"
     description: str
 
     @property
     def width(self) -> int:
         """Number of 16-bit Modbus registers the value occupies."""
-        return 1 if self.type == "u16" else 2
+        return {"u16": 1, "block": _tables.BLOCK_WORDS}.get(self.type, 2)
 
     def encode(self, value: float) -> Tuple[int, ...]:
         """The register words of ``value`` (big-endian words: high half first)."""
+        if self.type == "block":
+            raise ValueError(f"{self.name} is a read-only download window")
         if self.type == "u16":
             return (int(value) & 0xFFFF,)
         raw = struct.pack(">i", int(value)) if self.type == "i32" else struct.pack(">f", float(value))
         return struct.unpack(">HH", raw)
 
     def decode(self, words) -> float:
-        """The value carried by ``words`` (int for u16/i32, float for f32)."""
+        """The value carried by ``words`` (int for u16/i32, float for f32, the
+        words themselves for a block)."""
+        if self.type == "block":
+            return list(words)
         if self.type == "u16":
             return int(words[0])
         raw = struct.pack(">HH", int(words[0]), int(words[1]))

@@ -90,6 +90,7 @@ std::string module() {
   o << "SCHEMA_HASH = " << hash << "\n";
   o << "ENGINEER_KEY = 0x" << std::hex << kEngineerKey << std::dec << "\n";
   o << "PERSISTED_COUNT = " << kPersistedCount << "\n";
+  o << "BLOCK_WORDS = " << kBlockWords << "  # registers of a \"block\" (download window)\n";
 
   o << "\n# registers.def: (name, address, type, unit, min, max, default, access, writable_when, persisted, kind, "
        "description)\nREGISTERS = (\n";

@@ -177,3 +177,41 @@ TEST(Overrides, OutputFiltersAreScenarioKeysBoundedByTheirRegisters) {
   LONGS_EQUAL(4, errs2.size());
   CHECK(o2.controller.axis[index(Axis::kX)].filters[0].type == kernel::BiquadType::kNone);
 }
+
+TEST(Overrides, ThePaperPresetIsThePublishedPidsWithoutOurShaping) {
+  // Paper 000 (27), (28), (32), (33): the gains as printed, PID on the error
+  // (b = c = 1), no acceleration feed-forward, no output filters; AXIS keys
+  // after the preset refine it, whatever their order in the file.
+  auto parsed = scenario::parse_scenario(
+      "[scenario]\nname = p\nduration_s = 1\n[controller]\nx.filter1.type = notch\nx.filter1.frequency_Hz = 320Hz\n"
+      "preset = paper\nz.kp = 30000\n",
+      "p.scenario");
+  CHECK_TRUE(parsed.ok());
+  Overrides o;
+  std::vector<ScenarioError> errs;
+  CHECK_TRUE(apply_overrides(*parsed.scenario, &o, &errs));
+  const kernel::KernelConfig d = kernel::default_kernel_config();
+  for (int a = 0; a < kernel::kAxisCount; ++a) {
+    const kernel::Pid2DofConfig& pid = o.controller.axis[a].pid;
+    DOUBLES_EQUAL(1.0, pid.setpoint_weight_p, 0.0);
+    DOUBLES_EQUAL(1.0, pid.setpoint_weight_d, 0.0);
+    DOUBLES_EQUAL(d.axis[a].pid.ki, pid.ki, 0.0);
+    DOUBLES_EQUAL(d.axis[a].pid.kd, pid.kd, 0.0);
+  }
+  DOUBLES_EQUAL(36000.0, o.controller.axis[index(Axis::kX)].pid.kp, 0.0);   // (27)
+  DOUBLES_EQUAL(2400000.0, o.controller.axis[index(Axis::kY)].pid.ki, 0.0);  // (27)
+  DOUBLES_EQUAL(300.0, o.controller.axis[index(Axis::kThetaZ)].pid.kp, 0.0); // (28)
+  DOUBLES_EQUAL(0.09, o.controller.axis[index(Axis::kThetaX)].pid.kd, 1e-7); // (33), as a float
+  DOUBLES_EQUAL(30000.0, o.controller.axis[index(Axis::kZ)].pid.kp, 0.0);    // refined after the preset
+  CHECK(o.controller.axis[index(Axis::kX)].filters[0].type == kernel::BiquadType::kNotch);  // refined too
+  CHECK_FALSE(o.controller.acceleration_feedforward);
+  kernel::Controller<float> kernel_under_test;
+  CHECK(kernel_under_test.apply_config(o.controller) == kernel::ConfigError::kOk);
+
+  auto bad = scenario::parse_scenario("[scenario]\nname = q\nduration_s = 1\n[controller]\npreset = fast\n", "q.scenario");
+  CHECK_TRUE(bad.ok());
+  Overrides o2;
+  std::vector<ScenarioError> errs2;
+  CHECK_FALSE(apply_overrides(*bad.scenario, &o2, &errs2));
+  CHECK(errs2.at(0).message.find("preset = fast: expected default or paper") != std::string::npos);
+}

@@ -36,6 +36,8 @@
 #include "maglev/drivers/iwdg.hpp"
 #include "maglev/drivers/stm32h7_gpio.hpp"
 #include "maglev/drivers/usart_rs485.hpp"
+#include "maglev/lab_tools/lab_registers.hpp"
+#include "maglev/lab_tools/lab_tick.hpp"
 #include "maglev/persistence/config_store.hpp"
 #include "maglev/stm32h7/register_bus.hpp"
 #if MAGLEV_BOARD_HIL
@@ -83,9 +85,16 @@ struct FaultLog {
 constexpr std::uint32_t kFaultMagic = 0x4D41474Cu;  // "MAGL"
 [[gnu::section(".backup_sram")]] FaultLog g_fault_log;
 
-// --- recorder in AXI SRAM ---
+// --- the lab recorder owns all of AXI SRAM (512 KiB: 8 channels x 16384
+// samples, docs/LAB-TOOLS.md); the per-tick record ring moved to D2 SRAM
+// (non-cacheable: ~70 bytes written per tick, read by the comms loop) ---
 constexpr std::size_t kRecorderEntries = 2048;
-[[gnu::section(".axi_bss")]] maglev::app::Recorder<kRecorderEntries> g_recorder;
+[[gnu::section(".dma_bss")]] maglev::app::Recorder<kRecorderEntries> g_recorder;
+[[gnu::section(".axi_bss")]] float g_lab_pool[maglev::lab::kBoardPoolWords];
+// One multisine period (16 KiB), read by the tick: DTCM (.bss).
+float g_wave_table[maglev::lab::kWaveTableLen];
+maglev::lab::Recorder g_lab_recorder{g_lab_pool, maglev::lab::kBoardPoolWords};
+maglev::lab::WaveGenerator g_wave{g_wave_table, maglev::lab::kWaveTableLen};
 
 Bus g_bus;
 
@@ -155,7 +164,10 @@ bool tick_irq_pending_again() { return (g_bus.read32(r::tim::kTim2 + r::tim::kSr
 bool tick_irq_pending_again() { return (g_bus.read32(r::exti::kBase + r::exti::kCpupr1) & r::bit(11)) != 0; }
 #endif
 void servo_ran() { g_feed_gate.servo_ran(); }
-void record(const maglev::io::SensorSample& s, const maglev::io::ActuatorCommand& c) { g_recorder.record(s, c); }
+void record(const maglev::io::SensorSample& s, const maglev::io::ActuatorCommand& c) {
+  g_recorder.record(s, c);
+  maglev::lab::LabTick<float>::record(s, c);  // the lab recorder: this tick's kernel status
+}
 
 // Microsecond clock for thread mode: DWT CYCCNT deltas accumulated (the loop
 // runs far more often than CYCCNT's 8.9 s wrap), so it wraps at 2^32 us as
@@ -350,7 +362,17 @@ extern "C" void board_main() {
   static maglev::app::Application<float, kRecorderEntries> application(
       g_kernel, &store, &g_can, &g_replies, &g_recorder, g_feed_gate, g_iwdg_feeder, app_config, app_hooks);
 
-  static const maglev::app::ServoHooks hooks{&cycle_counter, &tick_irq_pending_again, &servo_ran, &record};
+  // Lab tools: the recorder armed in fault watch (the last second before a
+  // fault is kept), the wave generator off; rec.* / wave.* over Modbus.
+  (void)g_lab_recorder.configure(maglev::lab::fault_watch_config(g_kernel.config().servo_rate_Hz));
+  (void)g_lab_recorder.arm();
+  maglev::lab::LabTick<float>::bind(&g_kernel, &g_lab_recorder, &g_wave);
+  static maglev::lab::LabRegisters lab_registers(g_lab_recorder, g_wave, g_kernel.config(),
+                                                 maglev::lab::LabRegistersHooks{&critical_enter, &critical_exit});
+  application.attach_lab_tools(&lab_registers);
+
+  static const maglev::app::ServoHooks hooks{&cycle_counter, &tick_irq_pending_again, &servo_ran, &record,
+                                             &maglev::lab::LabTick<float>::before_step};
   static maglev::app::ServoLoop<b::ServoKernel> servo(g_sensors, actuators, g_kernel,
                                                       maglev::app::ServoConfig{kCycleBudget, kPeriodCycles, 3}, hooks);
   g_servo = &servo;

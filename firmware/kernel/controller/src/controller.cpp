@@ -570,6 +570,21 @@ void Controller<Scalar>::excite(Tick& t) {
   }
   for (int a = 0; a < kAxisCount; ++a) t.excitation[a] = (ex.active && a == ex.axis) ? d_sum : Traits::zero();
   ex.tick += ex.active ? 1u : 0u;
+  // External injection (lab wave generator): same rule as kExcite (motion
+  // allowed), clamped here whatever the generator checked.
+  const Injection& in = injection_;
+  if (in.active && t.so->motion_allowed && in.axis < kAxisCount) {
+    t.injecting = true;
+    if (in.at_reference) {
+      const float lim = config_.references.max_step[in.axis];
+      t.reference_injection = in.value > lim ? lim : (in.value < -lim ? -lim : in.value);
+      t.reference_injection_pm = static_cast<std::int64_t>(static_cast<double>(t.reference_injection) * 1e12);
+    } else {
+      const float lim = config_.excitation.max_amplitude_A;
+      const float d = in.value > lim ? lim : (in.value < -lim ? -lim : in.value);
+      t.excitation[in.axis] += Traits::from_float(d);
+    }
+  }
 }
 
 // 6. axis loops (all run; outputs selected by the closed mask).
@@ -582,6 +597,11 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
   // so it scales the full lift effort precomputed at apply time
   // (GravityFeedForward_A would clamp the ramp to [0, 1]).
   const Scalar gravity_A = ff_fraction * ap.allocation.gravity_effort_A;
+  // The external reference injection enters the loop's error in pico (before
+  // the Scalar conversion and its +-128 um saturation): added to the stored
+  // reference for the loops only, taken off again below (exact integers).
+  const int inj_axis = injection_.axis;
+  if (t.reference_injection_pm != 0) reference_.pico[inj_axis] += t.reference_injection_pm;
   for (int a = 0; a < kAxisCount; ++a) {
     AxisLoop<Scalar> l = loop(a);
     // Only the error (and this tick's explicit step) become Scalar: +-128 um.
@@ -599,6 +619,7 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
     t.effort[a] = closed ? t.loop_out[a] + t.excitation[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
     if (!closed) l.reset(e_um);
   }
+  if (t.reference_injection_pm != 0) reference_.pico[inj_axis] -= t.reference_injection_pm;
 }
 
 // 7. force allocation with the whole-vector current limit, then 8. the
@@ -661,6 +682,10 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
     status_.excitation_A[a] = Traits::to_float(t.excitation[a]);
     status_.reference_acceleration[a] = profile_accel_[a];
   }
+  status_.injection_active = t.injecting;
+  status_.injection_at_reference = injection_.at_reference;
+  status_.injection_axis = injection_.axis;
+  status_.reference_injection = t.reference_injection;
   status_.excitation_active = excitation_.active;
   status_.excitation_tick = excitation_.tick;
   status_.motion_active = motion_active();
@@ -668,7 +693,7 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
 
 template <typename Scalar>
 bool Controller<Scalar>::motion_active() const {
-  if (excitation_.active) return true;
+  if (excitation_.active || injection_.active) return true;
   for (int a = 0; a < kAxisCount; ++a) {
     if (profile_[a].kind != ProfileKind::kNone || pending_step_pm_[a] != 0) return true;
   }

@@ -47,6 +47,7 @@ void store_field(T& f, double v) {
 #define MAGLEV_BIND_STATUS(id, field)
 #define MAGLEV_BIND_CONTROL(id, field)
 #define MAGLEV_BIND_STAGE(id, field)
+#define MAGLEV_BIND_LAB(id, field)
 #define MAGLEV_REG(id, name, address, type, unit, min, max, def, access, when, persist, kind, field, desc) \
   MAGLEV_BIND_##kind(id, field)
 

@@ -229,6 +229,8 @@ class Application {
   }
 
   modbus::PersistStatus persist_status() const { return device_.persist_status(); }
+  // The lab tools behind the rec.* / wave.* registers (firmware/lab_tools/registers).
+  void attach_lab_tools(modbus::LabTools* lab) { registers_.set_lab_tools(lab); }
   const modbus::RegisterServer& registers() const { return registers_; }
   const modbus::RtuServer& rtu() const { return rtu_; }
   const can::LinkReceiver& receiver() const { return receiver_; }

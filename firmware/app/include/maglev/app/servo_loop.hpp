@@ -50,6 +50,9 @@ struct ServoHooks {
   bool (*next_tick_pending)() = nullptr;       // the tick interrupt is pending again
   void (*servo_ran)() = nullptr;               // FeedGate::servo_ran
   void (*record)(const io::SensorSample&, const io::ActuatorCommand&) = nullptr;  // recorder
+  // Right before kernel step() (the lab wave generator hands the kernel this
+  // tick's injection: Controller::set_injection).
+  void (*before_step)() = nullptr;
 };
 
 template <typename Kernel>
@@ -75,6 +78,7 @@ class ServoLoop {
       sample.status_flags = static_cast<std::uint16_t>(sample.status_flags | io::kAdcFault);
       ++state_.sensor_faults;
     }
+    if (hooks_.before_step != nullptr) hooks_.before_step();
     const io::ActuatorCommand kernel_command = kernel_.step(sample, overrun_pending_);
     overrun_pending_ = false;
     if (inputs_ok) command = kernel_command;

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "maglev/board/mps2_an500/instruction_counter.hpp"
 #include "maglev/board/mps2_an500/semihosting.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/kernel_replay/replay_format.hpp"
@@ -36,50 +37,8 @@ enum ExitCode : int {
   kConfigRefused = 6,
 };
 
-// --- SysTick as an instruction counter ----------------------------------------
-// Under `-icount shift=N` QEMU's virtual clock advances exactly 2^N ns per guest
-// instruction and SysTick (processor clock source) counts that virtual time, so
-// SysTick counts are proportional to instructions executed. The ratio is
-// calibrated below on a block of exactly kCalibrationNops NOPs.
-struct SysTick {
-  volatile std::uint32_t csr;
-  volatile std::uint32_t rvr;
-  volatile std::uint32_t cvr;
-  volatile std::uint32_t calib;
-};
-SysTick& systick() { return *reinterpret_cast<SysTick*>(0xE000E010U); }
-constexpr std::uint32_t kSysTickMask = 0x00FFFFFFU;
-
-void systick_start() {
-  systick().csr = 0U;
-  systick().rvr = kSysTickMask;
-  systick().cvr = 0U;
-  systick().csr = 0x5U;  // CLKSOURCE = processor clock, ENABLE, no interrupt
-}
-
-inline std::uint32_t systick_now() {
-  __asm__ volatile("" ::: "memory");
-  const std::uint32_t v = systick().cvr;
-  __asm__ volatile("" ::: "memory");
-  return v;
-}
-// SysTick counts down and wraps at 24 bits.
-inline std::uint32_t systick_elapsed(std::uint32_t start, std::uint32_t end) {
-  return (start - end) & kSysTickMask;
-}
-
-constexpr std::uint32_t kCalibrationNops = 4096;
-__attribute__((noinline)) std::uint32_t measure_empty() {
-  const std::uint32_t t0 = systick_now();
-  const std::uint32_t t1 = systick_now();
-  return systick_elapsed(t0, t1);
-}
-__attribute__((noinline)) std::uint32_t measure_nops() {
-  const std::uint32_t t0 = systick_now();
-  __asm__ volatile(".rept 4096\n\tnop\n\t.endr" ::: "memory");
-  const std::uint32_t t1 = systick_now();
-  return systick_elapsed(t0, t1);
-}
+// SysTick as an instruction counter: maglev/board/mps2_an500/instruction_counter.hpp.
+using namespace hw::icount;
 
 struct Stats {
   std::uint64_t count = 0;
@@ -98,17 +57,6 @@ struct Stats {
   }
 };
 
-// counts -> instructions: (counts - empty) * nops / (nop_counts - empty), rounded.
-struct Calibration {
-  std::uint64_t empty_counts = 0;
-  std::uint64_t nop_counts = 0;
-  bool valid() const { return nop_counts > empty_counts; }
-  std::uint64_t instructions(std::uint64_t counts) const {
-    if (!valid() || counts <= empty_counts) return 0;
-    const std::uint64_t span = nop_counts - empty_counts;
-    return ((counts - empty_counts) * kCalibrationNops + span / 2U) / span;
-  }
-};
 
 void print_stats(const char* label, const Stats& s, const Calibration& cal) {
   hw::semihost_write("step_instructions ");

@@ -69,6 +69,33 @@ class Device {
   ~Device() = default;
 };
 
+// One register of a validated write request (its def and its raw 32-bit value).
+struct PendingWrite {
+  const RegisterDef* def;
+  std::uint32_t raw;
+};
+
+// The lab tools behind the Kind::kLab registers (recorder, wave generator:
+// firmware/lab_tools/registers). Without one, kLab addresses answer 02.
+class LabTools {
+ public:
+  // A kLab register's raw value (U16 in the low half, I32/F32 bits).
+  virtual std::uint32_t read(RegId id) const = 0;
+  // Words [first, first + count) of a kBlock register; an exception code
+  // (06: nothing to read now) refuses the whole read.
+  virtual ExceptionCode read_block(RegId id, std::uint16_t first, std::uint16_t count, std::uint16_t* out) const = 0;
+  // The whole request's writes (every kind, address order; kLab ones are the
+  // lab's): commit false = check only (nothing changes), true = apply. Called
+  // with commit true only after a check passed and the rest was applied.
+  virtual ExceptionCode write(const PendingWrite* writes, std::size_t n, bool commit) = 0;
+
+ protected:
+  LabTools() = default;
+  LabTools(const LabTools&) = default;
+  LabTools& operator=(const LabTools&) = default;
+  ~LabTools() = default;
+};
+
 inline constexpr std::size_t kMaxPdu = 253;
 inline constexpr std::uint16_t kMaxReadCount = 125;
 inline constexpr std::uint16_t kMaxWriteCount = 123;
@@ -98,12 +125,11 @@ class RegisterServer {
   bool live_tuning() const { return live_tuning_; }
   // The configuration now matches what flash holds (after load or save).
   void mark_saved() { saved_ = config_; }
+  // The lab tools serving the kLab registers (nullptr: none, 02).
+  void set_lab_tools(LabTools* lab) { lab_ = lab; }
 
  private:
-  struct Pending {
-    const RegisterDef* def;
-    std::uint32_t raw;
-  };
+  using Pending = PendingWrite;
   ExceptionCode validate_write(std::uint16_t start, std::uint16_t count, const std::uint16_t* values,
                                std::size_t& n_pending) ;
   ExceptionCode apply_pending(std::size_t n_pending);
@@ -121,6 +147,8 @@ class RegisterServer {
   std::uint16_t cmd_code_ = 0;
   std::uint16_t cmd_result_ = 0;
   Pending pending_[kMaxWriteCount];
+  LabTools* lab_ = nullptr;
+  bool lab_pending_ = false;  // the validated request carries kLab writes
 };
 
 }  // namespace maglev::modbus

@@ -8,7 +8,10 @@
 
 namespace maglev::modbus {
 
-enum class RegType : std::uint8_t { kU16, kI32, kF32 };
+// kBlock: a read-only window of kBlockWords registers whose content the lab
+// tools supply (rec.data: recorder values, float32 ABCD pairs).
+enum class RegType : std::uint8_t { kU16, kI32, kF32, kBlock };
+inline constexpr std::uint16_t kBlockWords = 124;
 enum class Access : std::uint8_t { kReadOnly, kOperator, kEngineer };
 // When a write is accepted (else exception 06, server device busy).
 enum class WriteWhen : std::uint8_t {
@@ -20,7 +23,9 @@ enum class WriteWhen : std::uint8_t {
 };
 // kStage: persisted like kConfig, but not a KernelConfig field (the stage
 // profile selection, applied by the controller binding).
-enum class Kind : std::uint8_t { kIdent, kStatus, kConfig, kControl, kStage };
+// kLab: the lab tools (recorder, wave generator: firmware/lab_tools), served
+// by the RegisterServer's LabTools (volatile; refused with 02 when none).
+enum class Kind : std::uint8_t { kIdent, kStatus, kConfig, kControl, kStage, kLab };
 
 // Stable identifiers, in table order.
 enum class RegId : std::uint16_t {
@@ -50,6 +55,7 @@ namespace detail {
 inline constexpr RegType U16 = RegType::kU16;
 inline constexpr RegType I32 = RegType::kI32;
 inline constexpr RegType F32 = RegType::kF32;
+inline constexpr RegType BLOCK = RegType::kBlock;
 inline constexpr Access RO = Access::kReadOnly;
 inline constexpr Access OP = Access::kOperator;
 inline constexpr Access ENG = Access::kEngineer;
@@ -65,6 +71,7 @@ inline constexpr Kind STATUS = Kind::kStatus;
 inline constexpr Kind CONFIG = Kind::kConfig;
 inline constexpr Kind CONTROL = Kind::kControl;
 inline constexpr Kind STAGE = Kind::kStage;
+inline constexpr Kind LAB = Kind::kLab;
 
 inline constexpr RegisterDef kTable[] = {
 #define MAGLEV_REG(id, name, address, type, unit, min, max, def, access, when, persist, kind, field, desc) \
@@ -78,7 +85,9 @@ inline constexpr RegisterDef kTable[] = {
 inline constexpr std::size_t kRegisterCount = static_cast<std::size_t>(RegId::kCount);
 inline constexpr const RegisterDef* kRegisters = detail::kTable;
 
-constexpr std::uint16_t width(RegType t) { return t == RegType::kU16 ? 1 : 2; }
+constexpr std::uint16_t width(RegType t) {
+  return t == RegType::kU16 ? 1 : (t == RegType::kBlock ? kBlockWords : 2);
+}
 
 // The attributes' names as tools print them (stagectl --json, the Python
 // table generator, docs/REGISTERS.md): one spelling everywhere.
@@ -87,6 +96,7 @@ constexpr const char* type_name(RegType t) {
     case RegType::kU16: return "u16";
     case RegType::kI32: return "i32";
     case RegType::kF32: return "f32";
+    case RegType::kBlock: return "block";
   }
   return "?";
 }
@@ -115,6 +125,7 @@ constexpr const char* kind_name(Kind k) {
     case Kind::kConfig: return "config";
     case Kind::kControl: return "control";
     case Kind::kStage: return "stage";
+    case Kind::kLab: return "lab";
   }
   return "?";
 }

@@ -39,6 +39,11 @@ bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<Sc
 // The profile a scenario names ([scenario] profile), else the default.
 std::string profile_of(const scenario::Scenario& sc);
 
+// `[controller] preset = paper`: paper 000's published PIDs (27), (28), (32),
+// (33) as printed, without our shaping (setpoint weights, acceleration
+// feed-forward, output filters). docs/BENCH.md, "Controller presets".
+void apply_paper_controller(kernel::KernelConfig* c);
+
 // Applies the scenario's keys to *o; false: *errs says why (field by field).
 bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<ScenarioError>* errs);
 

@@ -100,6 +100,19 @@ std::vector<std::complex<double>> frequency_response(std::span<const double> inp
                                                      double fs_Hz,
                                                      std::span<const double> freqs_Hz);
 
+// H1 estimate over consecutive whole segments of `segment` samples (one
+// period of a periodic excitation): per segment the DFT X_s, Y_s of input and
+// output at each frequency, then H = sum Y X* / sum |X|^2 and the coherence
+// gamma^2 = |sum Y X*|^2 / (sum |X|^2 sum |Y|^2) (1: output fully explained by
+// the input; needs >= 2 segments to mean anything).
+struct FrfPoint {
+  std::complex<double> h;
+  double coherence;
+};
+std::vector<FrfPoint> frequency_response_segments(std::span<const double> input, std::span<const double> output,
+                                                  double fs_Hz, std::span<const double> freqs_Hz,
+                                                  std::size_t segment);
+
 struct LoopMargins {
   double crossover_Hz;        // |L| = 1 (first crossing from above, log-interpolated)
   double phase_margin_deg;    // 180 + angle(L) at crossover
@@ -108,6 +121,12 @@ struct LoopMargins {
   double closed_loop_peak_Hz;
   bool crossover_found;
   bool bandwidth_found;
+  // Gain margin: -20 log10 |L| where angle(L) crosses -180 deg (either way;
+  // the crossing nearest the crossover). Negative: a lower gain margin (a
+  // conditionally stable loop goes unstable if its gain drops by that much).
+  double phase_crossover_Hz = 0.0;
+  double gain_margin_dB = 0.0;
+  bool gain_margin_found = false;
 };
 
 // From open-loop samples L(j w_k) at increasing frequencies.

@@ -60,6 +60,20 @@ struct ExcitationLimits {
   float max_duration_s = 600.0f;
 };
 
+// External injection (firmware/lab_tools/wave_generator): one value per tick,
+// handed to the kernel before step() by the servo tick's before_step hook.
+// Effort: added to the axis' effort U like kExcite's d (A, clamped to
+// ExcitationLimits::max_amplitude_A). Reference: added to the reference the
+// axis loop sees (m or rad, clamped to ReferenceLimits::max_step), not to the
+// stored reference (profiles and status.reference are unchanged). Applied
+// only on a closed axis while motion is allowed (Ready); inactive by default.
+struct Injection {
+  bool active = false;
+  bool at_reference = false;  // false: at the effort
+  std::uint8_t axis = 0;      // kernel Axis index
+  float value = 0.0f;         // A (effort) or m / rad (reference)
+};
+
 struct KernelConfig {
   float servo_rate_Hz;
   SensorsToPoseConfig measurement;
@@ -197,6 +211,12 @@ struct ControllerStatus {
   // the excitation is running: the stage is being moved on purpose. The
   // Modbus map's "not moving" write rule and status.moving read it.
   bool motion_active = false;
+  // --- lab tools: the external injection applied this tick (0 when none) ---
+  // (one axis at a time: the values below are for injection_axis)
+  bool injection_active = false;
+  bool injection_at_reference = false;
+  std::uint8_t injection_axis = 0;
+  float reference_injection = 0.0f;  // m or rad, added to that axis loop's reference
 };
 
 template <typename Scalar>
@@ -219,6 +239,9 @@ class Controller {
   // 0 = ok): while nonzero the supervisor holds FaultCode::kStageProfileInvalid
   // (the stage stays landed; clear_fault is refused while the cause remains).
   void set_stage_profile_error(std::uint8_t error) { stage_profile_error_ = error; }
+  // The next step()'s external injection (see Injection); stays until replaced.
+  void set_injection(const Injection& injection) { injection_ = injection; }
+  const Injection& injection() const { return injection_; }
   std::uint8_t stage_profile_error() const { return stage_profile_error_; }
 
  private:
@@ -261,6 +284,11 @@ class Controller {
     Scalar accel_ff[kAxisCount] = {};
     std::int64_t step_pm[kAxisCount] = {};
     Scalar excitation[kAxisCount] = {};
+    // External injection at the reference: added to reference_ around the
+    // axis loops (no per-axis cost), in pm / prad.
+    std::int64_t reference_injection_pm = 0;
+    float reference_injection = 0.0f;  // the same, m or rad (status)
+    bool injecting = false;
     Scalar effort[kAxisCount] = {};
     Scalar loop_out[kAxisCount] = {};
     Scalar aw_offset[kAxisCount] = {};  // loop output before the biquads minus after them
@@ -295,6 +323,7 @@ class Controller {
   InternalModelState<Scalar> imr_state_[kAxisCount]{};
   LoopType running_type_[kAxisCount] = {};  // detects a live loop-type switch (bumpless hand-over)
   Excitation excitation_{};
+  Injection injection_{};
   BiquadState<Scalar> filter_state_[kAxisCount][kMaxBiquadStages]{};
   Profile profile_[kAxisCount]{};
   MoveReference move_[kAxisCount]{};
