@@ -165,6 +165,27 @@ class Test2Levitated(unittest.TestCase):
         self.assertLess(abs(r.phase_deg[0]), 30.0)
         self.assertGreater(r.coherence[0], 0.9)
 
+    def test_f_record_on_board(self):
+        # The controller's recorder: a level trigger on the x reference catches a
+        # 2 um step with 50 ms of pre-trigger, at the servo rate.
+        s = self.stage
+        x0 = s.read("status.x")
+        phases = []
+        rec = s.record(["x.pose", "x.reference", "x.effort"], duration_s=0.3, pretrigger_s=0.05,
+                       trigger="level", level=("x.reference", x0 + 1e-6, "rising"),
+                       during=lambda: s.step("x", 2e-6), progress=lambda p, d, n: phases.append(p))
+        self.assertEqual(rec.names, ("x.pose", "x.reference", "x.effort"))
+        self.assertEqual(len(rec), 750)  # 0.3 s at 2.5 kHz
+        self.assertAlmostEqual(float(np.median(np.diff(rec.t))), 1 / 2500.0, delta=1e-9)
+        self.assertAlmostEqual(rec.t[0], -0.05, delta=0.002)  # the pre-trigger samples are there
+        r = rec["x.reference"]
+        self.assertAlmostEqual(r[rec.t > 0].mean() - r[rec.t < 0].mean(), 2e-6, delta=1e-9)
+        x = rec["x.pose"]
+        self.assertAlmostEqual(x[rec.t > 0.2].mean() - x[rec.t < 0].mean(), 2e-6, delta=0.05e-6)
+        self.assertIn("download", phases)
+        with self.assertRaises(maglev.ValueOutOfRange):
+            s.record(["x.nope"])
+
     def test_z_land(self):
         self.stage.land(timeout_s=30)
         self.assertEqual(self.stage.state(), maglev.SequencerState.IDLE)

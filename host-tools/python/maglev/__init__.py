@@ -12,7 +12,7 @@ from .client import STATUS_NAMES, Stage
 from .errors import *  # noqa: F401,F403  (the exception classes are part of the API)
 from .errors import MODBUS_EXCEPTIONS
 from .recording import FrfResult, Recording, sine_fit
-from .registers import (AXES, ENGINEER_KEY, HOST_COMMANDS, PERSIST_FLAGS, POSE_REGISTERS, REGISTERS, SCHEMA_HASH,
+from .registers import (AXES, ENGINEER_KEY, HOST_COMMANDS, LAB_SIGNALS, PERSIST_FLAGS, POSE_REGISTERS, REGISTERS, SCHEMA_HASH,
                         CommandResult, ConfigError, FaultCode, ProfileError, Register, SequencerState,
                         TransitionReason, register, state_name)
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import errors
 from .recording import FrfResult, Recording, sine_fit
-from .registers import (AXES, ENGINEER_KEY, HOST_COMMANDS, POSE_REGISTERS, ROTATIONAL_AXES, REGISTERS,
+from .registers import (AXES, ENGINEER_KEY, HOST_COMMANDS, LAB_SIGNALS, POSE_REGISTERS, ROTATIONAL_AXES, REGISTERS,
                         CommandResult, FaultCode, Register, SequencerState, register)
 
 # The most registers one 0x03 request may read (Modbus application protocol).
@@ -97,6 +97,20 @@ class Stage:
         self.close()
 
     # ---- transport -------------------------------------------------------------
+    def _write_read(self, write_address: int, words: Sequence[int], read_address: int, read_count: int,
+                    what: str) -> List[int]:
+        """One 0x17 (write, then read, multiple registers) to this unit."""
+        from pymodbus.register_read_message import ReadWriteMultipleRegistersRequest
+
+        request = ReadWriteMultipleRegistersRequest(read_address=read_address, read_count=read_count,
+                                                    write_address=write_address, write_registers=list(words))
+        # readwrite_registers() of pymodbus 3.0 drops slave= (the request went to
+        # unit 0, an RTU broadcast nobody answers): address the request itself
+        # (3.0 calls it unit_id, later versions slave_id).
+        request.unit_id = self.unit
+        request.slave_id = self.unit
+        return list(self._execute(lambda: self._client.execute(request), what, 0x17).registers)
+
     def _execute(self, call: Callable, what: Optional[str], function: int):
         try:
             response = call()
@@ -153,6 +167,21 @@ class Stage:
                                          + (" or not an integer" if r.type != "f32" else ""))
         self.write_words(r.address, r.encode(value), name)
 
+    def write_block(self, values: Dict[str, float]) -> None:
+        """Write registers that cover one contiguous address range in ONE 0x10 request
+        (the controller checks and applies it as a whole); each value is checked here
+        first (ValueOutOfRange, nothing sent)."""
+        regs = sorted((register(n) for n in values), key=lambda r: r.address)
+        words: List[int] = []
+        for a, b in zip(regs, regs[1:] + [None]):
+            v = values[a.name]
+            if a.access == "read-only" or not a.in_range(float(v)):
+                raise errors.ValueOutOfRange(f"{a.name}: {v!r} is read-only or outside [{a.min:g}, {a.max:g}]")
+            words.extend(a.encode(v))
+            if b is not None and b.address != a.address + a.width:
+                raise errors.ValueOutOfRange(f"write_block: {a.name} and {b.name} are not adjacent")
+        self.write_words(regs[0].address, words, regs[0].name)
+
     @contextlib.contextmanager
     def engineer(self):
         """Engineer access for the block (writes access.key; locks again on exit)."""
@@ -195,17 +224,8 @@ class Stage:
         words = [ax, *value_reg.encode(value), spec.code]
         base = register("cmd.axis").address
         assert register("cmd.code").address == base + 3  # the one-request layout stagectl uses too
-        from pymodbus.register_read_message import ReadWriteMultipleRegistersRequest
-
-        request = ReadWriteMultipleRegistersRequest(read_address=register("cmd.result").address, read_count=1,
-                                                    write_address=base, write_registers=words)
-        # readwrite_registers() of pymodbus 3.0 drops slave= (the request went to
-        # unit 0, an RTU broadcast nobody answers): address the request itself
-        # (3.0 calls it unit_id, later versions slave_id).
-        request.unit_id = self.unit
-        request.slave_id = self.unit
-        r = self._execute(lambda: self._client.execute(request), f"cmd.code ({name})", 0x17)
-        result = CommandResult(r.registers[0])
+        result = CommandResult(self._write_read(base, words, register("cmd.result").address, 1,
+                                                f"cmd.code ({name})")[0])
         if result != CommandResult.ACCEPTED:
             raise errors.CommandRejected(name, result)
         return result
@@ -401,3 +421,82 @@ class Stage:
             result_c.append(coherence)
             time.sleep(0.05)
         return FrfResult(np.array(result_f), np.array(result_h), np.array(result_c))
+
+    # ---- the on-board recorder (docs/LAB-TOOLS.md) -------------------------------
+    _TRIGGER_MODES = {"immediate": 0, "command": 1, "level": 2, "fault": 3}
+    _EDGES = {"rising": 0, "falling": 1, "either": 2}
+
+    def record(self, signals: Sequence[str] = ("x.pose", "x.reference", "x.error", "x.effort"),
+               duration_s: float = 1.0, decimation: int = 1, trigger: str = "immediate",
+               pretrigger_s: float = 0.0, level: Optional[Tuple[str, float, str]] = None,
+               timeout_s: float = 30.0, during: Optional[Callable[[], None]] = None,
+               progress: Optional[Callable[[str, int, int], None]] = None) -> Recording:
+        """Record ``signals`` (LAB_SIGNALS names) with the controller's own recorder, in
+        the servo loop (no link jitter), and download them. The recorder is stopped,
+        configured and armed in one request; ``during()`` (e.g. a step command) runs once
+        the pre-trigger samples are in;
+        then it waits for the capture (rec.state 3) and reads it block by block (0x17:
+        rec.read_offset + rec.data). ``trigger``: immediate | command | fault | level,
+        with ``level = (signal, value, "rising"|"falling"|"either")``. Recording.t is 0
+        at the trigger sample. ``progress(phase, done, total)``: "waiting" (state),
+        "download" (values)."""
+        try:
+            ids = [LAB_SIGNALS[n].id for n in signals]
+        except KeyError as e:
+            raise errors.ValueOutOfRange(f"unknown signal {e.args[0]!r} (maglev.LAB_SIGNALS lists them)") from None
+        if trigger not in self._TRIGGER_MODES:
+            raise errors.ValueOutOfRange(f"trigger {trigger!r}: one of {', '.join(self._TRIGGER_MODES)}")
+        self.write("rec.control", 3)  # stop (configuration is refused, 06, while armed)
+        # The servo rate: rec.sample_rate is it over the present decimation.
+        tick_Hz = self.read("rec.sample_rate") * self.read("rec.decimation")
+        length = max(2, int(round(duration_s * tick_Hz / decimation)))
+        pre = int(round(pretrigger_s * tick_Hz / decimation))
+        config = {"rec.control": 1, "rec.channel_count": len(ids), "rec.decimation": decimation,
+                  "rec.length": length, "rec.pretrigger": pre, "rec.trigger_mode": self._TRIGGER_MODES[trigger],
+                  "rec.trigger_signal": 1, "rec.trigger_edge": 0, "rec.trigger_level": 0.0}
+        for k in range(8):
+            config[f"rec.channel.{k}"] = ids[k] if k < len(ids) else ids[0]
+        if trigger == "level":
+            if level is None:
+                raise errors.ValueOutOfRange("a level trigger needs level=(signal, value, edge)")
+            config.update({"rec.trigger_signal": LAB_SIGNALS[level[0]].id, "rec.trigger_level": level[1],
+                           "rec.trigger_edge": self._EDGES[level[2]]})
+        # One 0x10 over rec.control .. rec.trigger_level: the firmware checks the
+        # whole configuration at once and applies rec.control (arm) after it.
+        self.write_block(config)
+        if during is not None:
+            # Let the pre-trigger samples fill first (the recorder keeps only what
+            # it saw since it was armed).
+            time.sleep(pre / (tick_Hz / decimation) + 0.01)
+            during()
+        t0 = time.monotonic()
+        last = None
+        while True:
+            state = self.read("rec.state")
+            if progress is not None and state != last:
+                progress("waiting", state, 3)
+            last = state
+            if state == 3:
+                break
+            if time.monotonic() - t0 > timeout_s:
+                raise errors.WaitTimeout(f"recorder state {state} after {timeout_s:g} s (3 = done)")
+            time.sleep(0.02)
+        v = self.read_many(("rec.captured", "rec.trigger_index", "rec.sample_rate", "rec.capture_id"))
+        n_ch = len(ids)
+        total = int(v["rec.captured"]) * n_ch
+        offset_reg, data_reg = register("rec.read_offset"), register("rec.data")
+        per_block = data_reg.width // 2
+        values = np.empty(total, dtype=np.float32)
+        for k in range(0, total, per_block):
+            words = self._write_read(offset_reg.address, offset_reg.encode(k), data_reg.address, data_reg.width,
+                                     "rec.data")
+            block = np.frombuffer(np.array(words, dtype=">u2").tobytes(), dtype=">f4")
+            n = min(per_block, total - k)
+            values[k:k + n] = block[:n]
+            if progress is not None:
+                progress("download", k + n, total)
+        if self.read("rec.capture_id") != v["rec.capture_id"]:
+            raise errors.CommunicationError("the capture changed during the download (re-armed by another client)")
+        samples = values.reshape(-1, n_ch).astype(float)
+        t = (np.arange(samples.shape[0]) - v["rec.trigger_index"]) / v["rec.sample_rate"]
+        return Recording(t, {name: samples[:, i] for i, name in enumerate(signals)})

@@ -78,6 +78,19 @@ POSE_REGISTERS: Dict[str, str] = {axis: "status." + axis for axis in AXES}
 
 
 @dataclass(frozen=True)
+class LabSignal:
+    """A signal the on-board recorder can record (lab_tools signals.hpp; ids pinned)."""
+
+    id: int
+    name: str  # "x.pose", "coil3.current", "state"
+    unit: str
+    description: str
+
+
+LAB_SIGNALS: Dict[str, LabSignal] = {row[1]: LabSignal(*row) for row in _tables.LAB_SIGNALS}
+
+
+@dataclass(frozen=True)
 class CommandField:
     name: str
     quantity: str

@@ -15,6 +15,7 @@
 #include "maglev/can_link/host_commands.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/io/axis.hpp"
+#include "maglev/lab_tools/signals.hpp"
 #include "maglev/register_schema/register_map.hpp"
 #include "maglev/sequencer/sequencer.hpp"
 #include "maglev/stage_profile/stage_profile.hpp"
@@ -129,6 +130,16 @@ std::string module() {
         << py_str(range_name(f.range)) << ", " << py_str(f.comment) << "),";
     }
     o << (s.field_count > 0 ? "\n     " : "") << "), " << py_str(s.comment) << "),\n";
+  }
+  o << ")\n";
+
+  o << "\n# lab_tools signals.hpp: the recorder's signals (id, name, unit, description)\nLAB_SIGNALS = (\n";
+  for (std::uint16_t id = 0; id < maglev::lab::kSignalIdEnd; ++id) {
+    char name[48];
+    const maglev::lab::SignalGroupDef* g = maglev::lab::signal_group(id);
+    if (g == nullptr || !maglev::lab::signal_name(id, name, sizeof name)) continue;
+    o << "    (" << id << ", " << py_str(name) << ", " << py_str(maglev::lab::signal_unit(id)) << ", "
+      << py_str(g->description) << "),\n";
   }
   o << ")\n";
 
