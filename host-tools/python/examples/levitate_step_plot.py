@@ -6,8 +6,8 @@
 #     MAGLEV_TCP=127.0.0.1:1502 python3 levitate_step_plot.py [OUT.png]
 #
 # against a controller or the bench stand-in `maglev-hil serve --modbus-tcp
-# 127.0.0.1:1502`. Recording is host-side polling (Stage.poll): sample times
-# carry the link's jitter.
+# 127.0.0.1:1502`. Stage.record() uses the controller's recorder (servo-rate
+# samples); Stage.poll() reads over the link (its jitter included).
 
 # %%
 import os
@@ -31,32 +31,41 @@ pose = stage.pose()
 print("pose:", ", ".join(f"{axis} {value * 1e6:+.3f} um" if axis in ("x", "y", "z") else f"{axis} {value * 1e6:+.3f} urad"
                          for axis, value in pose.items()))
 
-# %% A 2 um reference step in x, recorded at 1 kHz from 50 ms before it to 0.4 s after.
-rec = stage.step_response("x", 2e-6, duration_s=0.45, pre_s=0.05, rate_Hz=1000,
-                          names=("status.x", "status.y", "status.z", "status.moving"))
-t_step = rec.events[0][0]
-t = (rec.t - t_step) * 1e3  # ms from the step command
-x = rec["status.x"]
+# %% A 2 um reference step in x, recorded by the controller's own recorder at the
+# servo rate (2.5 kHz): a level trigger on the x reference, 50 ms before it.
+x_start = stage.read("status.x")
+rec = stage.record(["x.pose", "x.reference", "x.effort", "z.pose"], duration_s=0.4, pretrigger_s=0.05,
+                   trigger="level", level=("x.reference", x_start + 1e-6, "rising"),
+                   during=lambda: stage.step("x", 2e-6))
+t = rec.t * 1e3  # ms from the trigger (the step)
+x = rec["x.pose"]
 x0 = x[t < 0].mean()
 x1 = x[t > 300].mean()
 rise = t[np.argmax(x - x0 >= 0.9 * (x1 - x0))] - t[np.argmax(x - x0 >= 0.1 * (x1 - x0))]
-print(f"{len(rec)} samples, median interval {np.median(rec.intervals()) * 1e3:.2f} ms"
-      f" (max {rec.intervals().max() * 1e3:.2f} ms)")
+print(f"{len(rec)} samples at {1 / np.median(np.diff(rec.t)):.0f} Hz, from {t[0]:.1f} to {t[-1]:.1f} ms")
 print(f"step measured {(x1 - x0) * 1e6:.4f} um, 10-90 % rise {rise:.1f} ms,"
-      f" overshoot {max(0.0, (x.max() - x1) / (x1 - x0) * 100):.1f} %")
+      f" overshoot {max(0.0, (x.max() - x1) / (x1 - x0) * 100):.2f} %,"
+      f" peak effort {np.abs(rec['x.effort']).max():.3f} A")
+
+# %% The same step polled from the host over Modbus (Stage.poll): link jitter included.
+polled = stage.step_response("x", -2e-6, duration_s=0.2, pre_s=0.02, rate_Hz=1000)
+print(f"host polling: {len(polled)} samples, median interval {np.median(polled.intervals()) * 1e3:.2f} ms,"
+      f" worst {polled.intervals().max() * 1e3:.2f} ms")
 
 # %% Plot (matplotlib; MPLBACKEND=Agg writes the file without a display).
 import matplotlib.pyplot as plt
 
-fig, ax = plt.subplots(2, 1, sharex=True, figsize=(7, 5))
-ax[0].plot(t, (x - x0) * 1e6, ".-", ms=2)
+fig, ax = plt.subplots(3, 1, sharex=True, figsize=(7, 6))
+ax[0].plot(t, (x - x0) * 1e6, label="x")
+ax[0].plot(t, (rec["x.reference"] - rec["x.reference"][t < 0].mean()) * 1e6, "k--", lw=0.8, label="reference")
 ax[0].set_ylabel("x - x0 [um]")
-ax[0].set_title("2 um step in x (host-polled over Modbus)")
-ax[1].plot(t, (rec["status.y"] - rec["status.y"][t < 0].mean()) * 1e9, label="y")
-ax[1].plot(t, (rec["status.z"] - rec["status.z"][t < 0].mean()) * 1e9, label="z")
-ax[1].set_ylabel("[nm]")
-ax[1].set_xlabel("time from the step command [ms]")
-ax[1].legend()
+ax[0].legend()
+ax[0].set_title("2 um step in x (on-board recorder, 2.5 kHz)")
+ax[1].plot(t, rec["x.effort"])
+ax[1].set_ylabel("x effort [A]")
+ax[2].plot(t, (rec["z.pose"] - rec["z.pose"][t < 0].mean()) * 1e9)
+ax[2].set_ylabel("z [nm]")
+ax[2].set_xlabel("time from the step [ms]")
 fig.tight_layout()
 fig.savefig(out_png, dpi=100)
 print("plot:", out_png)
