@@ -500,3 +500,43 @@ class Stage:
         samples = values.reshape(-1, n_ch).astype(float)
         t = (np.arange(samples.shape[0]) - v["rec.trigger_index"]) / v["rec.sample_rate"]
         return Recording(t, {name: samples[:, i] for i, name in enumerate(signals)})
+
+    def frf_onboard(self, axis, amplitude_A: float = 0.1, f_min_Hz: float = 5.0, f_max_Hz: float = 400.0,
+                    tones: int = 28, periods: int = 4, settle_s: float = 1.0,
+                    progress: Optional[Callable[[str, int, int], None]] = None) -> FrfResult:
+        """OPEN-LOOP FRF of ``axis`` measured on board, what `stagectl frf` measures
+        (docs/LAB-TOOLS.md): the wave generator injects a multisine (``tones`` lines on
+        the 1 Hz grid, f_min..f_max, ``amplitude_A`` peak) at the axis' effort, the
+        recorder takes d (excitation), u (loop effort) and u + d at the servo rate over
+        ``periods`` 1-s periods after ``settle_s``; L = -u / (u + d) at the tones, H1
+        over the periods, and its coherence. Needs the stage Ready."""
+        name = AXES[_axis_index(axis)]
+        self.write("wave.control", 2)
+        self.write_block({"wave.control": 1, "wave.axis": _axis_index(axis), "wave.point": 0, "wave.shape": 2,
+                          "wave.tones": tones, "wave.amplitude": amplitude_A, "wave.f_start": f_min_Hz,
+                          "wave.f_end": f_max_Hz, "wave.duration": 0.0})
+        try:
+            time.sleep(settle_s)
+            rec = self.record([f"{name}.excitation", f"{name}.loop_effort", f"{name}.effort"],
+                              duration_s=float(periods), timeout_s=30.0 + periods, progress=progress)
+            running = self.read("wave.state") == 1
+        finally:
+            self.write("wave.control", 2)
+        if not running:
+            raise errors.CommandRejected("frf_onboard", "the wave generator stopped during the measurement")
+        fs = 1.0 / float(np.median(np.diff(rec.t)))
+        period = int(round(fs))  # 1-s periods: the multisine's lines sit on its 1 Hz grid
+        d = rec[f"{name}.excitation"]
+        u = -rec[f"{name}.loop_effort"]  # L = -u / (u + d)
+        e = rec[f"{name}.effort"]
+        n = (len(d) // period) * period
+        D = np.fft.rfft(d[:n].reshape(-1, period), axis=1)
+        U = np.fft.rfft(u[:n].reshape(-1, period), axis=1)
+        E = np.fft.rfft(e[:n].reshape(-1, period), axis=1)
+        mag = np.abs(D[0])
+        lines = np.nonzero(mag > 0.05 * mag[1:].max())[0]
+        lines = lines[lines > 0]
+        s_ue = (U[:, lines] * np.conj(E[:, lines])).sum(axis=0)
+        s_ee = (np.abs(E[:, lines]) ** 2).sum(axis=0)
+        s_uu = (np.abs(U[:, lines]) ** 2).sum(axis=0)
+        return FrfResult(lines * fs / period, s_ue / s_ee, np.abs(s_ue) ** 2 / (s_uu * s_ee))
