@@ -114,7 +114,10 @@ CampaignPlan MakePlan(std::uint64_t seed, int index) {
   const int n_faults = 1 + pick(2);
   for (int f = 0; f < n_faults; ++f) {
     FaultEvent e;
-    e.kind = static_cast<CampaignFault>(pick(static_cast<int>(CampaignFault::kCount)));
+    // Kinds added after the first campaign (from kConfigWrite on) come from
+    // their own stream below, so that every run index keeps the plan it had:
+    // a replay command in a report or a test stays the same run.
+    e.kind = static_cast<CampaignFault>(pick(static_cast<int>(CampaignFault::kConfigWrite)));
     e.t_s = uni(kFaultWindow0_s, kFaultWindow1_s);
     const double tick = 1.0 / st::kServoRate_Hz;
     const double ticks_1_150 = tick * (1 + pick(150));  // the 1-150 ticks
@@ -184,18 +187,30 @@ CampaignPlan MakePlan(std::uint64_t seed, int index) {
       case CampaignFault::kCommandOutOfRange:
         e.target = pick(4);
         break;
-      case CampaignFault::kConfigWrite:
-        // 0: gains while levitated, live tuning off (must be refused);
-        // 1: live tuning on, gains x0.7-1.4 (applied if the loop check passes);
-        // 2: live tuning on, gains x20 (the loop check must refuse them);
-        // 3: a supervisor limit while levitated (must be refused).
-        // target = variant * 10 + axis; magnitude = the gain factor.
-        e.target = pick(4) * 10 + pick(kernel::kAxisCount);
-        e.magnitude = e.target / 10 == 1 ? uni(0.7, 1.4) : e.target / 10 == 2 ? 20.0 : 1.5;
-        break;
+      case CampaignFault::kConfigWrite:  // drawn below
       case CampaignFault::kCount:
         break;
     }
+    p.faults.push_back(e);
+  }
+  // A host configuration write mid-motion in one run of 16, from its own
+  // stream (see above). Variants, on a random axis:
+  //   0: gains x1.5, live tuning off (must be refused while levitated);
+  //   1: live tuning on, kp and kd x0.7-1.4 (applied if the loop check passes);
+  //   2: live tuning on, kp and kd x20 (the loop check should refuse them);
+  //   3: the supervisor's z envelope halved (must be refused while levitated).
+  // target = variant * 10 + axis; magnitude = the gain factor.
+  std::mt19937_64 host_rng(mix(p.run_seed ^ 0xC0F16u));
+  auto host_pick = [&](int n) { return static_cast<int>(std::uniform_int_distribution<int>(0, n - 1)(host_rng)); };
+  if (host_pick(16) == 0) {
+    FaultEvent e;
+    e.kind = CampaignFault::kConfigWrite;
+    e.t_s = std::uniform_real_distribution<double>(kFaultWindow0_s, kFaultWindow1_s)(host_rng);
+    e.duration_s = 1.0 / st::kServoRate_Hz;
+    e.target = host_pick(4) * 10 + host_pick(kernel::kAxisCount);
+    e.magnitude = e.target / 10 == 1   ? std::uniform_real_distribution<double>(0.7, 1.4)(host_rng)
+                  : e.target / 10 == 2 ? 20.0
+                                       : 1.5;
     p.faults.push_back(e);
   }
   std::sort(p.faults.begin(), p.faults.end(), [](const FaultEvent& a, const FaultEvent& b) { return a.t_s < b.t_s; });

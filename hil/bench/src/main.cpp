@@ -14,6 +14,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -44,6 +46,7 @@ struct Args {
   double max_time_s = 0.0;
   std::string config;             // controller: scenario whose [controller]/kernel to apply
   std::string controller_record;  // plant: the controller's record file
+  int seeds = 0;                  // run --seeds N: error seeds 1..N, median and spread
   std::string error;
 };
 
@@ -54,9 +57,12 @@ void usage() {
       "  maglev-hil run NAME|FILE --out DIR [--can virtual|vcan0] [--kernel float32|q7.24]\n"
       "                 [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet] [--scenarios DIR]\n"
       "                 [--can-log FILE]   the run's CAN traffic as a candump log (simulated time)\n"
+      "                 [--plant default|ideal|nominal|as-built] [--error-seed N]   the plant model (docs/PLANT.md)\n"
+      "                 [--seeds N]        as-built error seeds 1..N: per paper figure median, spread, ratio\n"
       "  maglev-hil suite --out DIR [run options but --can-log]\n"
       "  maglev-hil check NAME|FILE...\n"
       "  maglev-hil profiles                  the stage profiles; run/suite take --profile NAME|FILE\n"
+      "  maglev-hil error-terms               the as-built error terms (markdown, docs/PLANT.md)\n"
       "  maglev-hil check-profile NAME|FILE   allocation, passive axes, loops, current headroom\n"
       "  maglev-hil campaign --runs N [--seed S] [--jobs J] [--out DIR] [--only I]   randomized faults, judged\n"
       "  maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S]\n"
@@ -107,12 +113,25 @@ Args parse_args(int argc, char** argv) {
       }
     } else if (s == "--profile") {
       if (value(&v)) a.run.profile = v;
-    } else if (s == "--seed") {
+    } else if (s == "--seed" || s == "--error-seed") {
       if (value(&v)) {
         char* end = nullptr;
         const unsigned long long n = std::strtoull(v.c_str(), &end, 10);
-        if (end == v.c_str() || *end != '\0') a.error = "--seed: not an integer: '" + v + "'";
-        a.run.seed = n;
+        if (end == v.c_str() || *end != '\0') a.error = s + ": not an integer: '" + v + "'";
+        (s == "--seed" ? a.run.seed : a.run.error_seed) = n;
+      }
+    } else if (s == "--plant") {
+      if (value(&v)) {
+        maglev::hil::PlantModel m{};
+        if (!maglev::hil::parse_plant_model(v, &m)) a.error = "--plant: expected default, ideal, nominal or as-built, got '" + v + "'";
+        a.run.plant = m;
+      }
+    } else if (s == "--seeds") {
+      if (value(&v)) {
+        char* end = nullptr;
+        const long n = std::strtol(v.c_str(), &end, 10);
+        if (end == v.c_str() || *end != '\0' || n < 1 || n > 100) a.error = "--seeds: an integer 1..100, got '" + v + "'";
+        a.seeds = static_cast<int>(n);
       }
     } else if (s == "--max-time" || s == "--duration") {
       if (value(&v)) a.max_time_s = std::atof(v.c_str());
@@ -214,6 +233,67 @@ int run_one(const maglev::scenario::Scenario& sc, const Args& a, const std::stri
   return rc;
 }
 
+// run --seeds N: the scenario once per as-built error seed 1..N (noise seed
+// unchanged), each into DIR/error_seed_K; then, per paper figure, the median
+// and spread of the bench's values and the ratio median / paper against the
+// 0.5-2x band (docs/PERFORMANCE.md). Also into DIR/seeds_summary.json.
+int run_seeds(const maglev::scenario::Scenario& sc, const Args& a) {
+  std::map<std::string, std::vector<double>> values;
+  int rc = 0;
+  for (int k = 1; k <= a.seeds; ++k) {
+    Args ak = a;
+    ak.run.error_seed = static_cast<std::uint64_t>(k);
+    maglev::bench::RunResult r;
+    rc |= run_one(sc, ak, (fs::path(a.out) / ("error_seed_" + std::to_string(k))).string(), &r);
+    if (r.metrics.count("plant_model") == 0 ||
+        r.metrics.at("plant_model") != static_cast<double>(static_cast<int>(maglev::hil::PlantModel::kAsBuilt))) {
+      std::fprintf(stderr, "maglev-hil run --seeds: the plant is not as-built (say --plant as-built or model = as-built)\n");
+      return 2;
+    }
+    for (const auto& [key, v] : r.metrics) values[key].push_back(v);
+  }
+  auto stats = [](std::vector<double> v, double* med, double* lo, double* hi) {
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    *med = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+    *lo = v.front();
+    *hi = v.back();
+  };
+  std::ofstream js((fs::path(a.out) / "seeds_summary.json").string());
+  js << "{\n  \"error_seeds\": " << a.seeds;
+  std::printf("\n== %s, as-built, error seeds 1..%d: paper figures (median [min, max] over the seeds)\n",
+              sc.name().c_str(), a.seeds);
+  std::printf("  %-44s %12s %24s %10s %8s  %s\n", "metric", "paper", "bench median [min, max]", "", "ratio", "band 0.5-2x");
+  int in_band = 0, total = 0;
+  for (const auto& [key, paper] : sc.paper) {
+    const auto it = values.find(key);
+    if (it == values.end()) continue;
+    double med = 0, lo = 0, hi = 0;
+    stats(it->second, &med, &lo, &hi);
+    const double ratio = paper != 0.0 ? med / paper : 0.0;
+    const bool ok = ratio >= 0.5 && ratio <= 2.0;
+    in_band += ok;
+    ++total;
+    std::printf("  %-44s %12.4g %10.4g [%.3g, %.3g] %8.3g  %s\n", key.c_str(), paper, med, lo, hi, ratio,
+                ok ? "within" : "OUTSIDE");
+    js << ",\n  \"" << key << "_paper\": " << paper << ",\n  \"" << key << "_median\": " << med << ",\n  \"" << key
+       << "_min\": " << lo << ",\n  \"" << key << "_max\": " << hi << ",\n  \"" << key << "_ratio\": " << ratio;
+  }
+  // Peak times and p-p perturbations, reported separately (paper 003 Sec. 3.3).
+  for (const auto& [key, v] : values) {
+    if (key.find("_peak_time_s") == std::string::npos && key.find("_pp_") == std::string::npos) continue;
+    if (key.find("rest_pp") != std::string::npos) continue;
+    double med = 0, lo = 0, hi = 0;
+    stats(v, &med, &lo, &hi);
+    std::printf("  %-44s %12s %10.4g [%.3g, %.3g]\n", key.c_str(), "", med, lo, hi);
+    js << ",\n  \"" << key << "_median\": " << med << ",\n  \"" << key << "_min\": " << lo << ",\n  \"" << key
+       << "_max\": " << hi;
+  }
+  js << "\n}\n";
+  std::printf("  %d of %d paper figures within 0.5-2x (median of %d error seeds)\n", in_band, total, a.seeds);
+  return rc;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -251,6 +331,17 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (a.cmd == "profiles") return maglev::bench::list_profiles_main();
+  if (a.cmd == "error-terms") {
+    // The as-built error terms as a markdown table (docs/PLANT.md is made
+    // from this output: kErrorTerms is the one source).
+    static const char* kDraw[] = {"uniform +-M", "normal, sigma M", "+-[lo M, M]", "[lo M, M]"};
+    std::printf("| [plant] key | draw | M (as-built default) | lo | refused above | source |\n|---|---|---|---|---|---|\n");
+    for (const auto& t : maglev::hil::kErrorTerms) {
+      std::printf("| `%s` | %s | %g | %s | %g | %s |\n", t.key, kDraw[static_cast<int>(t.draw)], t.magnitude,
+                  t.lo_fraction > 0 ? std::to_string(t.lo_fraction).substr(0, 5).c_str() : "-", t.max, t.source);
+    }
+    return 0;
+  }
   if (a.cmd == "check-profile") {
     if (a.positional.size() != 1) {
       std::fprintf(stderr, "maglev-hil check-profile: needs one profile NAME|FILE\n");
@@ -274,6 +365,7 @@ int main(int argc, char** argv) {
     }
     maglev::scenario::Scenario sc;
     if (!load(a.positional[0], a.scenarios, &sc)) return 2;
+    if (a.seeds > 0) return run_seeds(sc, a);
     return run_one(sc, a, a.out, nullptr);
   }
   if (a.cmd == "suite") {

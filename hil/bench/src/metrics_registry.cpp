@@ -340,10 +340,17 @@ void compute_metrics(const scenario::Scenario& sc, const MetricInputs& in, std::
                      std::vector<std::string>* warnings) {
   Context c{in, std::span<const double>(in.trace.t_s), 0.0, in.duration_s,
             static_cast<std::size_t>(std::lround(0.010 * in.servo_rate_Hz)), *out, *warnings};
+  // Rest: from Ready + 0.5 s to the first point-to-point motion after it. A
+  // motion commanded before that (the ccq scenarios level the as-built
+  // platen right after Ready) moves the start to 1 s after it.
+  double begin = in.ready_t >= 0.0 ? in.ready_t + 0.5 : -1.0;
   for (const auto& a : in.actions) {
-    if (a.is_point_to_point()) c.rest_end = std::min(c.rest_end, a.t_s);
+    if (begin >= 0.0 && a.is_point_to_point() && a.t_s < begin) begin = std::max(begin, a.t_s + 1.0);
   }
-  c.rest_begin = in.ready_t >= 0.0 ? in.ready_t + 0.5 : c.rest_end;
+  for (const auto& a : in.actions) {
+    if (a.is_point_to_point() && (begin < 0.0 || a.t_s >= begin)) c.rest_end = std::min(c.rest_end, a.t_s);
+  }
+  c.rest_begin = begin >= 0.0 ? begin : c.rest_end;
   for (const auto& req : sc.metrics) {
     MetricSpec s;
     std::string err;

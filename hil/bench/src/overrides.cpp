@@ -77,14 +77,85 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     Axis p{};
     if (!parse_axis(it->second, &p)) fail("[scenario] primary: unknown axis '" + it->second + "'");
   }
-  // [plant]: a baseline first, then the single-value overrides.
+  // [plant]: a baseline first (model, noise), then the single-value
+  // overrides, then (as-built) the error set drawn on top. Every bad [plant]
+  // line is reported as file:line: key: reason.
+  auto plant_fail = [&](const std::string& key, const std::string& why) {
+    const auto ln = sc.plant_line.find(key);
+    errs->push_back({sc.source + ":" + (ln != sc.plant_line.end() ? std::to_string(ln->second) : std::string("0")) +
+                     ": " + key + ": " + why});
+  };
   if (const auto it = sc.plant.find("model"); it != sc.plant.end()) {
-    if (it->second == "ideal") o->plant = hil::PlantConfig::Ideal();
-    else if (it->second != "default") fail("[plant] model: expected default or ideal, got '" + it->second + "'");
+    if (!hil::parse_plant_model(it->second, &o->plant_model)) {
+      plant_fail("model", "expected default, ideal, nominal or as-built, got '" + it->second + "'");
+    }
   }
+  if (o->plant_model_override) o->plant_model = *o->plant_model_override;
+  switch (o->plant_model) {
+    case hil::PlantModel::kIdeal: o->plant = hil::PlantConfig::Ideal(); break;
+    case hil::PlantModel::kNominal:
+    case hil::PlantModel::kAsBuilt: o->plant = hil::NominalPlant(o->plant); break;
+    default: break;
+  }
+  // noise = component | fitted: the fitted density (docs/BENCH.md) stays a
+  // named option; nominal and as-built default to the component figures.
+  if (const auto it = sc.plant.find("noise"); it != sc.plant.end()) {
+    if (it->second == "fitted") {
+      const hil::PlantConfig fitted{};
+      o->plant.amplifier.current_noise_density_A_per_rtHz = fitted.amplifier.current_noise_density_A_per_rtHz;
+      o->plant.interferometer.noise_m = fitted.interferometer.noise_m;
+      o->plant.displacement.noise_m = fitted.displacement.noise_m;
+    } else if (it->second == "component") {
+      hil::ApplyComponentNoise(&o->plant);
+    } else {
+      plant_fail("noise", "expected component or fitted, got '" + it->second + "'");
+    }
+  }
+  // The error set: error_seed, error_scale and one magnitude per term, each
+  // within its physical bound (kErrorTerms).
+  bool error_keys = false;
+  for (const auto& [k, v] : sc.plant) {
+    const int term = hil::find_error_term(k);
+    if (k != "error_seed" && k != "error_scale" && term < 0) continue;
+    error_keys = true;
+    const auto x = scenario::parse_number(v);
+    if (!x) {
+      plant_fail(k, "not a number: '" + v + "'");
+      continue;
+    }
+    if (k == "error_seed") {
+      if (*x < 0 || *x != std::floor(*x) || *x > 9.0e15) plant_fail(k, "must be a non-negative integer");
+      else o->error_set.error_seed = static_cast<std::uint64_t>(*x);
+    } else if (k == "error_scale") {
+      if (!(*x >= 0.0 && *x <= 2.0)) plant_fail(k, "must be within [0, 2] (and every scaled term within its bound)");
+      else o->error_set.error_scale = *x;
+    } else {
+      const hil::ErrorTerm& t = hil::kErrorTerms[term];
+      if (!(*x >= 0.0)) plant_fail(k, "a magnitude, must be >= 0");
+      else if (*x > t.max) plant_fail(k, v + " is above its physical bound " + std::to_string(t.max) + " (" + t.source + ")");
+      else o->error_set.magnitude[term] = *x;
+    }
+  }
+  for (int i = 0; i < hil::kErrorTermCount; ++i) {
+    const double scaled = o->error_set.magnitude[i] * o->error_set.error_scale;
+    if (scaled > hil::kErrorTerms[i].max * (1.0 + 1e-12)) {
+      plant_fail(sc.plant.count("error_scale") ? "error_scale" : hil::kErrorTerms[i].key,
+                 std::string("scales ") + hil::kErrorTerms[i].key + " to " + std::to_string(scaled) +
+                     ", above its physical bound " + std::to_string(hil::kErrorTerms[i].max));
+    }
+  }
+  if (error_keys && o->plant_model != hil::PlantModel::kAsBuilt && !o->plant_model_override) {
+    for (const auto& [k, v] : sc.plant) {
+      if (k == "error_seed" || k == "error_scale" || hil::find_error_term(k) >= 0) {
+        plant_fail(k, "an error-set key needs model = as-built");
+        break;
+      }
+    }
+  }
+  if (o->error_seed_override) o->error_set.error_seed = *o->error_seed_override;
   for (const auto& [k, v] : sc.plant) {
     auto& p = o->plant;
-    if (k == "model") continue;
+    if (k == "model" || k == "noise" || k == "error_seed" || k == "error_scale" || hil::find_error_term(k) >= 0) continue;
     if (k == "payload_kg") num("plant", k, v, Dim::kMass, &p.body.payload_kg);
     else if (k == "current_noise_scale") num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_scale);
     else if (k == "current_noise_density_A_per_rtHz")
@@ -115,9 +186,16 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
         p.integration.substeps_per_tick = static_cast<int>(n);
       }
     } else {
-      fail("[plant] unknown key '" + k +
-           "' (model, payload_kg, current_noise_scale, current_noise_density_A_per_rtHz, interferometer_noise_m, displacement_noise_m, "
-           "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick)");
+      plant_fail(k, "unknown key (model, noise, error_seed, error_scale, an error term of docs/PLANT.md, payload_kg, "
+                    "current_noise_scale, current_noise_density_A_per_rtHz, interferometer_noise_m, displacement_noise_m, "
+                    "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick)");
+    }
+  }
+  if (o->plant_model == hil::PlantModel::kAsBuilt) {
+    if (o->plant.body.layout == hil::BodyConfig::Layout::kTriangle) {
+      fail("[plant] model = as-built: the error set is modelled for the cross and square layouts only");
+    } else {
+      o->drawn_errors = hil::DrawAsBuilt(o->error_set, &o->plant);
     }
   }
   // [controller] preset first, so that AXIS.FIELD keys refine it.

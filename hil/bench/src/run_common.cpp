@@ -11,6 +11,8 @@ bool resolve_overrides(const scenario::Scenario& sc, const RunOptions& opt, Over
   // The stage first (kernel configuration and plant from its profile), then
   // the scenario's own [plant]/[controller] keys on top.
   if (errs.empty()) apply_profile(opt.profile ? *opt.profile : profile_of(sc), ov, &errs);
+  ov->plant_model_override = opt.plant;
+  ov->error_seed_override = opt.error_seed;
   if (errs.empty()) apply_overrides(sc, ov, &errs);
   if (!errs.empty()) {
     if (errors != nullptr) *errors = errs;
@@ -29,6 +31,17 @@ RunResult new_result(const scenario::Scenario& sc, const Overrides& ov) {
   R.profile = ov.profile_name;
   R.seed = ov.seed;
   R.paper = sc.paper;
+  // Which plant ran, and (as-built) every error drawn: reproducible from
+  // error_seed. The default model adds nothing (its metrics.json is the
+  // regression oracle's).
+  if (ov.plant_model != hil::PlantModel::kDefault) {
+    R.metrics["plant_model"] = static_cast<double>(static_cast<int>(ov.plant_model));
+    R.metrics["plant_current_noise_density_A_per_rtHz"] = ov.plant.amplifier.current_noise_density_A_per_rtHz *
+                                                          ov.plant.amplifier.current_noise_scale;
+    R.metrics["plant_interferometer_noise_m"] = ov.plant.interferometer.noise_m;
+    R.metrics["plant_displacement_noise_m"] = ov.plant.displacement.noise_m;
+  }
+  for (const auto& [name, value] : ov.drawn_errors) R.metrics["plant_error_" + name] = value;
   return R;
 }
 

@@ -52,7 +52,13 @@ Amplifiers::Amplifiers(const AmplifierConfig& config)
     : config_(config),
       omega_(config.loop_transresistance_V_per_A / config.coil_inductance_H),
       v_max_(config.supply_voltage_V - config.output_dropout_V),
-      force_noise_std_A_(ForceNoiseStd_A(config)) {}
+      force_noise_std_A_(ForceNoiseStd_A(config)) {
+  for (int j = 0; j < kCoils; ++j) {
+    bandwidth_spread_ = bandwidth_spread_ || config.bandwidth_error[j] != 0.0;
+    omega_coil_[j] = omega_ * (1.0 + config.bandwidth_error[j]);
+    k_coil_[j] = config.loop_transresistance_V_per_A * (1.0 + config.bandwidth_error[j]);
+  }
+}
 
 double Amplifiers::bandwidth_Hz() const { return omega_ / (2.0 * io::stage::kPi); }
 
@@ -85,11 +91,17 @@ void Amplifiers::BeginSubstep(double h_s) {
   for (int j = 0; j < kCoils; ++j) {
     const double i0 = current_[j];
     const double it = target_[j];
-    const double v_demand = r * i0 + k * (it - i0);
+    double lh = lin_half, lf = lin_full, kj = k;
+    if (bandwidth_spread_) {
+      lh = std::exp(-omega_coil_[j] * h_s / 2.0);
+      lf = lh * lh;
+      kj = k_coil_[j];
+    }
+    const double v_demand = r * i0 + kj * (it - i0);
     stage_current_[0][j] = i0;
     if (std::fabs(v_demand) <= v_max_) {
-      stage_current_[1][j] = it + (i0 - it) * lin_half;
-      stage_current_[2][j] = it + (i0 - it) * lin_full;
+      stage_current_[1][j] = it + (i0 - it) * lh;
+      stage_current_[2][j] = it + (i0 - it) * lf;
     } else {
       // Output at the rail: L di/dt = +-V_max - R i, never past the target.
       const double i_inf = std::copysign(v_max_, v_demand) / r;

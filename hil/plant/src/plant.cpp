@@ -34,6 +34,14 @@ Eigen::Vector2d ForcerCentre(int forcer, double l, BodyConfig::Layout layout) {
   }
 }
 
+// As built: the magnets' pitch differs from the one the kernel (and the coil
+// layout) assume.
+FieldConfig FieldOf(const PlantConfig& c) {
+  FieldConfig f = c.field;
+  if (c.as_built.active && c.as_built.magnet_pitch_error != 0.0) f.pitch_m *= 1.0 + c.as_built.magnet_pitch_error;
+  return f;
+}
+
 }  // namespace
 
 PlantConfig PlantConfig::Ideal() {
@@ -83,7 +91,7 @@ Eigen::Vector3d Plant::AnglesFromRotation(const Eigen::Matrix3d& r) {
 
 Plant::Plant(const PlantConfig& config, std::uint64_t seed)
     : config_(config),
-      field_(config.field),
+      field_(FieldOf(config)),
       amplifiers_(config.amplifier),
       rng_(seed),
       mass_(config.body.mass_kg + config.body.payload_kg),
@@ -102,6 +110,7 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
             (config.suspension.subtract_magnetic_stiffness ? field_.gamma1_per_m() * weight : 0.0);
 
   triangle_ = config.body.layout == BodyConfig::Layout::kTriangle;
+  as_built_ = config.as_built.active;
   if (triangle_) {
     BuildTriangleSides();
   } else {
@@ -117,6 +126,31 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
   body_.position_m = {config.initial.position_m[0], config.initial.position_m[1], config.initial.position_m[2]};
   body_.attitude = Eigen::Quaterniond(
       RotationFromAngles(config.initial.angles_rad[0], config.initial.angles_rad[1], config.initial.angles_rad[2]));
+
+  if (as_built_) {
+    // The platen's geometric centre starts where the nominal one would: its
+    // CoM (the state) sits at the drawn offset from it.
+    body_.position_m.x() += config.as_built.com_offset_m[0];
+    body_.position_m.y() += config.as_built.com_offset_m[1];
+    const double* poi = config.as_built.products_of_inertia_kgm2;
+    if (poi[0] != 0.0 || poi[1] != 0.0 || poi[2] != 0.0) {
+      full_inertia_ = true;
+      inertia_matrix_ << inertia_[0], -poi[0], -poi[1], -poi[0], inertia_[1], -poi[2], -poi[1], -poi[2], inertia_[2];
+      inertia_inverse_ = inertia_matrix_.inverse();
+    }
+    // Readings are zero at the reference pose (geometric centre at the
+    // origin, level): the counters and the LDS are set there on the stage as
+    // built, as the nominal plant's are.
+    const BodyState initial = body_;
+    body_ = BodyState{};
+    body_.position_m = {config.as_built.com_offset_m[0], config.as_built.com_offset_m[1], 0.0};
+    for (int a = 0; a < io::kInterferometerAxes; ++a) interferometer_zero_[a] = AsBuiltInterferometer(a);
+    for (int i = 0; i < io::kDisplacementSensors; ++i) {
+      // Spot at the sensor's own (x, y) when the geometric centre is at the origin.
+      target_home_m_[i] = TargetHeight(config.displacement.sensor_x_m[i], config.displacement.sensor_y_m[i]);
+    }
+    body_ = initial;
+  }
 
   lsb_m_ = config.interferometer.wavelength_m /
            (static_cast<double>(config.interferometer.fold) * config.interferometer.interpolation);
@@ -140,8 +174,11 @@ void Plant::BuildArraySides() {
   // 1&2, 3&4) or -L/4 (5&6, 7&8): the layout is symmetric under a 180 deg
   // turn, and the four sides of a pair are L/4 apart (Sec. III).
   const double pitch = config_.field.pitch_m;
-  const double gamma1 = field_.gamma1_per_m();
+  // The layout is the kernel's (nominal pitch) even when the magnets differ.
+  const double gamma1 = (as_built_ && config_.as_built.magnet_pitch_error != 0.0) ? 2.0 * kPi / pitch
+                                                                                    : field_.gamma1_per_m();
   const double l = config_.body.lever_arm_m;
+  const AsBuiltConfig& ab = config_.as_built;
   int k = 0;
   for (int j = 0; j < kCoils; ++j) {
     const int f = j / 2;
@@ -154,7 +191,8 @@ void Plant::BuildArraySides() {
       centre = (f < 2) ? pitch / 4.0 : -pitch / 4.0;
     }
     const Eigen::Vector3d u_ref = fx_coil ? Eigen::Vector3d(0.0, -1.0, 0.0) : Eigen::Vector3d(1.0, 0.0, 0.0);
-    const Eigen::Vector2d fc = ForcerCentre(f, l, config_.body.layout);
+    Eigen::Vector2d fc = ForcerCentre(f, l, config_.body.layout);
+    if (as_built_) fc *= 1.0 + ab.forcer_lever_offset_m[f] / fc.norm();
     const double alpha = config_.forcer_errors.misalignment_rad[f];
     const Eigen::Matrix3d rot_alpha = Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     for (int side = 0; side < 2; ++side) {
@@ -168,6 +206,13 @@ void Plant::BuildArraySides() {
       // Misalignment: the pair turns by alpha about its centre (paper 003).
       const Eigen::Vector3d centre3(fc.x(), fc.y(), -com_arm_m_);
       r = centre3 + rot_alpha * (r - centre3);
+      if (as_built_) {
+        // The coil sits off its place along the array (a commutation phase
+        // error), and the CoM is off the geometric centre.
+        r[fx_coil ? 0 : 1] += ab.coil_shift_m[j];
+        r.x() -= ab.com_offset_m[0];
+        r.y() -= ab.com_offset_m[1];
+      }
       CoilSide cs;
       cs.coil = j;
       cs.forcer = f;
@@ -201,6 +246,8 @@ void Plant::BuildArraySides() {
     c.eps_t_x = c.sel_x * config_.forcer_errors.epsilon_tangential[cs.forcer];
     c.eps_t_y = c.sel_y * config_.forcer_errors.epsilon_tangential[cs.forcer];
     c.eps_z = config_.forcer_errors.epsilon_off_axis_z[cs.forcer];
+    c.gain = 1.0 + (as_built_ ? ab.forcer_bstar_error[cs.forcer] : 0.0);
+    c.roll = as_built_ ? ab.coil_roll_rad[cs.coil] : 0.0;
     c.ax = cs.array_axis;
     c.coil = cs.coil;
   }
@@ -539,6 +586,18 @@ void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* ac
     double f0 = scale * (c.uy * bb2);
     double f1 = scale * (-c.ux * bb2);
     double f2 = scale * (c.ux * bb1 - c.uy * bb0);
+    if (as_built_) {
+      // The forcer's b* error scales both components; the coil's roll turns
+      // (F_t, F_z) by its angle.
+      f0 *= c.gain;
+      f1 *= c.gain;
+      f2 *= c.gain;
+      const double t0 = c.sel_x * f0 + c.sel_y * f1;
+      const double dt = -c.roll * f2;
+      f2 += c.roll * t0;
+      f0 += c.sel_x * dt;
+      f1 += c.sel_y * dt;
+    }
     // Paper 003: F_t -> F_t (1 + eps_t), dF_z = eps_z F_t (platen frame).
     // Branch-free in registers: the selectors are exact 0/1 (the tangential
     // axis is X' or Y'), eps = 0 when the errors are off (exact no-ops).
@@ -591,6 +650,10 @@ void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
 // (at the coils' plane): its vertical force and the tilt torques it makes.
 void Plant::AddSpring(const Kinematics& k, double x, double y, double k_spring, double c_spring, double h0,
                       Accum* acc) const {
+  if (as_built_) {
+    x -= config_.as_built.com_offset_m[0];
+    y -= config_.as_built.com_offset_m[1];
+  }
   const Eigen::Vector3d rb(x, y, -com_arm_m_);
   double rw[3];
   Rotate(k.r, rb, rw);
@@ -710,6 +773,11 @@ BodyDerivative Plant::Derivative(const BodyState& state, const double* currents_
                      0.5 * (q.w() * om.y() + q.z() * om.x() - q.x() * om.z()),
                      0.5 * (q.w() * om.z() + q.x() * om.y() - q.y() * om.x())};
   // Euler's equations in the principal body frame.
+  if (full_inertia_) {
+    const Eigen::Vector3d i_om = inertia_matrix_ * om;
+    d.angular_acceleration_body = inertia_inverse_ * (w.torque_body_Nm - om.cross(i_om));
+    return d;
+  }
   const Eigen::Vector3d i_om = inertia_.cwiseProduct(om);
   d.angular_acceleration_body = (w.torque_body_Nm - om.cross(i_om)).cwiseQuotient(inertia_);
   return d;
@@ -820,7 +888,56 @@ void Plant::RefreshTruthWrench() const {
 // ---------------------------------------------------------------------------
 // Sensors
 // ---------------------------------------------------------------------------
+// As built: mirror normals turned by the drawn angles, mirror faces and beams
+// relative to the CoM (off the geometric centre), a bowed mirror; the reading
+// is zeroed at the home pose (interferometer_zero_).
+double Plant::AsBuiltInterferometer(int axis) const {
+  const Eigen::Matrix3d r = body_.attitude.toRotationMatrix();
+  const auto& ic = config_.interferometer;
+  const AsBuiltConfig& ab = config_.as_built;
+  const double d = ic.mirror_distance_m;
+  const double zb = ic.beam_height_m;
+  const double cx = ab.com_offset_m[0], cy = ab.com_offset_m[1];
+  const Eigen::Vector3d& p = body_.position_m;
+  if (axis == 0) {
+    const Eigen::Vector3d nb = Eigen::Vector3d(1.0, ab.x_mirror_yaw_rad, ab.x_mirror_pitch_rad).normalized();
+    const Eigen::Vector3d m0(d - cx, -cy, 0.0);  // a point of the mirror face, CoM frame
+    const Eigen::Vector3d n = r * nb;
+    const double t = (n.dot(p) + nb.dot(m0) - n.z() * zb) / n.x();
+    const Eigen::Vector3d hit = r.transpose() * (Eigen::Vector3d(t, 0.0, zb) - p);
+    const double s = (hit.y() + cy) / ab.mirror_half_length_m;
+    return t + ab.mirror_bow_m * s * s;
+  }
+  const double xb = (axis == 1 ? -0.5 : 0.5) * ic.y_beam_separation_m;
+  const Eigen::Vector3d nb = Eigen::Vector3d(0.0, 1.0, ab.y_mirror_roll_rad).normalized();
+  const Eigen::Vector3d m0(-cx, d - cy, 0.0);
+  const Eigen::Vector3d n = r * nb;
+  const double t = (n.dot(p) + nb.dot(m0) - n.x() * xb - n.z() * zb) / n.y();
+  const Eigen::Vector3d hit = r.transpose() * (Eigen::Vector3d(xb, t, zb) - p);
+  const double s = (hit.x() + cx) / ab.mirror_half_length_m;
+  return t + ab.mirror_bow_m * s * s;
+}
+
+// Height offset of the LDS target (the magnet matrix top) under (x, y):
+// one value per target_cell_m square, uniform in +-target_cell_height_m,
+// from a hash of (target_seed, cell): no storage, any travel.
+double Plant::TargetHeight(double x_m, double y_m) const {
+  const AsBuiltConfig& ab = config_.as_built;
+  if (ab.target_cell_height_m == 0.0) return 0.0;
+  const auto i = static_cast<std::int64_t>(std::floor(x_m / ab.target_cell_m));
+  const auto j = static_cast<std::int64_t>(std::floor(y_m / ab.target_cell_m));
+  std::uint64_t z = ab.target_seed * 0x9e3779b97f4a7c15ull + static_cast<std::uint64_t>(i) * 0xbf58476d1ce4e5b9ull +
+                    static_cast<std::uint64_t>(j) * 0x94d049bb133111ebull;
+  // splitmix64 finalizer
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  z ^= z >> 31;
+  const double u = static_cast<double>(z >> 11) * (1.0 / 9007199254740992.0);  // [0, 1)
+  return ab.target_cell_height_m * (2.0 * u - 1.0);
+}
+
 double Plant::InterferometerDisplacement(int axis) const {
+  if (as_built_) return AsBuiltInterferometer(axis) - interferometer_zero_[axis];
   // Plane mirror on the platen at mirror_distance_m from the centre; the beam
   // is fixed in the world. Returns the beam's hit point along its axis minus
   // its value at the reference pose (exact, includes Abbe and cosine terms).
@@ -873,8 +990,16 @@ io::SensorSample Plant::sample() {
   // --- laser displacement sensors ---------------------------------------------
   const auto& dc = config_.displacement;
   for (int i = 0; i < io::kDisplacementSensors; ++i) {
-    const Eigen::Vector3d rb(dc.sensor_x_m[i], dc.sensor_y_m[i], -com_arm_m_);
-    const double h = body_.position_m.z() + (r * rb).z() - rb.z();
+    Eigen::Vector3d rb(dc.sensor_x_m[i], dc.sensor_y_m[i], -com_arm_m_);
+    double target = 0.0;
+    if (as_built_) {
+      rb.x() -= config_.as_built.com_offset_m[0];
+      rb.y() -= config_.as_built.com_offset_m[1];
+      const Eigen::Vector3d w = body_.position_m + r * rb;
+      // A higher target under the spot reads as a lower platen.
+      target = TargetHeight(w.x(), w.y()) - target_home_m_[i];
+    }
+    const double h = body_.position_m.z() + (r * rb).z() - rb.z() - target;
     const double noise = noisy ? dc.noise_m * rng_.Normal() : 0.0;
     const double volts = (h + noise - dc.zero_height_m) / dc.scale_m_per_V;
     if (std::fabs(volts) > config_.adc.full_scale_V) {
@@ -887,7 +1012,11 @@ io::SensorSample Plant::sample() {
   const auto& hc = config_.hall;
   const double hall_xy[2][2] = {{hc.a_x_m, hc.a_y_m}, {hc.b_x_m, hc.b_y_m}};
   for (int sensor = 0; sensor < 2; ++sensor) {
-    const Eigen::Vector3d rb(hall_xy[sensor][0], hall_xy[sensor][1], -com_arm_m_);
+    Eigen::Vector3d rb(hall_xy[sensor][0], hall_xy[sensor][1], -com_arm_m_);
+    if (as_built_) {
+      rb.x() -= config_.as_built.com_offset_m[0];
+      rb.y() -= config_.as_built.com_offset_m[1];
+    }
     const Eigen::Vector3d w = body_.position_m + r * rb;
     const double height = hc.height_above_magnets_m + w.z() - rb.z();
     const FieldSZ bx = field_.PointField(w.x(), height);

@@ -107,6 +107,7 @@ ParseResult parse_scenario(const std::string& text, const std::string& source) {
       auto& map = section == "scenario" ? sc.scenario : section == "plant" ? sc.plant : sc.controller;
       if (map.count(key)) { fail(line_no, "duplicate key '" + key + "' in [" + section + "]"); continue; }
       map[key] = value;
+      if (section == "plant") sc.plant_line[key] = line_no;
     }
   }
   if (sc.name().empty()) fail(0, "[scenario] needs 'name = ...'");

@@ -3,11 +3,13 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "maglev/controller/controller.hpp"
 #include "maglev/controller_node/controller_node.hpp"
+#include "maglev/plant/as_built.hpp"
 #include "maglev/plant/plant_config.hpp"
 #include "maglev/scenario/scenario.hpp"
 #include "maglev/stage_profile/stage_profile.hpp"
@@ -30,6 +32,13 @@ struct Overrides {
   kernel::KernelConfig controller = kernel::default_kernel_config();
   std::uint64_t seed = 1;
   hil::KernelKind kernel = hil::KernelKind::kFloat32;
+  // [plant] model (docs/PLANT.md "Plant models and error sets"); the command
+  // line's --plant / --error-seed win over the scenario's keys.
+  hil::PlantModel plant_model = hil::PlantModel::kDefault;
+  std::optional<hil::PlantModel> plant_model_override;
+  std::optional<std::uint64_t> error_seed_override;
+  hil::ErrorSet error_set;
+  hil::DrawnErrors drawn_errors;  // as-built: what was drawn (metrics.json plant_error_*)
 };
 
 // Loads the profile NAME|FILE and builds the kernel configuration and the

@@ -24,6 +24,7 @@
 #include "maglev/bench/axes.hpp"
 #include "maglev/bench/overrides.hpp"
 #include "maglev/controller_node/controller_node.hpp"
+#include "maglev/plant/as_built.hpp"
 #include "maglev/scenario/scenario.hpp"
 
 namespace maglev::bench {
@@ -36,6 +37,8 @@ struct RunOptions {
   Mode mode = Mode::kLockstep;
   std::optional<std::uint64_t> seed;      // overrides the scenario's `seed`
   std::optional<std::string> profile;     // overrides the scenario's `profile` (NAME or FILE)
+  std::optional<hil::PlantModel> plant;   // --plant: overrides the scenario's [plant] model
+  std::optional<std::uint64_t> error_seed;  // --error-seed: overrides [plant] error_seed (as-built)
   bool verbose = true;                    // print command results while running
   // Fault injection and judging (maglev-hil campaign); nullptr: none. Only
   // the in-process run with --can virtual takes hooks.

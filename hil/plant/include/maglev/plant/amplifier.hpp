@@ -66,6 +66,11 @@ class Amplifiers {
  private:
   AmplifierConfig config_;
   double omega_;   // K / L
+  // As built: per-coil loop gain K (1 + bandwidth_error[j]) (all equal to K
+  // when the errors are 0; the one-exp path is then kept).
+  bool bandwidth_spread_ = false;
+  double omega_coil_[kCoils] = {};
+  double k_coil_[kCoils] = {};
   double v_max_;   // supply - dropout
   double force_noise_std_A_;  // per tick
   double current_[kCoils] = {};

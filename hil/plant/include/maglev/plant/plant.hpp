@@ -190,6 +190,8 @@ class Plant {
     double sel_x, sel_y;      // 1 for the tangential axis (X' or Y'), else 0
     double eps_t_x, eps_t_y;  // the forcer's paper-003 tangential error on X' / Y'
     double eps_z;             // its off-axis vertical error
+    double gain;              // as built: 1 + the forcer's b* error
+    double roll;              // as built: the coil's roll (turns (F_t, F_z))
     int ax;
     int coil;
   };
@@ -207,6 +209,16 @@ class Plant {
   std::array<ObliqueSide, 2 * 2 * kTriangleForcers> oblique_sides_{};
   bool triangle_ = false;
   bool forcer_errors_active_ = false;
+  // As built (config_.as_built.active): the branches below are taken only
+  // then, so the nominal and default plants keep their arithmetic bit for bit.
+  bool as_built_ = false;
+  bool full_inertia_ = false;
+  Eigen::Matrix3d inertia_matrix_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d inertia_inverse_ = Eigen::Matrix3d::Zero();
+  double interferometer_zero_[io::kInterferometerAxes] = {};
+  double target_home_m_[io::kDisplacementSensors] = {};
+  double AsBuiltInterferometer(int axis) const;
+  double TargetHeight(double x_m, double y_m) const;
 
   double mass_;
   Eigen::Vector3d external_force_N_ = Eigen::Vector3d::Zero();

@@ -114,6 +114,9 @@ struct AmplifierConfig {
   double current_limit_A = 5.0;     // (ours) = DAC full scale * gain
   double gain_error[kCoils] = {0, 0, 0, 0, 0, 0, 0, 0};  // fraction
   double offset_A[kCoils] = {0, 0, 0, 0, 0, 0, 0, 0};
+  // As built (docs/PLANT.md "Error sets"): per-amplifier current-loop
+  // bandwidth error, fraction (the loop's RC parts' tolerance). 0 = nominal.
+  double bandwidth_error[kCoils] = {0, 0, 0, 0, 0, 0, 0, 0};
   // --- Noise (docs/BENCH.md "Amplifier current noise") --------------------
   // Two separate things, because paper 003 Table 1 reports the std of the
   // MEASURED current (monitor chain included, bandwidth unknown), while what
@@ -185,6 +188,41 @@ struct AdcConfig {
   double full_scale_V = io::stage::kAdcFullScale_V;
 };
 
+// --- As-built geometry (docs/PLANT.md "Error sets") -----------------------
+// How the built stage differs from the geometry the kernel assumes. Every
+// field 0 = the nominal stage (and the plant's arithmetic is then exactly
+// that of the nominal stage: the terms are applied only when `active`).
+// Drawn from an error set by DrawAsBuilt (as_built.hpp), never hand-set to a
+// result.
+struct AsBuiltConfig {
+  bool active = false;
+  // Coils (cross and square layouts).
+  double coil_shift_m[kCoils] = {};         // along its array axis: a commutation phase error
+  double coil_roll_rad[kCoils] = {};        // about the side's length: turns (F_t, F_z)
+  double forcer_lever_offset_m[kForcers] = {};  // forcer centre, away from the platen centre
+  double forcer_bstar_error[kForcers] = {};     // b* of the forcer, fraction (both components)
+  // Platen: CoM offset from the geometric centre (x, y; the height is
+  // BodyConfig::com_above_coil_midplane_m) and the products of inertia.
+  double com_offset_m[2] = {};
+  double products_of_inertia_kgm2[3] = {};  // Ixy, Ixz, Iyz
+  // Magnet array: pitch error, fraction (the plant's field pitch vs the kernel's).
+  double magnet_pitch_error = 0.0;
+  // Metrology: mirror normals in the platen frame turn by these angles.
+  double x_mirror_yaw_rad = 0.0;    // in-plane: orthogonality to the y mirror
+  double x_mirror_pitch_rad = 0.0;  // out of plane
+  double y_mirror_roll_rad = 0.0;   // out of plane
+  double mirror_bow_m = 0.0;        // flatness: bow at the mirror's ends (+-half length)
+  double mirror_half_length_m = 0.05;
+  double y_beam_separation_error_m = 0.0;
+  // Laser displacement sensors' target (the magnet matrix top): a height
+  // offset per 12.7 mm square cell, from a hash of (target_seed, i, j),
+  // uniform in +-target_cell_height_m. Zeroed at the home pose (the sensors
+  // are set at their working distance on the stage as built).
+  double target_cell_height_m = 0.0;
+  double target_cell_m = 12.7e-3;
+  std::uint64_t target_seed = 0;
+};
+
 // --- Integration -------------------------------------------------------------
 struct IntegrationConfig {
   double servo_rate_Hz = io::stage::kServoRate_Hz;
@@ -210,6 +248,7 @@ struct PlantConfig {
   AdcConfig adc;
   IntegrationConfig integration;
   InitialState initial;
+  AsBuiltConfig as_built;
   bool sensor_noise_enabled = true;
 
   // The bench default: ideal + small realistic imperfections (docs/PLANT.md).

@@ -38,6 +38,7 @@ struct Scenario {
   std::string source;  // file path or "<builtin:name>"
   std::map<std::string, std::string> scenario;
   std::map<std::string, std::string> plant;
+  std::map<std::string, int> plant_line;  // [plant] key -> its line (errors say file:line: key: reason)
   std::map<std::string, std::string> controller;
   std::vector<TimelineEntry> timeline;  // sorted by t_s (stable)
   std::vector<MetricRequest> metrics;

@@ -1,0 +1,63 @@
+#!/bin/sh
+# Issue 15 on the bench: [plant] refusals as file:line: key: reason, the drawn
+# errors in metrics.json (reproducible per error seed), as-built coupling
+# above rest noise and above the nominal stage's, ideal unchanged.
+#   usage: fidelity_bench.sh MAGLEV_HIL SOURCE_DIR OUT_DIR PYTHON3
+set -u
+HIL="$1"; DIR="$2"; OUT="$3"; PY="$4"
+rm -rf "$OUT"; mkdir -p "$OUT"
+fail() { echo "FAIL: $*"; exit 1; }
+expect() {  # expect FILE PATTERN: the refusal names file:line: key: reason
+  out=$("$HIL" check "$DIR/$1" 2>&1) && fail "$1 accepted"
+  echo "$out" | grep -q -- "$2" || { echo "$out"; fail "$1: no '$2'"; }
+}
+expect bad_plant.scenario "bad_plant.scenario:8: coil_yaw_rad: 0.02 is above its physical bound"
+expect bad_plant.scenario "bad_plant.scenario:9: com_xy_m: a magnitude, must be >= 0"
+expect bad_plant.scenario "bad_plant.scenario:10: amp_gain_error: not a number: 'lots'"
+expect bad_plant.scenario "bad_plant.scenario:11: error_scale: must be within \[0, 2\]"
+expect bad_model.scenario "bad_model.scenario:7: model: expected default, ideal, nominal or as-built, got 'as_bilt'"
+expect bad_model.scenario "bad_model.scenario:8: noise: expected component or fitted, got 'quiet'"
+expect bad_nominal.scenario "bad_nominal.scenario:8: bstar_error: an error-set key needs model = as-built"
+out=$("$HIL" run "$DIR/fidelity_move.scenario" --plant bogus --out "$OUT/x" 2>&1) && fail "--plant bogus accepted"
+echo "$out" | grep -q -- "--plant: expected default, ideal, nominal or as-built, got 'bogus'" || fail "--plant message: $out"
+echo "refusals: ok"
+run() {  # run NAME ARGS...: a run into OUT/NAME
+  name=$1; shift
+  "$HIL" run "$DIR/fidelity_move.scenario" --out "$OUT/$name" --no-plots --quiet "$@" > "$OUT/$name.log" 2>&1 ||
+    { cat "$OUT/$name.log"; fail "run $name"; }
+}
+run seed3a --error-seed 3
+run seed3b --error-seed 3
+run seed4 --error-seed 4
+run nominal --plant nominal
+"$HIL" run "$DIR/../bench/short.scenario" --plant ideal --out "$OUT/ideal" --no-plots --quiet > "$OUT/ideal.log" 2>&1 ||
+  { cat "$OUT/ideal.log"; fail "run ideal"; }
+"$PY" - "$OUT" <<'PYEOF' || exit 1
+import json, sys
+out = sys.argv[1]
+m = {n: json.load(open(f"{out}/{n}/metrics.json")) for n in ("seed3a", "seed3b", "seed4", "nominal", "ideal")}
+def errors(d): return {k: v for k, v in d.items() if k.startswith("plant_error_")}
+a, b, c = errors(m["seed3a"]), errors(m["seed3b"]), errors(m["seed4"])
+assert len(a) >= 70, f"only {len(a)} drawn errors recorded"
+for key in ("plant_error_amp1_gain_error", "plant_error_coil8_position_m", "plant_error_forcer4_bstar_error",
+            "plant_error_com_height_m", "plant_error_x_mirror_yaw_rad", "plant_error_lds3_dy_m",
+            "plant_error_ixy_kgm2", "plant_error_magnet_pitch_error", "plant_error_error_seed"):
+    assert key in a, f"{key} not in metrics.json"
+assert a == b, "the same error seed drew different errors"
+assert a["plant_error_error_seed"] == 3 and c["plant_error_error_seed"] == 4
+assert sum(a[k] != c[k] for k in a) > 60, "another error seed drew the same errors"
+assert m["seed3a"]["plant_model"] == 3 and m["nominal"]["plant_model"] == 2
+assert not errors(m["nominal"]), "nominal recorded drawn errors"
+assert m["ideal"]["plant_model"] == 1 and not errors(m["ideal"])
+assert m["ideal"]["completed"] == 1
+# As built couples: theta_y p-p during the move well above its rest p-p and
+# above the nominal stage's (thrust below the raised CoM, roll, b* spread).
+for n in ("seed3a", "seed4"):
+    pp, rest = m[n]["move_pp_theta_y_rad"], m[n]["move_rest_pp_theta_y_rad"]
+    assert m[n]["completed"] == 1 and m[n]["final_sequencer_state"] == m["nominal"]["final_sequencer_state"]
+    assert pp > 5 * rest, f"{n}: theta_y p-p {pp} not above 5x rest {rest}"
+    assert pp > 3 * m["nominal"]["move_pp_theta_y_rad"], f"{n}: theta_y p-p {pp} vs nominal {m['nominal']['move_pp_theta_y_rad']}"
+    print(f"{n}: theta_y p-p {pp:.3g} rad, rest {rest:.3g}, nominal {m['nominal']['move_pp_theta_y_rad']:.3g}")
+print("metrics.json: ok")
+PYEOF
+echo "hil_fidelity_bench: passed"
