@@ -26,6 +26,10 @@ PACKAGES=(
   can-utils openocd
   # scripts and plots
   python3 python3-matplotlib python3-numpy
+  # the lab Python package (host-tools/python/maglev): Modbus client; its serial
+  # transport imports serial_asyncio (a Recommends of python3-pymodbus); pip install
+  # --no-build-isolation host-tools/python needs setuptools
+  python3-pymodbus python3-serial-asyncio python3-setuptools
   # independent readers of maglev-hil's --can-log: candump log + DBC decode (tests/can check_can_log.py)
   python3-can python3-canmatrix
   # SocketCAN VM: initramfs building, serial/socket plumbing, kernel modules

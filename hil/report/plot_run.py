@@ -33,9 +33,9 @@ def scaled(values, rotation):
     return values, "rad" if rotation else "m"
 
 
-def small_steps(run_dir, primary, d, col, sl):
-    """Times of up to 4 'step' commands on the primary axis that are < 2 % of
-    the plotted span (invisible at full scale)."""
+def primary_steps(run_dir, primary, d, col, sl):
+    """(time, sign, small) of every accepted 'step' command on the primary axis;
+    small: < 2 % of the plotted span (invisible at full scale)."""
     path = os.path.join(run_dir, "commands.txt")
     if not os.path.exists(path):
         return []
@@ -50,13 +50,13 @@ def small_steps(run_dir, primary, d, col, sl):
     span = float(np.nanmax(v) - np.nanmin(v)) if v.size else 0.0
     out = []
     for ts in times:
+        # A step moves the reference at once: compare a few ticks after it.
         i = np.searchsorted(d["t_s"], ts)
-        j = min(i + 500, d.size - 1)
-        size = abs(float(d[col[primary].replace("_m", "_ref_m").replace("_rad", "_ref_rad")][j]) -
-                   float(d[col[primary].replace("_m", "_ref_m").replace("_rad", "_ref_rad")][max(i - 1, 0)]))
-        if span > 0 and size < 0.02 * span:
-            out.append(ts)
-    return out[:4]
+        j = min(i + 5, d.size - 1)
+        ref_col = col[primary].replace("_m", "_ref_m").replace("_rad", "_ref_rad")
+        delta = float(d[ref_col][j]) - float(d[ref_col][max(i - 1, 0)])
+        out.append((ts, 1.0 if delta >= 0 else -1.0, span > 0 and abs(delta) < 0.02 * span))
+    return out
 
 
 def zoom(ax, d, t, c, r, ts, rot):
@@ -67,6 +67,35 @@ def zoom(ax, d, t, c, r, ts, rot):
     ax.plot(t[m] - ts, y[:n] - base, lw=0.6)
     ax.plot(t[m] - ts, y[n:] - base, lw=0.8, ls="--", color="k")
     ax.set_title(f"step at {ts:g} s ({u})", fontsize=7)
+    ax.set_xlabel("t - t_step (s)", fontsize=7)
+    ax.tick_params(labelsize=6)
+    ax.grid(True, lw=0.3)
+
+
+def averaged(ax, d, t, c, steps, rot):
+    """The steps averaged, each in its own direction from its own level (the
+    averaging of the bench's step_avg metric, metrics::average_steps): what a
+    step within the noise really does."""
+    times = [ts for ts, _, _ in steps]
+    gap = min(b - a for a, b in zip(times, times[1:]))
+    dt = float(t[1] - t[0])
+    n_pre, n_post = int(round(min(0.05, gap / 2) / dt)), int(round((gap - min(0.05, gap / 2)) / dt))
+    acc, n = np.zeros(n_pre + n_post), 0
+    for ts, sign, _ in steps:
+        i0 = int(np.searchsorted(t, ts))
+        if i0 >= n_pre and i0 + n_post <= t.size:
+            acc += sign * (d[c][i0 - n_pre:i0 + n_post] - d[c][i0 - n_pre:i0].mean())
+            n += 1
+    ys, u = scaled(acc / n, rot)
+    tt = (np.arange(n_pre + n_post) - n_pre) * dt
+    size, _ = scaled(np.array([np.mean([abs(float(d[c.replace("_m", "_ref_m").replace("_rad", "_ref_rad")]
+                                                  [min(int(np.searchsorted(t, ts)) + 5, t.size - 1)] -
+                                                  d[c.replace("_m", "_ref_m").replace("_rad", "_ref_rad")]
+                                                  [max(int(np.searchsorted(t, ts)) - 1, 0)]))
+                                              for ts, _, _ in steps])]), rot)
+    ax.plot(tt, ys, lw=0.8, color="C3")
+    ax.plot(tt, np.where(tt < 0, 0.0, size[0]), lw=0.8, ls="--", color="k")
+    ax.set_title(f"average of {n} steps ({u})", fontsize=7)
     ax.set_xlabel("t - t_step (s)", fontsize=7)
     ax.tick_params(labelsize=6)
     ax.grid(True, lw=0.3)
@@ -93,12 +122,17 @@ def main():
     rot = a.primary.startswith("theta")
     # Steps on the primary axis that the full-scale panel cannot show (a 10 nm
     # step beside a 6 mm circle) get zoom panels below it: +-0.1 s around each.
-    steps = small_steps(a.run_dir, a.primary, d, col, sl)
-    if steps:
-        sub = gs[:, 0].subgridspec(2, len(steps), height_ratios=[2.2, 1.0], hspace=0.35, wspace=0.35)
+    # A train of 8 or more steps (x_steps_10nm) gets a panel of their average.
+    steps = primary_steps(a.run_dir, a.primary, d, col, sl)
+    shown = [ts for ts, _, small in steps if small][:3 if len(steps) >= 8 else 4]
+    if shown or len(steps) >= 8:
+        panels = len(shown) + (1 if len(steps) >= 8 else 0)
+        sub = gs[:, 0].subgridspec(2, panels, height_ratios=[2.2, 1.0], hspace=0.35, wspace=0.35)
         ax0 = fig.add_subplot(sub[0, :])
-        for k, ts in enumerate(steps):
+        for k, ts in enumerate(shown):
             zoom(fig.add_subplot(sub[1, k]), d, t, col[a.primary], ref[a.primary], ts, rot)
+        if len(steps) >= 8:
+            averaged(fig.add_subplot(sub[1, len(shown)]), d, t, col[a.primary], steps, rot)
     else:
         ax0 = fig.add_subplot(gs[:, 0])
     y = d[col[a.primary]][sl]

@@ -2,6 +2,7 @@
 // The register names, types, units and ranges come from the same
 // registers.def the firmware serves (maglev/register_schema/register_map.hpp).
 #include <modbus/modbus.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
@@ -20,6 +21,7 @@
 #include "maglev/can_link/host_commands.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/register_schema/register_map.hpp"
+#include "maglev/supervisor/supervisor.hpp"
 #include "exit_codes.hpp"
 #include "lab_commands.hpp"
 
@@ -31,14 +33,21 @@ using maglev::can::HostCommandCode;  // cmd.code values: the one command table
 // Exit codes: host-tools/stagectl/exit_codes.hpp (also in --help and README.md).
 using enum maglev::stagectl::Exit;
 
-const char* kHelp = R"(usage: stagectl (--rtu DEVICE[,BAUD] | --tcp HOST:PORT) [--unit N] [--engineer] [--wait SECONDS] COMMAND
+const char* kHelp = R"(usage: stagectl (--rtu DEVICE[,BAUD] | --tcp HOST:PORT) [--unit N] [--engineer] [--wait SECONDS]
+                [--json] [--count N] [--interval SECONDS] COMMAND
 
 connection:
   --rtu DEVICE[,BAUD]   Modbus RTU on a serial device (default 115200 baud, 8N1)
   --tcp HOST:PORT       Modbus TCP
   --unit N              unit (slave) id, default 1
   --engineer            write the engineer key first (needed for engineer registers)
-  --wait SECONDS        after home/levitate/land/move: wait until the stage gets there
+  --wait SECONDS        after home/levitate/land/move: wait until the stage gets there,
+                        printing its progress (state changes, distance to go) on stderr
+                        (config import/export print theirs too)
+  --json                get, dump, status, registers, watch: JSON on stdout (watch: one
+                        object per line), for scripts
+  --count N             watch: N refreshes, then exit (default: until interrupted)
+  --interval SECONDS    watch: time between refreshes (default 0.2)
 
 commands:
   get NAME                 print one register: NAME = value  # unit
@@ -54,6 +63,8 @@ commands:
   config import FILE       check the whole file, then write every entry
   save                     save the configuration to flash (needs --engineer)
   registers                list the register table (names, addresses, units, ranges)
+  watch [NAME...]          live values, refreshed in place (default: state, fault,
+                           moving, pose, scale_k); --count, --interval
 
 exit codes:
   0 ok            1 usage        2 cannot connect      3 bad name/value (local check)
@@ -69,6 +80,9 @@ struct Options {
   int unit = 1;
   bool engineer = false;
   double wait_s = 0.0;
+  bool json = false;        // --json: machine-readable output of the read commands
+  long watch_count = 0;     // --count: watch refreshes (0 = until interrupted)
+  double interval_s = 0.2;  // --interval: watch period
   std::vector<std::string> args;
 };
 
@@ -283,12 +297,58 @@ double parse_or_die(const RegisterDef& d, const std::string& text, const char* u
   return v;
 }
 
-int wait_state(Client& c, std::uint16_t want, double seconds) {
+// Progress of a long operation on stderr (stdout stays the command's result):
+// rewritten in place on a terminal, one line per update otherwise (logs, CI).
+class Progress {
+ public:
+  explicit Progress(std::string what) : what_(std::move(what)), tty_(isatty(STDERR_FILENO) == 1) {}
+  ~Progress() {
+    if (tty_ && shown_) std::cerr << "\n";
+  }
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+  double elapsed_s() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+  void update(const std::string& text) {
+    char t[32];
+    std::snprintf(t, sizeof t, "%6.2f s", elapsed_s());
+    std::cerr << (tty_ ? "\r\033[K" : "") << "stagectl: " << what_ << ": " << t << "  " << text << (tty_ ? "" : "\n")
+              << std::flush;
+    shown_ = true;
+  }
+
+ private:
+  std::string what_;
+  bool tty_;
+  bool shown_ = false;
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+};
+
+std::string fault_name(double code) {
+  return code >= 0 && code <= 255 ? maglev::kernel::to_string(static_cast<maglev::kernel::FaultCode>(code)) : "?";
+}
+
+// Waits for status.state == want, printing every state change. `settle`:
+// only accept `want` once the stage has left it or `min_s` has passed (home:
+// Idle -> Homing -> Idle, the command acts on the next servo ticks).
+int wait_state(Client& c, std::uint16_t want, double seconds, const char* what, double min_s = 0.0) {
+  Progress progress(what);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  int last = -1;
+  bool left = false;
   while (std::chrono::steady_clock::now() < deadline) {
     const auto state = static_cast<std::uint16_t>(c.read(def(RegId::status_state)));
-    if (state == want) return kOk;
-    if (state == 8) die(kCommandRejected, "stage faulted (status.fault = " + fmt(c.read(def(RegId::status_fault))) + ")");
+    if (state != last) {
+      progress.update(std::string(state_name(state)) + (state == want && (left || progress.elapsed_s() >= min_s) ? " (done)" : ""));
+      last = state;
+    }
+    if (state != want) left = true;
+    if (state == want && (left || progress.elapsed_s() >= min_s)) return kOk;
+    if (state == 8) {
+      const double f = c.read(def(RegId::status_fault));
+      die(kCommandRejected, "stage faulted (status.fault = " + fmt(f) + " " + fault_name(f) + ")");
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   die(kTimeout, std::string("timed out waiting for state '") + state_name(want) + "'");
@@ -303,13 +363,25 @@ int run_command(Client& c, HostCommandCode code, std::uint16_t axis, float value
   }
   if (o.wait_s <= 0.0) return kOk;
   switch (code) {
-    case HostCommandCode::kLevitate: return wait_state(c, 6, o.wait_s);
-    case HostCommandCode::kLand: return wait_state(c, 0, o.wait_s);
+    case HostCommandCode::kHome: return wait_state(c, 0, o.wait_s, "home", 0.2);
+    case HostCommandCode::kLevitate: return wait_state(c, 6, o.wait_s, "levitate");
+    case HostCommandCode::kLand: return wait_state(c, 0, o.wait_s, "land");
     case HostCommandCode::kMoveTo: {
+      Progress progress(std::string("move ") + kAxisNames[axis]);
       const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.wait_s);
       const double tol = is_rotation(axis) ? 1e-6 : 1e-6;
+      const char* unit = is_rotation(axis) ? " urad" : " um";
+      double next_report_s = 0.0;
       while (std::chrono::steady_clock::now() < deadline) {
-        if (std::fabs(c.read(def(kPoseReg[axis])) - static_cast<double>(value)) < tol) return kOk;
+        const double to_go = static_cast<double>(value) - c.read(def(kPoseReg[axis]));
+        const bool done = std::fabs(to_go) < tol;
+        if (done || progress.elapsed_s() >= next_report_s) {
+          char text[64];
+          std::snprintf(text, sizeof text, "%.3f%s to go%s", to_go * 1e6, unit, done ? " (done)" : "");
+          progress.update(text);
+          next_report_s = progress.elapsed_s() + 0.25;
+        }
+        if (done) return kOk;
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
       }
       die(kTimeout, "timed out waiting for the move");
@@ -397,8 +469,147 @@ int config_import(Client& c, const std::string& path) {
     for (const auto& e : errors) std::cerr << e << "\n";
     die(kFile, std::to_string(errors.size()) + " error(s) in " + path + "; nothing written");
   }
-  for (const Entry& e : entries) c.write(*e.d, e.v, e.text);
+  Progress progress("config import");
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    c.write(*entries[i].d, entries[i].v, entries[i].text);
+    // A line per 25% (RTU: ~10 ms per entry, a full image takes seconds).
+    if ((i + 1) * 4 / entries.size() != i * 4 / entries.size()) {
+      progress.update(std::to_string(i + 1) + "/" + std::to_string(entries.size()) + " written");
+    }
+  }
   std::cout << "imported " << entries.size() << " entries from " << path << "\n";
+  return kOk;
+}
+
+// ---- machine-readable output (--json) and watch --------------------------------
+std::string json_str(const std::string& text) {
+  std::string out = "\"";
+  for (const char ch : text) {
+    if (ch == '"' || ch == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (static_cast<unsigned char>(ch) < 0x20) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\u%04x", static_cast<unsigned>(ch));
+      out += b;
+    } else {
+      out += ch;
+    }
+  }
+  return out + "\"";
+}
+// JSON has no NaN/inf: null.
+std::string json_num(double v) { return std::isfinite(v) ? fmt(v) : "null"; }
+
+int json_get(Client& c, const RegisterDef& d) {
+  std::cout << "{\"name\": " << json_str(d.name) << ", \"value\": " << json_num(c.read(d)) << ", \"unit\": "
+            << json_str(d.unit) << "}\n";
+  return kOk;
+}
+
+// What dump prints: every value register; not a download window (kBlock:
+// stagectl record), not the lab registers of a controller without them.
+bool dumped(const RegisterDef& d, bool lab) {
+  return d.type != RegType::kBlock && (d.kind != Kind::kLab || lab);
+}
+
+// Every dumped register: {"name": value, ...} in address order (units: registers --json).
+int json_dump(Client& c, bool lab) {
+  std::cout << "{";
+  bool first = true;
+  for (std::size_t i = 0; i < kRegisterCount; ++i) {
+    if (!dumped(kRegisters[i], lab)) continue;
+    std::cout << (first ? "\n  " : ",\n  ") << json_str(kRegisters[i].name) << ": " << json_num(c.read(kRegisters[i]));
+    first = false;
+  }
+  std::cout << "\n}\n";
+  return kOk;
+}
+
+int json_registers() {
+  std::cout << "[";
+  for (std::size_t i = 0; i < kRegisterCount; ++i) {
+    const RegisterDef& d = kRegisters[i];
+    std::cout << (i == 0 ? "\n  " : ",\n  ") << "{\"name\": " << json_str(d.name) << ", \"address\": " << d.address
+              << ", \"type\": " << json_str(type_name(d.type)) << ", \"unit\": " << json_str(d.unit)
+              << ", \"min\": " << json_num(d.min) << ", \"max\": " << json_num(d.max)
+              << ", \"default\": " << json_num(d.default_value) << ", \"access\": " << json_str(access_name(d.access))
+              << ", \"writable_when\": " << json_str(when_name(d.when))
+              << ", \"persisted\": " << (d.persisted ? "true" : "false")
+              << ", \"description\": " << json_str(d.description) << "}";
+  }
+  std::cout << "\n]\n";
+  return kOk;
+}
+
+// status as one object, SI units (pose in m / rad).
+int json_status(Client& c) {
+  const double state = c.read(def(RegId::status_state));
+  const double fault = c.read(def(RegId::status_fault));
+  const auto flags = static_cast<std::uint16_t>(c.read(def(RegId::persist_flags)));
+  std::cout << "{\"state\": " << json_num(state) << ", \"state_name\": "
+            << json_str(state_name(static_cast<std::uint16_t>(state))) << ", \"fault\": " << json_num(fault)
+            << ", \"fault_name\": " << json_str(fault_name(fault))
+            << ", \"moving\": " << json_num(c.read(def(RegId::status_moving)))
+            << ", \"saturation\": " << json_num(c.read(def(RegId::status_saturation)))
+            << ", \"scale_k\": " << json_num(c.read(def(RegId::status_scale_k))) << ", \"pose\": {";
+  for (std::size_t a = 0; a < 6; ++a) {
+    std::cout << (a == 0 ? "" : ", ") << json_str(kAxisNames[a]) << ": " << json_num(c.read(def(kPoseReg[a])));
+  }
+  std::cout << "}, \"persist\": {\"flags\": " << flags << ", \"reason\": " << json_num(c.read(def(RegId::persist_reason)))
+            << ", \"sequence\": " << json_num(c.read(def(RegId::persist_sequence))) << ", \"unsaved\": "
+            << ((flags & kUnsaved) ? "true" : "false") << "}}\n";
+  return kOk;
+}
+
+// watch: the registers' values refreshed every --interval, --count times (0 =
+// until interrupted). On a terminal the block is rewritten in place (ANSI
+// cursor-up + erase-line); otherwise each refresh is a new block (logs,
+// pipes); --json prints one object per refresh ({"t": s, "name": value, ...}).
+int do_watch(Client& c, const Options& o, const std::vector<std::string>& names) {
+  std::vector<const RegisterDef*> regs;
+  if (names.empty()) {
+    const RegId defaults[] = {RegId::status_state,   RegId::status_fault,   RegId::status_moving,
+                              RegId::status_x,       RegId::status_y,       RegId::status_z,
+                              RegId::status_theta_x, RegId::status_theta_y, RegId::status_theta_z,
+                              RegId::status_scale_k};
+    for (RegId id : defaults) regs.push_back(&def(id));
+  } else {
+    for (const std::string& n : names) regs.push_back(&lookup(n));
+  }
+  const bool ansi = !o.json && isatty(STDOUT_FILENO) == 1;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto next = t0;
+  for (long n = 0; o.watch_count == 0 || n < o.watch_count; ++n) {
+    std::vector<double> v;
+    for (const RegisterDef* d : regs) v.push_back(c.read(*d));
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::ostringstream out;
+    if (o.json) {
+      out << "{\"t\": " << json_num(t);
+      for (std::size_t i = 0; i < regs.size(); ++i) out << ", " << json_str(regs[i]->name) << ": " << json_num(v[i]);
+      out << "}\n";
+    } else {
+      if (ansi && n > 0) out << "\033[" << regs.size() + 1 << "A";  // back to the block's first line
+      char head[96];
+      std::snprintf(head, sizeof head, "stagectl watch  t = %8.2f s  refresh %ld", t, n + 1);
+      out << head << (ansi ? "\033[K" : "") << "\n";
+      for (std::size_t i = 0; i < regs.size(); ++i) {
+        std::string line = "  " + line_of(*regs[i], v[i]);
+        if (regs[i]->address == def(RegId::status_state).address) {
+          line += "  (" + std::string(state_name(static_cast<std::uint16_t>(v[i]))) + ")";
+        } else if (regs[i]->address == def(RegId::status_fault).address) {
+          line += "  (" + fault_name(v[i]) + ")";
+        }
+        out << line << (ansi ? "\033[K" : "") << "\n";
+      }
+      if (!ansi) out << "\n";
+    }
+    std::cout << out.str() << std::flush;
+    if (o.watch_count != 0 && n + 1 >= o.watch_count) break;
+    next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(o.interval_s));
+    std::this_thread::sleep_until(next);
+  }
   return kOk;
 }
 
@@ -433,6 +644,14 @@ Options parse_args(int argc, char** argv) {
       o.engineer = true;
     } else if (a == "--wait") {
       o.wait_s = std::atof(next().c_str());
+    } else if (a == "--json") {
+      o.json = true;
+    } else if (a == "--count") {
+      o.watch_count = std::atol(next().c_str());
+      if (o.watch_count <= 0) die(kUsage, "--count needs a positive number");
+    } else if (a == "--interval") {
+      o.interval_s = std::atof(next().c_str());
+      if (!(o.interval_s > 0.0)) die(kUsage, "--interval needs a positive number of seconds");
     } else {
       o.args.push_back(a);
     }
@@ -449,6 +668,7 @@ int main(int argc, char** argv) {
   const auto need = [&](std::size_t n) {
     if (o.args.size() != n + 1) die(kUsage, cmd + " takes " + std::to_string(n) + " argument(s)");
   };
+  if (cmd == "registers" && o.json) return json_registers();
   if (cmd == "registers") {
     for (std::size_t i = 0; i < kRegisterCount; ++i) {
       const RegisterDef& d = kRegisters[i];
@@ -462,6 +682,7 @@ int main(int argc, char** argv) {
   if (cmd == "get") {
     need(1);
     const RegisterDef& d = lookup(o.args[1]);
+    if (o.json) return json_get(c, d);
     std::cout << line_of(d, c.read(d)) << "\n";
     return kOk;
   }
@@ -478,14 +699,15 @@ int main(int argc, char** argv) {
     // A controller without the lab tools answers 02 for rec.* / wave.*: left out.
     std::uint16_t probe = 0;
     const bool lab = modbus_read_registers(c.context(), def(RegId::rec_state).address, 1, &probe) == 1;
+    if (o.json) return json_dump(c, lab);
     for (std::size_t i = 0; i < kRegisterCount; ++i) {
-      if (kRegisters[i].type == RegType::kBlock) continue;  // a download window (stagectl record), not a value
-      if (kRegisters[i].kind == Kind::kLab && !lab) continue;
+      if (!dumped(kRegisters[i], lab)) continue;
       std::cout << line_of(kRegisters[i], c.read(kRegisters[i])) << "\n";
     }
     return kOk;
   }
-  if (cmd == "status") return do_status(c);
+  if (cmd == "status") return o.json ? json_status(c) : do_status(c);
+  if (cmd == "watch") return do_watch(c, o, std::vector<std::string>(o.args.begin() + 1, o.args.end()));
   if (cmd == "record" || cmd == "frf") return maglev::stagectl::run_lab_command(c.context(), o.args);
   if (cmd == "home") return run_command(c, HostCommandCode::kHome, 0, 0.0f, o);
   if (cmd == "levitate") return run_command(c, HostCommandCode::kLevitate, 0, 0.0f, o);
@@ -515,7 +737,13 @@ int main(int argc, char** argv) {
       if (!out) die(kFile, "cannot write " + o.args[2]);
       out << "# maglev stage configuration (stagectl config export); schema hash 0x" << std::hex << kSchemaHash
           << std::dec << "\n";
-      for (std::size_t s = 0; s < kPersistedCount; ++s) out << line_of(persisted_def(s), c.read(persisted_def(s))) << "\n";
+      Progress progress("config export");
+      for (std::size_t s = 0; s < kPersistedCount; ++s) {
+        out << line_of(persisted_def(s), c.read(persisted_def(s))) << "\n";
+        if ((s + 1) * 4 / kPersistedCount != s * 4 / kPersistedCount) {
+          progress.update(std::to_string(s + 1) + "/" + std::to_string(kPersistedCount) + " read");
+        }
+      }
       if (!out) die(kFile, "cannot write " + o.args[2]);
       std::cout << "exported " << kPersistedCount << " entries to " << o.args[2] << "\n";
       return kOk;

@@ -18,24 +18,8 @@ using namespace maglev::modbus;
 const char* kBegin = "<!-- BEGIN GENERATED REGISTER TABLE (maglev_gen_registers_md; do not edit) -->";
 const char* kEnd = "<!-- END GENERATED REGISTER TABLE -->";
 
-const char* type_name(RegType t) {
-  switch (t) {
-    case RegType::kU16: return "u16";
-    case RegType::kI32: return "i32";
-    case RegType::kF32: return "f32";
-    case RegType::kBlock: return "block";
-  }
-  return "?";
-}
-const char* access_name(Access a) {
-  switch (a) {
-    case Access::kReadOnly: return "read-only";
-    case Access::kOperator: return "operator";
-    case Access::kEngineer: return "engineer";
-  }
-  return "?";
-}
-const char* when_name(WriteWhen w) {
+// The docs' wording of "writable when" (tools use when_name()).
+const char* when_text(WriteWhen w) {
   switch (w) {
     case WriteWhen::kNever: return "-";
     case WriteWhen::kAlways: return "always";
@@ -83,7 +67,7 @@ std::string table() {
     std::string def = ro ? "-" : num(d.default_value, d.type);
     o << "| " << addr << " | `" << d.name << "` | " << type_name(d.type) << " | " << cell(d.unit) << " | "
       << (ro ? "-" : num(d.min, d.type)) << " | " << (ro ? "-" : num(d.max, d.type)) << " | " << def << " | "
-      << access_name(d.access) << " | " << when_name(d.when) << " | " << (d.persisted ? "yes" : "no") << " | "
+      << access_name(d.access) << " | " << when_text(d.when) << " | " << (d.persisted ? "yes" : "no") << " | "
       << cell(d.description) << " |\n";
   }
   o << "\n" << kEnd;

@@ -60,7 +60,7 @@ std::span<const double> slice(std::span<const double> v, Window w) {
 
 StepMetrics analyze_step(std::span<const double> t_s, std::span<const double> y,
                          double t_step_s, double t_end_s, double target,
-                         double pre_window_s) {
+                         double pre_window_s, double band_fraction) {
   StepMetrics m{};
   const Window pre = window(t_s, t_step_s - pre_window_s, t_step_s);
   const Window post = window(t_s, t_step_s, t_end_s);
@@ -95,8 +95,8 @@ StepMetrics analyze_step(std::span<const double> t_s, std::span<const double> y,
   }
   m.overshoot_percent = std::max(0.0, (p_peak - final_progress) * 100.0);
 
-  // 2% settling: after the last sample outside the band.
-  const double band = 0.02;
+  // 2% settling (band_fraction): after the last sample outside the band.
+  const double band = band_fraction;
   std::size_t last_out = post.first;
   bool any_out = false;
   for (std::size_t i = post.first; i < post.last; ++i) {
@@ -123,6 +123,35 @@ StepMetrics analyze_step(std::span<const double> t_s, std::span<const double> y,
     }
   }
   return m;
+}
+
+AveragedStep average_steps(std::span<const double> t_s, std::span<const double> y,
+                           std::span<const double> step_times_s, std::span<const double> signs,
+                           double pre_s, double post_s) {
+  AveragedStep a;
+  if (t_s.size() < 2 || step_times_s.size() != signs.size()) return a;
+  const double dt = (t_s.back() - t_s.front()) / static_cast<double>(t_s.size() - 1);
+  const auto n_pre = static_cast<std::size_t>(std::lround(pre_s / dt));
+  const auto n_post = static_cast<std::size_t>(std::lround(post_s / dt));
+  if (n_pre == 0 || n_post < 5) return a;
+  std::vector<double> sum(n_pre + n_post, 0.0);
+  const std::size_t tail = std::max<std::size_t>(1, n_post / 5);
+  for (std::size_t k = 0; k < step_times_s.size(); ++k) {
+    const auto i0 = static_cast<std::size_t>(std::lower_bound(t_s.begin(), t_s.end(), step_times_s[k]) - t_s.begin());
+    if (i0 < n_pre || i0 + n_post > t_s.size()) continue;
+    const double level = mean(y.subspan(i0 - n_pre, n_pre));
+    for (std::size_t j = 0; j < n_pre + n_post; ++j) sum[j] += signs[k] * (y[i0 - n_pre + j] - level);
+    a.measured.push_back(signs[k] * (mean(y.subspan(i0 + n_post - tail, tail)) - level));
+    ++a.count;
+  }
+  if (a.count == 0) return a;
+  a.t_s.resize(sum.size());
+  a.y.resize(sum.size());
+  for (std::size_t j = 0; j < sum.size(); ++j) {
+    a.t_s[j] = (static_cast<double>(j) - static_cast<double>(n_pre)) * dt;
+    a.y[j] = sum[j] / static_cast<double>(a.count);
+  }
+  return a;
 }
 
 std::string ccq_unit(AxisKind primary, AxisKind perturbed) {

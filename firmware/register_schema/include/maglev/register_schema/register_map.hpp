@@ -88,6 +88,47 @@ inline constexpr const RegisterDef* kRegisters = detail::kTable;
 constexpr std::uint16_t width(RegType t) {
   return t == RegType::kU16 ? 1 : (t == RegType::kBlock ? kBlockWords : 2);
 }
+
+// The attributes' names as tools print them (stagectl --json, the Python
+// table generator, docs/REGISTERS.md): one spelling everywhere.
+constexpr const char* type_name(RegType t) {
+  switch (t) {
+    case RegType::kU16: return "u16";
+    case RegType::kI32: return "i32";
+    case RegType::kF32: return "f32";
+    case RegType::kBlock: return "block";
+  }
+  return "?";
+}
+constexpr const char* access_name(Access a) {
+  switch (a) {
+    case Access::kReadOnly: return "read-only";
+    case Access::kOperator: return "operator";
+    case Access::kEngineer: return "engineer";
+  }
+  return "?";
+}
+constexpr const char* when_name(WriteWhen w) {
+  switch (w) {
+    case WriteWhen::kNever: return "never";
+    case WriteWhen::kAlways: return "always";
+    case WriteWhen::kNotMoving: return "not-moving";
+    case WriteWhen::kIdle: return "idle";
+    case WriteWhen::kGains: return "gains";
+  }
+  return "?";
+}
+constexpr const char* kind_name(Kind k) {
+  switch (k) {
+    case Kind::kIdent: return "ident";
+    case Kind::kStatus: return "status";
+    case Kind::kConfig: return "config";
+    case Kind::kControl: return "control";
+    case Kind::kStage: return "stage";
+    case Kind::kLab: return "lab";
+  }
+  return "?";
+}
 constexpr const RegisterDef& def(RegId id) { return detail::kTable[static_cast<std::size_t>(id)]; }
 
 // The engineer key (access.key). A guard against accidental writes by an
