@@ -26,9 +26,7 @@ std::uint16_t addr(RegId id) { return def(id).address; }
 void set_f32(float v, std::uint16_t* w) { split_words(encode(RegType::kF32, static_cast<double>(v)), w); }
 double get_f32(const std::uint16_t* w) { return decode(RegType::kF32, join_words(w)); }
 
-bool same_config(const kernel::KernelConfig& a, const kernel::KernelConfig& b) {
-  return std::memcmp(&a, &b, sizeof a) == 0;
-}
+using kernel::same_config;  // the values, padding excluded
 
 constexpr std::size_t kSector = 4096;
 

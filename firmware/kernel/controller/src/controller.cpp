@@ -17,7 +17,7 @@ float pico_to_si(std::int64_t v) { return static_cast<float>(static_cast<double>
 
 template <typename T>
 bool same_bytes(const T& a, const T& b) {
-  return std::memcmp(&a, &b, sizeof(T)) == 0;
+  return same_value_bytes(a, b);
 }
 
 bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }

@@ -29,6 +29,11 @@ enum class BiquadType : std::uint8_t { kNone = 0, kNotch, kLowPass, kLeadLag };
 
 struct BiquadConfig {
   BiquadType type = BiquadType::kNone;
+  // Explicit, always zero: as padding these three bytes held stack garbage
+  // from brace-initialized temporaries, and configurations compare byte by
+  // byte (the kernel's "locked while levitated" check; GCC 12's
+  // __builtin_clear_padding left them in a sanitizer build).
+  std::uint8_t reserved[3] = {};
   float frequency_Hz = 0.0f;   // notch / low-pass: f0. lead-lag: zero frequency
   float q = 0.7071f;           // notch / low-pass quality factor
   float depth_dB = 0.0f;       // notch depth at f0 (>= 0); 0 dB = no notch

@@ -41,6 +41,7 @@ enum class LoopType : std::uint8_t { kPid2Dof = 0, kInternalModel = 1 };
 
 struct AxisLoopConfig {
   LoopType type = LoopType::kPid2Dof;
+  std::uint8_t reserved[3] = {};  // explicit, always zero (see BiquadConfig::reserved)
   Pid2DofConfig pid;
   InternalModelConfig imr;
   BiquadConfig filters[kMaxBiquadStages];  // applied in series to the loop output

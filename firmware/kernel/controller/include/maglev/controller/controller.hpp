@@ -98,6 +98,37 @@ struct KernelConfig {
 
 KernelConfig default_kernel_config();
 
+// Equality of the VALUES of two configuration (sub)structs, byte for byte
+// with padding excluded. Padding bytes are unspecified: a brace-initialized
+// temporary copied into a config (`beam[0] = {...}`) brings whatever the
+// stack held, so a plain memcmp could call two equal configurations
+// different (a sanitizer build showed it; the kernel's "locked while
+// levitated" test compares sub-structs this way). GCC clears the padding of
+// local copies; a compiler without __builtin_clear_padding (the clang of
+// the fuzz targets) falls back to the plain compare.
+template <typename T>
+bool same_value_bytes(const T& a, const T& b) {
+  T x = a;
+  T y = b;
+#if defined(__has_builtin)
+#if __has_builtin(__builtin_clear_padding)
+  __builtin_clear_padding(&x);
+  __builtin_clear_padding(&y);
+#endif
+#endif
+  return __builtin_memcmp(&x, &y, sizeof(T)) == 0;
+}
+
+template <typename T, decltype(sizeof 0) N>
+bool same_value_bytes(const T (&a)[N], const T (&b)[N]) {
+  for (decltype(sizeof 0) i = 0; i < N; ++i) {
+    if (!same_value_bytes(a[i], b[i])) return false;
+  }
+  return true;
+}
+
+inline bool same_config(const KernelConfig& a, const KernelConfig& b) { return same_value_bytes(a, b); }
+
 // ConfigError: value and name of every enumerator, defined once (the enum and
 // to_string() are generated from it). Values cross a wire or a register:
 // never renumber, only append.
