@@ -88,11 +88,13 @@ kd = 1.0
 derivative_filter_Hz = 100
 effort_limit_A = 0.5
 filter1 = butterworth2 10
-# Gain schedule over z: kp and kd scaled by g(0)/g(z), g the z force
-# constant of the bench plant linearized at each height (the stage's
-# 3 k_opi(z)); printed by `maglev-hil selfstab-schedule`, checked by
-# the test SelfstabSuite.TheProfilesScheduleIsTheLinearizedPlants.
-schedule = -2e-3 0.8861 0.8861; -1e-3 0.9356 0.9356; 0 1 1; 1e-3 1.0793 1.0793; 2e-3 1.1739 1.1739
+# Gain schedule over z (Section 4: the nonlinear model linearized at a grid
+# of operating points): at each height the kp and kd scales that give the z
+# loop around the bench plant linearized there the same response at the
+# nominal 5.07 Hz crossover as at z = 0 (gain and phase). Printed by
+# `maglev-hil selfstab-schedule --profile jb2002-selfstab`; the suite's
+# schedule_margins checks the table against it.
+schedule = -2e-3 1.1430 1.2573; -1e-3 1.0753 1.1102; 0 1 1; 1e-3 0.9214 0.9236; 2e-3 0.8431 0.8785
 
 # Passive (the paper's uncontrolled axes): the nominal currents only. Open
 # loop stiffness and damping per unit inertia from (13).

@@ -134,11 +134,14 @@ ProfileError MakeSelfstabKernelConfig(const StageProfile& p, ss::SelfstabKernelC
     if (!solve6(A, col)) return ProfileError::kAllocationRank;
     for (int a = 0; a < 6; ++a) c.pose_per_code[a][ch] = static_cast<float>(col[a]);
   }
-  // The largest code a PSD can give: half its range in counts (12-bit: 2048).
-  // The range is not in the format; the resolution of a 12-bit A/D over the
-  // active area is, so the limit is 2^(bits-1) with bits from the paper's
-  // A/D (Section 4): 12 unless the resolution says finer (our sensor set).
-  c.psd_code_limit = 2047;
+  // The largest code a PSD can give: half its active area in counts. The
+  // format has no active area: the paper's 4.7 mm [P] (Section 4) is used,
+  // so a 12-bit A/D reads +-2048 at the edges (which counts as off the PSD).
+  {
+    const double half_area_m = 0.5 * 4.7e-3;
+    const double limit = std::floor(half_area_m / lsb[0] + 0.5);
+    c.psd_code_limit = static_cast<std::int16_t>(limit > 32767.0 ? 32767.0 : limit);
+  }
   c.servo_rate_Hz = static_cast<float>(p.servo_rate_Hz);
   c.feedback_filter_enabled = 0;
   int active = 0;

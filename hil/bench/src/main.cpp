@@ -21,6 +21,7 @@
 
 #include "maglev/bench/campaign.hpp"
 #include "maglev/bench/profile_check.hpp"
+#include "maglev/bench/selfstab_suite.hpp"
 #include "maglev/bench/runner.hpp"
 #include "maglev/bench/serve.hpp"
 #include "maglev/report/report.hpp"
@@ -357,6 +358,10 @@ int main(int argc, char** argv) {
       else std::printf("%s: ok\n", p.c_str());
     }
     return bad == 0 && !a.positional.empty() ? 0 : 2;
+  }
+  int selfstab_rc = 0;  // a solenoid_magnet stage (paper 001) runs on its own bench
+  if (a.run.profile && maglev::bench::selfstab_dispatch(a.cmd, a.positional, *a.run.profile, a.out, &selfstab_rc)) {
+    return selfstab_rc;
   }
   if (a.cmd == "run") {
     if (a.positional.size() != 1 || a.out.empty()) {
