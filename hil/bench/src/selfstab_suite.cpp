@@ -357,6 +357,30 @@ pl::CoilVector SelfstabAmplifierVoltages(const ss::SelfstabCoilCommand& cmd, flo
   return u;
 }
 
+bool selfstab_accepts(const sp::StageProfile& p) {
+  ss::SelfstabKernelConfig k{};
+  return sp::MakeSelfstabKernelConfig(p, &k) == sp::ProfileError::kOk;
+}
+
+int selfstab_check_profile(const sp::StageProfile& p) {
+  ss::SelfstabKernelConfig k{};
+  const sp::ProfileError e = sp::MakeSelfstabKernelConfig(p, &k);
+  std::printf("  paper-000 kernel: not this family (the checks above are its own)\n");
+  if (e != sp::ProfileError::kOk) {
+    std::printf("  selfstab kernel (paper 001): REFUSES this profile: %s\n", sp::to_string(e));
+    return 1;
+  }
+  const pl::StageParams pp = SelfstabPlantParams(p);
+  for (double z : {-2e-3, 0.0, 2e-3}) {
+    const SelfstabMargins m = ZLoopMargins(k, pp, z, true);
+    std::printf("  selfstab z loop at z %+.1f mm: crossover %.3g Hz, phase margin %.3g deg (bench plant linearized)\n",
+                z * 1e3, m.crossover_Hz, m.phase_margin_deg);
+  }
+  std::printf("  selfstab kernel (paper 001): accepts this profile; bench: plant built from it "
+              "(maglev-hil suite --profile %s)\n", p.name);
+  return 0;
+}
+
 bool SelfstabSuiteResult::all_pass() const {
   for (const auto& v : verdicts)
     if (!v.pass) return false;

@@ -20,7 +20,7 @@ sp::StageProfile shipped() {
   CHECK_TRUE(p.ok());
   return p.profile;
 }
-bench::SelfstabSuiteResult run(const char* name) {
+bench::SelfstabSuiteResult run_experiment(const char* name) {
   bench::SelfstabSuiteResult r;
   CHECK_TEXT(bench::RunSelfstabExperiment(name, shipped(), "", &r), name);
   for (const auto& v : r.verdicts) {
@@ -47,7 +47,7 @@ TEST(SelfstabBench, ThePlantTheBenchBuildsFromTheProfileIsTheBenchSet) {
 }
 
 TEST(SelfstabBench, FreeVibrationOfTheUncontrolledAxesMatchesEq13Within10Percent) {
-  const auto r = run("free_vibration");
+  const auto r = run_experiment("free_vibration");
   LONGS_EQUAL(10, r.verdicts.size());
   for (const char* a : {"y", "z", "alpha", "beta", "gamma"}) {
     const std::string k = std::string("free_vibration.") + a + ".";
@@ -59,7 +59,7 @@ TEST(SelfstabBench, FreeVibrationOfTheUncontrolledAxesMatchesEq13Within10Percent
 
 TEST(SelfstabBench, ZStepsSettleWithTheUncontrolledAxesBelowOneMicrometre) {
   for (const char* e : {"z_step_10um", "z_step_100um"}) {
-    const auto r = run(e);
+    const auto r = run_experiment(e);
     const std::string k = std::string(e) + ".";
     for (const char* a : {"y", "alpha", "beta", "gamma"}) CHECK_TRUE(r.metrics.at(k + "coupling_" + a + "_um") < 1.0);
     CHECK_TRUE(r.metrics.at(k + "settling_s") < 1.5);
@@ -68,20 +68,20 @@ TEST(SelfstabBench, ZStepsSettleWithTheUncontrolledAxesBelowOneMicrometre) {
 }
 
 TEST(SelfstabBench, LiftOffFromTheDockReachesTheNominalPosition) {
-  const auto r = run("lift_off");
+  const auto r = run_experiment("lift_off");
   CHECK_TRUE(r.metrics.at("lift_off.final_z_error_m") < 1.1475e-6);
   CHECK_TRUE(r.metrics.at("lift_off.peak_coil_current_A") < 1.5);
 }
 
 TEST(SelfstabBench, TheScheduledLoopKeepsCrossoverAndMarginFixedGainsDrift) {
-  const auto r = run("schedule_margins");
+  const auto r = run_experiment("schedule_margins");
   CHECK_TRUE(r.metrics.at("schedule_margins.scheduled_max_drift") < 0.1);
   CHECK_TRUE(r.metrics.at("schedule_margins.fixed_max_drift") > 0.1);
   CHECK_TRUE(r.metrics.at("schedule_margins.profile_table_vs_plant_max_rel") < 1e-3);
 }
 
 TEST(SelfstabBench, TheTenHertzFilterCostsPhaseAndTransient) {
-  const auto r = run("filter_cost");
+  const auto r = run_experiment("filter_cost");
   CHECK_TRUE(r.metrics.at("filter_cost.with_filter.phase_margin_deg") <
              r.metrics.at("filter_cost.without_filter_same_gains.phase_margin_deg"));
   CHECK_TRUE(r.metrics.at("filter_cost.with_filter.settling_s") >
@@ -89,7 +89,7 @@ TEST(SelfstabBench, TheTenHertzFilterCostsPhaseAndTransient) {
 }
 
 TEST(SelfstabBench, OurSensorAndLoopAreSeparatedAndFaster) {
-  const auto r = run("ours");
+  const auto r = run_experiment("ours");
   CHECK_TRUE(r.metrics.count("ours.sensor_only.z_step_10um.settling_s") == 1);
   CHECK_TRUE(r.metrics.at("ours.sensor_and_no_filter.z_step_100um.settling_s") <
              r.metrics.at("ours.z_step_100um.paper_set_settling_s"));

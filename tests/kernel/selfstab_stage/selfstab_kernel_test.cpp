@@ -256,6 +256,11 @@ TEST(SelfstabKernel, LosingTheSensorsWhileLevitatedFaultsWithTheCurrentsOff) {
   const ss::SelfstabCoilCommand o = k.tick(s);
   CHECK_TRUE(k.mode() == ss::SelfstabMode::kFault);
   CHECK_EQUAL(0, o.enable);
+  for (int j = 0; j < ss::kCoils; ++j) CHECK_EQUAL(0, o.dac_code[j]);
+  CHECK_TRUE(k.lift_off() == ss::SelfstabResult::kWrongMode);
+  // The way out: a configuration (the rotor is on the dock), then lift-off.
+  CHECK_TRUE(k.configure(config()) == ss::SelfstabConfigError::kOk);
+  CHECK_TRUE(k.mode() == ss::SelfstabMode::kDocked);
   // A spot off the PSD (the A/D at its end) as well.
   ss::SelfstabKernel k2;
   CHECK_TRUE(k2.configure(config()) == ss::SelfstabConfigError::kOk);

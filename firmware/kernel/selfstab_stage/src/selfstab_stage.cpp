@@ -25,7 +25,10 @@ std::int16_t dac_code(float current_A, float A_per_code) {
 }  // namespace
 
 SelfstabConfigError SelfstabKernel::configure(const SelfstabKernelConfig& c) {
-  if (configured_ && mode_ != SelfstabMode::kDocked) return SelfstabConfigError::kNotDocked;
+  // Only at rest: docked, or fallen to the dock after a fault (the way out of it).
+  if (configured_ && mode_ != SelfstabMode::kDocked && mode_ != SelfstabMode::kFault) {
+    return SelfstabConfigError::kNotDocked;
+  }
   if (!finite(c.servo_rate_Hz) || !(c.servo_rate_Hz > 0.0f)) return SelfstabConfigError::kBadServoRate;
   if (!(c.dac_A_per_code > 0.0f) || !(c.current_limit_A > 0.0f) || !(c.liftoff_ramp_s > 0.0f) ||
       !(c.land_ramp_s > 0.0f) || !(c.liftoff_settle_s >= 0.0f) || c.psd_code_limit <= 0) {

@@ -26,6 +26,12 @@ bool selfstab_dispatch(const std::string& cmd, const std::vector<std::string>& p
 // turns, R, PSD placement and resolution) taken from the profile.
 selfstab_plant::StageParams SelfstabPlantParams(const stage_profile::StageProfile& p);
 
+// check-profile / profiles for this family: whether the selfstab kernel
+// takes the profile (MakeSelfstabKernelConfig), and the printout (its
+// verdict, the z loop's margins over the schedule's range); 0 = accepted.
+bool selfstab_accepts(const stage_profile::StageProfile& p);
+int selfstab_check_profile(const stage_profile::StageProfile& p);
+
 // The bench's I/O: the PSD spots as the A/D's codes (signed, 0 = centre,
 // rounded, clamped to int16) and the amplifiers: each holds the voltage
 // R i_cmd (voltage drive, so the back-emf damping of (9) acts; ours), 0 V

@@ -100,7 +100,7 @@ struct SelfstabKernelConfig {
   X(kBadSchedule, 4, "schedule points not increasing or scales not positive") \
   X(kBadScale, 5, "DAC scale, current limit or ramp time not positive") \
   X(kNoActiveAxis, 6, "no active axis") \
-  X(kNotDocked, 7, "a configuration is applied only while docked")
+  X(kNotDocked, 7, "a configuration is applied only while docked or faulted")
 enum class SelfstabConfigError : std::uint8_t { MAGLEV_SELFSTAB_CONFIG_ERRORS(MAGLEV_ENUMERATOR) };
 const char* to_string(SelfstabConfigError e);
 
@@ -141,8 +141,9 @@ struct SelfstabTelemetry {
 
 class SelfstabKernel {
  public:
-  // Validates and applies a configuration; only while docked (or before the
-  // first one). On an error nothing changes.
+  // Validates and applies a configuration; only while docked or faulted (a
+  // fault is left this way), or before the first one. On an error nothing
+  // changes.
   SelfstabConfigError configure(const SelfstabKernelConfig& config);
 
   // Commands. Each returns why it was refused; a refused command changes nothing.
