@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <complex>
 #include <cstring>
@@ -25,6 +26,7 @@ using ps::MotionCommand;
 using ps::MotionType;
 
 namespace {
+double g_simulated_s = 0.0;  // single-threaded: the suite runs its benches one after another
 constexpr double kPi = 3.14159265358979323846;
 constexpr std::array<std::size_t, 5> kStateOf{0, 2, 4, 6, 8};  // plant state of each kernel axis
 const char* const kAxisName[5] = {"gap", "x", "z", "phi", "theta"};
@@ -54,6 +56,8 @@ bool PmlsmBench::Init(const sp::StageProfile& profile, const Variant& v, std::st
   period_s_ = 1.0 / p.servo_rate_Hz;
   return true;
 }
+
+double PmlsmBench::total_simulated_s() { return g_simulated_s; }
 
 std::array<double, 5> PmlsmBench::pose() const {
   std::array<double, 5> y{};
@@ -120,6 +124,7 @@ void PmlsmBench::Tick() {
   if (plant_->last_step_saturated()) ++clamp_ticks_;
   if (plant_->state()[0] >= stage_.stage.gap_max_m && v_before > 0.0) touchdown_speed_ = v_before;
   ++tick_;
+  g_simulated_s += period_s_;
   if (trace_ != nullptr && tick_ % trace_every_ == 0) {
     const auto& st = ctl_.status();
     const auto y = pose();
@@ -657,6 +662,8 @@ void list_experiments() {
 }
 
 int suite_main(const sp::StageProfile& profile, const std::string& out_dir, const std::string& only) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  const double sim0 = PmlsmBench::total_simulated_s();
   std::vector<Verdict> verdicts;
   int failed_runs = 0, ran = 0;
   for (const Experiment& e : kExperiments) {
@@ -715,8 +722,11 @@ int suite_main(const sp::StageProfile& profile, const std::string& out_dir, cons
     std::fprintf(j, "]\n");
     std::fclose(j);
   }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  const double sim = PmlsmBench::total_simulated_s() - sim0;
   std::printf("\n%d experiment(s), %d failed to run; %zu verdicts, %d outside their band\n", ran, failed_runs,
               verdicts.size(), failed);
+  std::printf("simulated %.1f s in %.2f s wall: %.0fx real time\n", sim, wall, wall > 0.0 ? sim / wall : 0.0);
   return failed_runs == 0 && failed == 0 ? 0 : 1;
 }
 

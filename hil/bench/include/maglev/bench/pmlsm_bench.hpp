@@ -49,6 +49,9 @@ class PmlsmBench {
   // Downward speed (m/s) of the platen the last time the gap reached the rest stop.
   double touchdown_speed_m_per_s() const { return touchdown_speed_; }
 
+  // Simulated seconds of every bench in this process (the suite's real-time factor).
+  static double total_simulated_s();
+
   // Replay vectors: every tick's command (if any) and sample, and the kernel's outputs.
   void StartRecording(std::vector<unsigned char>* inputs, std::vector<unsigned char>* outputs);
   // Trace: one CSV row every `every` ticks.
