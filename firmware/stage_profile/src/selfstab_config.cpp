@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "maglev/numeric/elementary.hpp"
+
 namespace maglev::stage_profile {
 namespace {
 
@@ -111,8 +113,8 @@ ProfileError MakeSelfstabKernelConfig(const StageProfile& p, ss::SelfstabKernelC
     if (z.kind != SensorKind::kPsd) return ProfileError::kUnsupportedSensors;
     if (psd == 3 || !(z.resolution > 0.0)) return ProfileError::kUnsupportedSensors;
     const double Rr = std::sqrt(z.x_m * z.x_m + z.y_m * z.y_m);
-    const double psi = std::atan2(z.y_m, z.x_m);
-    const double sp = std::sin(psi), cp = std::cos(psi);
+    const double psi = numeric::datan2(z.y_m, z.x_m);
+    const double sp = numeric::dsin(psi), cp = numeric::dcos(psi);  // not libm: host and M7 agree
     double* t = J[2 * psd];
     double* v = J[2 * psd + 1];
     t[ss::kX] = -sp;
