@@ -780,6 +780,11 @@ bool selfstab_dispatch(const std::string& cmd, const std::vector<std::string>& p
     *rc = 0;
     return true;
   }
+  if (cmd == "list") {
+    for (const auto& n : SelfstabExperiments()) std::printf("  %s\n", n.c_str());
+    *rc = 0;
+    return true;
+  }
   if (cmd != "run" && cmd != "suite") return false;
   if (out_dir.empty()) {
     std::fprintf(stderr, "maglev-hil %s: needs --out DIR\n", cmd.c_str());
