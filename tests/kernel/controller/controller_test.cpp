@@ -225,7 +225,7 @@ TEST(Controller, LiveTuningMovesEachGainByAtMostTwiceAndChangesNothingWhenRefuse
   c.axis[tx].pid.kd = start.axis[tx].pid.kd * 2.0f;
   c.axis[tx].pid.ki = start.axis[tx].pid.ki * 0.5f;
   CHECK(r.c.apply_config(c) == ConfigError::kOk);
-  DOUBLES_EQUAL(start.axis[tx].pid.kp * 2.0, r.c.config().axis[tx].pid.kp, 0.0);
+  DOUBLES_EQUAL(static_cast<double>(start.axis[tx].pid.kp) * 2.0, static_cast<double>(r.c.config().axis[tx].pid.kp), 0.0);
   // The bound is per write, from the gains in force: a second x2 is a new step.
   c.axis[tx].pid.kp = start.axis[tx].pid.kp * 4.0f;
   CHECK(r.c.apply_config(c) == ConfigError::kOk);

@@ -532,14 +532,53 @@ TEST(SensorsToPose, AOneTickSpikeIsRepairedBothWaysAndRealAccelerationIsMotion) 
   LONGS_EQUAL(y1, st.counts[1]);
   pm = SensorsToPoseStep(MovingSample(n++, 0), &st);
   LONGS_EQUAL(0, pm.beam_glitch);
-  // A step change just inside the bound (79.99 m/s^2) is motion, not a glitch.
+  // From rest, a step change just inside the bound (79.99 m/s^2) is motion.
   pm = SensorsToPoseStep(MovingSample(n++, 20712), &st);
   LONGS_EQUAL(0, pm.beam_glitch);
   LONGS_EQUAL(y1 + 20712, st.counts[1]);
-  // One count beyond it is not.
-  pm = SensorsToPoseStep(MovingSample(n++, 20712 + 20712 + 20713), &st);
+  // Stopping dead again is motion too: at speed, one tick's worth of steps
+  // more or less is allowed (a sample a tick early or late over a link).
+  pm = SensorsToPoseStep(MovingSample(n++, 20712), &st);
+  LONGS_EQUAL(0, pm.beam_glitch);
+  pm = SensorsToPoseStep(MovingSample(n++, 20712), &st);
+  LONGS_EQUAL(0, pm.beam_glitch);
+  // At rest, one count beyond the bound is a glitch: the predicted step (0) is counted.
+  pm = SensorsToPoseStep(MovingSample(n++, 20712 + 20713), &st);
   LONGS_EQUAL(2, pm.beam_glitch);
-  LONGS_EQUAL(y1 + 2 * 20712, st.counts[1]);  // the previous step (20712) repeated
+  LONGS_EQUAL(20713, pm.glitch_counts[1]);
+  LONGS_EQUAL(y1 + 20712, st.counts[1]);
+}
+
+TEST(SensorsToPose, AStaleSampleIsNoStepAndTheNextFreshStepCoversTheTicksMissed) {
+  SensorsToPoseState& st = FreshState(DefaultSensorsToPoseConfig());
+  // Beam 0 at 60 mm/s (the campaign's moves): 24 um = 38 835 counts per tick.
+  const std::int64_t v = 38835;
+  io::SensorSample s = ZeroSample();
+  int n = 0;
+  auto at = [&](int k) {
+    io::SensorSample x = s;
+    x.interferometer_counts[0] = static_cast<std::uint32_t>(v * k);
+    return x;
+  };
+  for (; n < 5; ++n) LONGS_EQUAL(0, SensorsToPoseStep(at(n), &st).beam_glitch);
+  // Two ticks with nothing new (the previous sample repeated, flagged), then
+  // the newest sample: three ticks of motion in one step. Not a glitch.
+  io::SensorSample rep = at(n - 1);
+  rep.status_flags = io::kStaleFrame;
+  LONGS_EQUAL(0, SensorsToPoseStep(rep, &st).beam_glitch);
+  LONGS_EQUAL(0, SensorsToPoseStep(rep, &st).beam_glitch);
+  n += 2;
+  LONGS_EQUAL(0, SensorsToPoseStep(at(n++), &st).beam_glitch);
+  LONGS_EQUAL(v * (n - 1), st.counts[0]);
+  LONGS_EQUAL(v, st.last_step[0]);
+  LONGS_EQUAL(0, SensorsToPoseStep(at(n++), &st).beam_glitch);
+  // A jump on beam 0 while it moves this fast: beyond 80 m/s^2 plus one
+  // tick's worth of steps, repaired like at rest.
+  io::SensorSample j = at(n++);
+  j.interferometer_counts[0] += 60000;
+  const PoseMeasurement pm = SensorsToPoseStep(j, &st);
+  LONGS_EQUAL(1, pm.beam_glitch);
+  LONGS_EQUAL(v * (n - 1), st.counts[0]);
 }
 
 TEST(SensorsToPose, TheAccelerationCheckArmsTwoStepsAfterASeedAndCanBeSwitchedOff) {
@@ -552,8 +591,8 @@ TEST(SensorsToPose, TheAccelerationCheckArmsTwoStepsAfterASeedAndCanBeSwitchedOf
   CHECK_EQUAL(0, SensorsToPoseStep(s, &st).beam_glitch);  // first step: nothing to compare with
   s.interferometer_counts[1] += 60000;
   CHECK_EQUAL(0, SensorsToPoseStep(s, &st).beam_glitch);  // same step again
-  s.interferometer_counts[1] += 0;
-  CHECK_EQUAL(2, SensorsToPoseStep(s, &st).beam_glitch);  // stops dead in one tick: armed
+  s.interferometer_counts[1] += 60000 + 90000;
+  CHECK_EQUAL(2, SensorsToPoseStep(s, &st).beam_glitch);  // armed: 90 000 > 20 712 + 60 000
   ReseedInterferometers(&st);
   CHECK_EQUAL(0, SensorsToPoseStep(s, &st).beam_glitch);
   s.interferometer_counts[0] += 90000;

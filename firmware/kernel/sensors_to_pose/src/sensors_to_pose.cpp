@@ -255,36 +255,50 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   // --- counters ----------------------------------------------------------------
   const bool seed = !s.seeded;
   s.steps_seen = seed ? std::uint8_t{0} : s.steps_seen;
+  s.stale_gap = seed ? std::uint8_t{0} : s.stale_gap;
+  // A stale sample repeats the previous one (the transport had nothing new):
+  // not a step of the mirror. The next fresh sample's step then covers
+  // n = stale_gap + 1 ticks.
+  const bool stale = (sample.status_flags & io::kStaleFrame) != 0;
+  const std::int64_t n = std::int64_t{s.stale_gap} + 1;
   // The acceleration check needs two real steps after the seed (the seed's
-  // own step is zero by construction).
-  const bool armed = s.max_counts_step_change > 0 && s.steps_seen >= 2;
+  // own step is zero by construction), and a fresh sample.
+  const bool armed = s.max_counts_step_change > 0 && s.steps_seen >= 2 && !stale;
   std::int64_t meas_pm[3];
   for (int b = 0; b < io::kInterferometerAxes; ++b) {
     const std::uint32_t raw = sample.interferometer_counts[b];
     s.last_raw[b] = seed ? raw : s.last_raw[b];
     s.counts[b] = Select(seed, 0, s.counts[b]);
     s.last_step[b] = Select(seed, 0, s.last_step[b]);
-    // A step within the speed bound whose change from the last step no
-    // actuator can produce: a glitch (lost or spurious fringes, a jumped
-    // counter). Count the previous step instead (one tick extrapolated) and
-    // take the rest as an offset of the raw counter, so that a jump that
-    // stays, or one that comes back, leaves the pose where the mirror is.
+    // A step within the speed bound that differs from the one the last step
+    // predicts (n of them) by more than any actuator can make it, over n
+    // ticks, plus one tick's worth of steps (a sample that reaches the
+    // kernel a tick early or late over a link: its step is then one tick
+    // longer or shorter) is a glitch: lost or spurious fringes, a jumped
+    // counter. Count the predicted step instead and take the rest as an
+    // offset of the raw counter, so that a jump that stays, or one that
+    // comes back, leaves the pose where the mirror is.
     const std::int64_t step = static_cast<std::int32_t>(raw - s.last_raw[b]);
-    const std::int64_t change = step - s.last_step[b];
+    const std::int64_t expected = n * s.last_step[b];
+    const std::int64_t change = step - expected;
     const std::int64_t change_mag = change < 0 ? -change : change;
     const std::int64_t step_mag = step < 0 ? -step : step;
-    const bool glitch = armed && step_mag <= s.max_counts_per_tick && change_mag > s.max_counts_step_change;
-    const std::uint32_t used = glitch ? s.last_raw[b] + static_cast<std::uint32_t>(s.last_step[b]) : raw;
+    const std::int64_t speed_mag = s.last_step[b] < 0 ? -s.last_step[b] : s.last_step[b];
+    const std::int64_t tolerance = s.max_counts_step_change * n * n + speed_mag;
+    const bool glitch = armed && step_mag <= s.max_counts_per_tick && change_mag > tolerance;
+    const std::uint32_t used = glitch ? s.last_raw[b] + static_cast<std::uint32_t>(expected) : raw;
     const std::int64_t before = s.counts[b];
     const bool ok = ExtendCounter(used, &s.last_raw[b], &s.counts[b], s.max_counts_per_tick);
     s.last_raw[b] = glitch ? raw : s.last_raw[b];
-    s.last_step[b] = s.counts[b] - before;
+    s.last_step[b] = stale ? s.last_step[b] : (s.counts[b] - before) / n;
     out.beam_glitch = static_cast<std::uint8_t>(out.beam_glitch | (glitch ? (1u << b) : 0u));
     out.glitch_counts[b] = Select(glitch, change, 0);
     s.jump_latched = static_cast<std::uint8_t>(s.jump_latched | (ok ? 0u : (1u << b)));
     meas_pm[b] = s.beam_sign[b] * CountsToPicometres(s.counts[b], s);
   }
-  s.steps_seen = static_cast<std::uint8_t>(s.steps_seen < 2 ? s.steps_seen + 1 : 2);
+  const bool counted = !stale || seed;
+  s.steps_seen = static_cast<std::uint8_t>(counted && s.steps_seen < 2 ? s.steps_seen + 1 : s.steps_seen);
+  s.stale_gap = static_cast<std::uint8_t>(stale && !seed ? (s.stale_gap < 255 ? s.stale_gap + 1 : 255) : 0);
   s.seeded = true;
 
   // --- beam solve: linear inverse, then four fixed Abbe/cosine corrections ---

@@ -106,8 +106,8 @@ struct SensorsToPoseConfig {
   // the stage can produce it. The step is replaced by the previous one (the
   // counter extrapolates one tick and absorbs the jump as an offset) and
   // PoseMeasurement::beam_glitch reports it. Within max_speed_m_per_s only;
-  // beyond it the jump check above acts. Applied from the third sample after
-  // a re-seed (it needs two real steps).
+  // beyond it the jump check above acts. Applied from the third fresh sample
+  // after a re-seed (it needs two real steps).
   double max_acceleration_m_per_s2;
 };
 
@@ -165,8 +165,9 @@ struct SensorsToPoseState {
   std::uint32_t last_raw[io::kInterferometerAxes];
   std::int64_t counts[io::kInterferometerAxes];
   std::uint8_t jump_latched;  // bit b: beam b saw an implausible jump (sticky until re-seed)
-  std::int64_t last_step[io::kInterferometerAxes];  // counts absorbed on the last tick
-  std::uint8_t steps_seen;   // real steps since the re-seed (saturates at 2)
+  std::int64_t last_step[io::kInterferometerAxes];  // counts per tick of the last fresh step
+  std::uint8_t steps_seen;   // fresh steps since the re-seed (saturates at 2)
+  std::uint8_t stale_gap;    // stale samples since the last fresh one (saturates)
   bool seeded;
   // Homing offsets added to the interferometer x, y (magnet-frame absolute).
   std::int64_t home_offset_x_pm;
@@ -188,6 +189,9 @@ struct PoseMeasurement {
   // bit b: THIS tick's step of beam b implied an impossible acceleration and
   // was replaced by the previous step (max_acceleration_m_per_s2); the pose
   // stays valid. glitch_counts[b]: the step change that was refused (counts).
+  // The check skips samples flagged io::kStaleFrame (a repeat, not a step)
+  // and allows a step one tick longer or shorter than predicted (a sample
+  // that reached the kernel a tick early or late over a link).
   std::uint8_t beam_glitch;
   std::int64_t glitch_counts[io::kInterferometerAxes];
   std::uint8_t displacement_bad;  // bit s: out of range, or ADC at the rail
