@@ -487,7 +487,7 @@ TEST(SensorsToPose, AJumpNoActuatorCanProduceIsReplacedByThePreviousStepAndFlagg
   SensorsToPoseState& st = FreshState(cfg);
   // 80 m/s^2 at 2.5 kHz: a step change of ceil(80 / 2500^2 / lsb) counts.
   LONGS_EQUAL(static_cast<long>(std::ceil(80.0 / (2500.0 * 2500.0) / kLsb_m)), st.max_counts_step_change);
-  LONGS_EQUAL(20712, st.max_counts_step_change);
+  LONGS_EQUAL(20707, st.max_counts_step_change);
   int n = 0;
   for (; n < 10; ++n) {
     const PoseMeasurement pm = SensorsToPoseStep(MovingSample(n), &st);
@@ -533,20 +533,20 @@ TEST(SensorsToPose, AOneTickSpikeIsRepairedBothWaysAndRealAccelerationIsMotion) 
   pm = SensorsToPoseStep(MovingSample(n++, 0), &st);
   LONGS_EQUAL(0, pm.beam_glitch);
   // From rest, a step change just inside the bound (79.99 m/s^2) is motion.
-  pm = SensorsToPoseStep(MovingSample(n++, 20712), &st);
+  pm = SensorsToPoseStep(MovingSample(n++, 20707), &st);
   LONGS_EQUAL(0, pm.beam_glitch);
-  LONGS_EQUAL(y1 + 20712, st.counts[1]);
+  LONGS_EQUAL(y1 + 20707, st.counts[1]);
   // Stopping dead again is motion too: at speed, one tick's worth of steps
   // more or less is allowed (a sample a tick early or late over a link).
-  pm = SensorsToPoseStep(MovingSample(n++, 20712), &st);
+  pm = SensorsToPoseStep(MovingSample(n++, 20707), &st);
   LONGS_EQUAL(0, pm.beam_glitch);
-  pm = SensorsToPoseStep(MovingSample(n++, 20712), &st);
+  pm = SensorsToPoseStep(MovingSample(n++, 20707), &st);
   LONGS_EQUAL(0, pm.beam_glitch);
   // At rest, one count beyond the bound is a glitch: the predicted step (0) is counted.
-  pm = SensorsToPoseStep(MovingSample(n++, 20712 + 20713), &st);
+  pm = SensorsToPoseStep(MovingSample(n++, 20707 + 20708), &st);
   LONGS_EQUAL(2, pm.beam_glitch);
-  LONGS_EQUAL(20713, pm.glitch_counts[1]);
-  LONGS_EQUAL(y1 + 20712, st.counts[1]);
+  LONGS_EQUAL(20708, pm.glitch_counts[1]);
+  LONGS_EQUAL(y1 + 20707, st.counts[1]);
 }
 
 TEST(SensorsToPose, AStaleSampleIsNoStepAndTheNextFreshStepCoversTheTicksMissed) {
@@ -592,7 +592,7 @@ TEST(SensorsToPose, TheAccelerationCheckArmsTwoStepsAfterASeedAndCanBeSwitchedOf
   s.interferometer_counts[1] += 60000;
   CHECK_EQUAL(0, SensorsToPoseStep(s, &st).beam_glitch);  // same step again
   s.interferometer_counts[1] += 60000 + 90000;
-  CHECK_EQUAL(2, SensorsToPoseStep(s, &st).beam_glitch);  // armed: 90 000 > 20 712 + 60 000
+  CHECK_EQUAL(2, SensorsToPoseStep(s, &st).beam_glitch);  // armed: 90 000 > 20 707 + 60 000
   ReseedInterferometers(&st);
   CHECK_EQUAL(0, SensorsToPoseStep(s, &st).beam_glitch);
   s.interferometer_counts[0] += 90000;

@@ -106,7 +106,7 @@ SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   // 0.05 m = 26 m/s^2 of rotation at a y beam: 63 m/s^2. Measured: at most
   // 7.8 m/s^2 in the 19 suite scenarios and 21.7 m/s^2 in 400 fault-campaign
   // runs (shorted amplifiers and pushes included). 80 m/s^2 is a step change
-  // of 20 712 counts (12.8 um) in one tick at 2.5 kHz (docs/RELIABILITY.md).
+  // of 20 707 counts (12.8 um) in one tick at 2.5 kHz (docs/RELIABILITY.md).
   c.max_acceleration_m_per_s2 = 80.0;
   return c;
 }
@@ -141,8 +141,9 @@ SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
   if (!(config.max_acceleration_m_per_s2 >= 0.0 && config.max_acceleration_m_per_s2 < 1.0e9)) {
     return SensorsToPoseError::kBadPlausibilityBound;
   }
-  const double max_change = std::ceil(config.max_acceleration_m_per_s2 / (config.servo_rate_Hz * config.servo_rate_Hz) / lsb_m);
-  if (config.max_acceleration_m_per_s2 > 0.0 && !(max_change >= 1.0 && max_change <= max_counts)) {
+  const double change_counts = config.max_acceleration_m_per_s2 / (config.servo_rate_Hz * config.servo_rate_Hz) / lsb_m;
+  const double max_change = std::ceil(change_counts);
+  if (config.max_acceleration_m_per_s2 > 0.0 && !(change_counts >= 1.0 && max_change <= max_counts)) {
     return SensorsToPoseError::kBadPlausibilityBound;
   }
   s.max_counts_step_change = config.max_acceleration_m_per_s2 > 0.0 ? static_cast<std::int64_t>(max_change) : 0;
