@@ -20,6 +20,9 @@
 #include <vector>
 
 #include "maglev/bench/campaign.hpp"
+#include "maglev/bench/overrides.hpp"
+#include "maglev/bench/pmlsm_bench.hpp"
+#include "maglev/profile/profile_text.hpp"
 #include "maglev/bench/profile_check.hpp"
 #include "maglev/bench/runner.hpp"
 #include "maglev/bench/serve.hpp"
@@ -61,6 +64,7 @@ void usage() {
       "                 [--seeds N]        as-built error seeds 1..N: per paper figure median, spread, ratio\n"
       "  maglev-hil suite --out DIR [run options but --can-log]\n"
       "  maglev-hil check NAME|FILE...\n"
+      "  maglev-hil record-pmlsm VECTORS OUTPUTS [--profile P]   paper 002's session for the M7 replay\n"
       "  maglev-hil profiles                  the stage profiles; run/suite take --profile NAME|FILE\n"
       "  maglev-hil error-terms               the as-built error terms (markdown, docs/PLANT.md)\n"
       "  maglev-hil check-profile NAME|FILE   allocation, passive axes, loops, current headroom\n"
@@ -312,6 +316,42 @@ int main(int argc, char** argv) {
                  a.cmd == "plant" || a.cmd == "controller" ? " (record the interface with 'candump -l IFACE')" : "");
     return 2;
   }
+  // Stages of another actuator family than the default's run on their own
+  // kernel and plant in process (paper 002: docs/PAPER-002.md); their suite
+  // is a list of experiments, not scenario files.
+  if (a.run.profile && (a.cmd == "run" || a.cmd == "suite" || a.cmd == "list")) {
+    const maglev::profile::ProfileParse pp = maglev::profile::find_profile(*a.run.profile, maglev::bench::profile_dir());
+    if (!pp.ok()) {
+      for (const auto& e : pp.errors) std::fprintf(stderr, "%s\n", e.c_str());
+      return 2;
+    }
+    if (pp.profile.family == maglev::stage_profile::ActuatorFamily::kIronCorePmlsm) {
+      namespace pm = maglev::bench::pmlsm;
+      if (a.cmd == "list") {
+        pm::list_experiments();
+        return 0;
+      }
+      if (a.out.empty() || (a.cmd == "run" && a.positional.size() != 1)) {
+        std::fprintf(stderr, "maglev-hil %s --profile %s: needs %s--out DIR\n", a.cmd.c_str(), pp.profile.name,
+                     a.cmd == "run" ? "one experiment NAME and " : "");
+        return 2;
+      }
+      return pm::suite_main(pp.profile, a.out, a.cmd == "run" ? a.positional[0] : std::string());
+    }
+  }
+  if (a.cmd == "record-pmlsm") {
+    if (a.positional.size() != 2) {
+      std::fprintf(stderr, "maglev-hil record-pmlsm: needs VECTORS OUTPUTS\n");
+      return 2;
+    }
+    const maglev::profile::ProfileParse pp =
+        maglev::profile::find_profile(a.run.profile ? *a.run.profile : "fmp2009-pmlsm", maglev::bench::profile_dir());
+    if (!pp.ok()) {
+      for (const auto& e : pp.errors) std::fprintf(stderr, "%s\n", e.c_str());
+      return 2;
+    }
+    return maglev::bench::pmlsm::record_main(pp.profile, a.positional[0], a.positional[1]);
+  }
   if (a.cmd == "list") {
     const auto files = scenario_files(a.scenarios);
     if (files.empty()) {
@@ -346,6 +386,10 @@ int main(int argc, char** argv) {
     if (a.positional.size() != 1) {
       std::fprintf(stderr, "maglev-hil check-profile: needs one profile NAME|FILE\n");
       return 2;
+    }
+    const maglev::profile::ProfileParse pp = maglev::profile::find_profile(a.positional[0], maglev::bench::profile_dir());
+    if (pp.ok() && pp.profile.family == maglev::stage_profile::ActuatorFamily::kIronCorePmlsm) {
+      return maglev::bench::pmlsm::check_profile_main(pp.profile);
     }
     return maglev::bench::check_profile_main(a.positional[0]);
   }

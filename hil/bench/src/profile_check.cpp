@@ -7,6 +7,7 @@
 
 #include "maglev/bench/axes.hpp"
 #include "maglev/bench/overrides.hpp"
+#include "maglev/control_design/pmlsm_kernel_config.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
 #include "maglev/plant/plant_profile.hpp"
 #include "maglev/profile/profile_text.hpp"
@@ -62,6 +63,14 @@ int list_profiles_main() {
     if (!p.ok()) {
       std::printf("  %-20s (errors: %s)\n", n.c_str(), p.errors.front().c_str());
       ++bad;
+      continue;
+    }
+    if (p.profile.family == sp::ActuatorFamily::kIronCorePmlsm) {
+      // Paper 002's family runs on its own kernel (firmware/kernel/pmlsm_stage).
+      control_design::PmlsmDesign d;
+      std::string why;
+      std::printf("  %-20s %-9s %s\n", n.c_str(),
+                  control_design::BuildPmlsmKernelConfig(p.profile, &d, &why) ? "runs" : "REFUSED", p.profile.title);
       continue;
     }
     kernel::KernelConfig kc{};

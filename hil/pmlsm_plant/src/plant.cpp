@@ -56,6 +56,35 @@ MotorCurrents Plant::Step(const MotorCurrents& command, double dt_s) {
     delivered[m] = o.delivered;
     saturated_ = saturated_ || o.saturated;
   }
+  return Advance(delivered, dt_s);
+}
+
+MotorCurrents Plant::StepPhases(const std::array<PhaseCurrents, kMotors>& command, double dt_s) {
+  const double th_x = ElectricalAngle_rad(p_.motor, x_[2]);
+  const double th_z = ElectricalAngle_rad(p_.motor, x_[4]);
+  MotorCurrents delivered{};
+  saturated_ = false;
+  for (std::size_t m = 0; m < kMotors; ++m) {
+    PhaseCurrents ph = command[m];
+    double peak = 0.0;
+    for (double i : ph.abc_A) peak = std::max(peak, std::abs(i));
+    if (peak > a_.phase_peak_A) {
+      for (double& i : ph.abc_A) i *= a_.phase_peak_A / peak;
+      saturated_ = true;
+    }
+    delivered[m] = ParkClarke(ph, (m % 2 == 1) ? th_x : th_z);
+  }
+  return Advance(delivered, dt_s);
+}
+
+std::array<std::int32_t, 5> Plant::EncoderCounts() const {
+  auto q = [](double v, double res) { return static_cast<std::int32_t>(std::lround(v / res)); };
+  return {q(x_[0], e_.translation_resolution_m), q(x_[2], e_.translation_resolution_m),
+          q(x_[4], e_.translation_resolution_m), q(x_[6], e_.rotation_resolution_rad),
+          q(x_[8], e_.rotation_resolution_rad)};
+}
+
+MotorCurrents Plant::Advance(const MotorCurrents& delivered, double dt_s) {
   auto add = [](const State& a, const State& b, double s) {
     State r{};
     for (std::size_t j = 0; j < r.size(); ++j) r[j] = a[j] + s * b[j];

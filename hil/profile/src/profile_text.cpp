@@ -261,7 +261,13 @@ Keys pmlsm_keys(sp::PmlsmParameters* m) {
       {"min_gap_m", real(&m->min_gap_m, 1e-4, 0.2)},
       {"max_gap_m", real(&m->max_gap_m, 1e-4, 0.2)},
       {"vertical_attraction_scale", real(&m->vertical_attraction_scale, 0.0, 10.0)},
-      {"guide_torsional_stiffness_Nm_per_rad", real(&m->guide_torsional_stiffness_Nm_per_rad, 0.0, 1e9)},
+      {"magnet_length_m", real(&m->magnet_length_m, 1e-4, 1.0)},
+      {"magnet_width_m", real(&m->magnet_width_m, 1e-4, 1.0)},
+      {"winding_factor", real(&m->winding_factor, 0.1, 1.0)},
+      {"recoil_permeability", real(&m->recoil_permeability, 1.0, 10.0)},
+      {"radius_to_movers_m", real(&m->radius_to_movers_m, 1e-3, 10.0)},
+      {"guide_torsion_phi_per_s2", real(&m->guide_torsion_phi_per_s2, 0.0, 1e9)},
+      {"guide_torsion_theta_per_s2", real(&m->guide_torsion_theta_per_s2, 0.0, 1e9)},
   };
 }
 
@@ -317,6 +323,16 @@ Keys axis_keys(sp::Axis* a) {
       {"imr_omega0_rad_per_s", real(&c->imr_omega0_rad_per_s, 0.0, 1e4)},
       {"antiwindup_gain", real(&c->antiwindup_gain, 0.0, 1e6)},
       {"feedback_linearization", flag(&c->feedback_linearization)},
+      {"lqr_weight_h", [=](const std::string& v) -> std::string {
+         const auto w = words(v);
+         if (w.size() != 5) return "expected 5 numbers h1..h5 (Q = h'h over [e e' xi1 xi2 xi3], R = 1)";
+         for (std::size_t i = 0; i < 5; ++i) {
+           if (!number(w[i], &c->lqr_weight_h[i]) || !std::isfinite(c->lqr_weight_h[i])) {
+             return "not a number: '" + w[i] + "'";
+           }
+         }
+         return "";
+       }},
       {"schedule", schedule(c)},
   };
   for (int f = 0; f < sp::kMaxFilters; ++f) {
@@ -349,7 +365,16 @@ Keys sensor_keys(sp::Sensor* s) {
           {"z_m", real(&s->z_m, -10.0, 10.0)},
           {"direction_rad", real(&s->direction_rad, -2 * kPi, 2 * kPi)},
           {"resolution", real(&s->resolution, 0.0, 1e3)},
-          {"noise", real(&s->noise, 0.0, 1.0)}};
+          {"noise", real(&s->noise, 0.0, 1.0)},
+          {"axis", [=](const std::string& v) -> std::string {
+             for (int a = 0; a < sp::kAxes; ++a) {
+               if (v == kAxisNames[a]) {
+                 s->measured_axis = static_cast<std::uint8_t>(a);
+                 return "";
+               }
+             }
+             return "expected one of x, y, theta_z, z, theta_x, theta_y";
+           }}};
 }
 
 std::string key_list(const Keys& k) {
@@ -374,6 +399,7 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
     a.controller.effort_limit_A = 4.0;
   }
   p.body.gravity_m_per_s2 = 9.81;
+  for (auto& sensor : p.sensors) sensor.measured_axis = sp::kGeometricSensor;
   bool family_set = false;
   int actuators_seen = 0, sensors_seen = 0;
   auto err = [&](int line, const std::string& field, const std::string& why) {

@@ -20,8 +20,8 @@ int main() {
     }
     std::printf("axis %s  (R = 1, Q = h'h, residual %.2e)\n  diag(Q) =", AxisName(a), d.riccati_residual);
     for (int j = 0; j < 5; ++j) std::printf(" %.6g", d.Q(j, j));
-    std::printf("\n  h       =");
-    for (int j = 0; j < 5; ++j) std::printf(" %.6g", std::sqrt(d.Q(j, j)) * (d.Q(0, j) < 0 ? -1.0 : 1.0));
+    std::printf("\n  h       =  (profile: lqr_weight_h)");
+    for (int j = 0; j < 5; ++j) std::printf(" %.10g", std::sqrt(d.Q(j, j)) * (d.Q(0, j) < 0 ? -1.0 : 1.0));
     std::printf("\n  K_s     =");
     for (double k : d.Ks) std::printf(" %.6g", k);
     std::printf("\n  poles   =");

@@ -17,7 +17,7 @@ if(NOT EXISTS "${BUILD_DIR}/CMakeCache.txt")
                         "the host build at an existing image with -DMAGLEV_KERNEL_REPLAY_ELF=<path>.")
   endif()
 endif()
-execute_process(COMMAND ${CMAKE_COMMAND} --build ${BUILD_DIR} --target maglev-qemu-kernel-replay
+execute_process(COMMAND ${CMAKE_COMMAND} --build ${BUILD_DIR} --target maglev-qemu-kernel-replay maglev-qemu-pmlsm-replay
                 RESULT_VARIABLE _rc)
 if(NOT _rc EQUAL 0)
   message(FATAL_ERROR "kernel replay image: 'cmake --build ${BUILD_DIR} --target maglev-qemu-kernel-replay' "

@@ -89,19 +89,6 @@ char g_command_line[1024];
 constexpr int kMaxWords = 4;
 const char* g_words[kMaxWords] = {};
 
-int split_words(char* text) {
-  int n = 0;
-  char* p = text;
-  while (*p != '\0' && n < kMaxWords) {
-    while (*p == ' ') ++p;
-    if (*p == '\0') break;
-    g_words[n++] = p;
-    while (*p != '\0' && *p != ' ') ++p;
-    if (*p == ' ') *p++ = '\0';
-  }
-  return n;
-}
-
 // --- buffers and the controller: all static (no heap) -------------------------
 constexpr std::size_t kChunkTicks = 64;
 std::uint8_t g_input[kChunkTicks * kr::kInputRecordBytes];
@@ -123,7 +110,7 @@ int main() {
     return fail("no semihosting command line", kBadCommandLine);
   }
   // "<kernel path> <vectors> <outputs>"
-  if (split_words(g_command_line) < 3) {
+  if (kr::split_words(g_command_line, g_words, kMaxWords) < 3) {
     return fail("usage: -append \"<vectors.bin> <outputs.bin> [--icount]\"", kBadCommandLine);
   }
   // SysTick counts are instructions only if QEMU runs with -icount; the caller says so.

@@ -50,4 +50,16 @@ long semihost_file_length(int handle) {
   return static_cast<long>(static_cast<std::int32_t>(call(Op::kFlen, block)));
 }
 
+int split_words(char* p, const char** words, int max_words) {
+  int n = 0;
+  while (*p != '\0' && n < max_words) {
+    while (*p == ' ') ++p;
+    if (*p == '\0') break;
+    words[n++] = p;
+    while (*p != '\0' && *p != ' ') ++p;
+    if (*p == ' ') *p++ = '\0';
+  }
+  return n;
+}
+
 }  // namespace maglev::kernel_replay

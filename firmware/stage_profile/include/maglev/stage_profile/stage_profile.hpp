@@ -96,6 +96,10 @@ struct AxisController {
   double imr_omega0_rad_per_s;
   double antiwindup_gain;
   bool feedback_linearization;
+  // LQR weights of the internal-model design plant z = [e e' xi1 xi2 xi3]
+  // (paper 002): Q = h' h (rank one), R = 1. The host solves the Riccati
+  // equation (host-tools/control_design); the firmware receives gains.
+  double lqr_weight_h[5];
   std::uint8_t filter_count;
   Filter filters[kMaxFilters];
   std::uint8_t schedule_points;
@@ -131,7 +135,11 @@ struct Sensor {
   double direction_rad;  // measuring direction in the plane (interferometers, encoders)
   double resolution;     // kind-specific unit (see SensorKind)
   double noise;          // rms, same unit as the measured quantity (m or rad)
+  // A sensor that reads one axis directly (an encoder on a guide, paper
+  // 002): that axis' index; kGeometricSensor = placed by its geometry.
+  std::uint8_t measured_axis;
 };
+inline constexpr std::uint8_t kGeometricSensor = 255;
 
 struct Body {
   double mass_kg;
@@ -161,7 +169,16 @@ struct PmlsmParameters {
   int turns_per_phase, magnets_per_motor, pole_pairs;
   double nominal_gap_m, min_gap_m, max_gap_m;
   double vertical_attraction_scale;  // K_v3 correction (NOTES-002-001), marked as ours in the profile
-  double guide_torsional_stiffness_Nm_per_rad;
+  // Added with paper 002's stage on the bench: the force law needs the
+  // magnets' length and width, the winding factor and the recoil
+  // permeability; (5)-(7) need the radius to the movers; the guides resist
+  // the two tilts differently (the paper's ranges: 3 mrad about X, 14 about
+  // Z), so one torsional stiffness could not describe them. Per unit
+  // inertia (k_s of (7)), as the paper writes it.
+  double magnet_length_m, magnet_width_m;
+  double winding_factor, recoil_permeability;
+  double radius_to_movers_m;
+  double guide_torsion_phi_per_s2, guide_torsion_theta_per_s2;
 };
 
 // Solenoid-magnet force law parameters (paper 001 (1)-(9), Tables 1-2).

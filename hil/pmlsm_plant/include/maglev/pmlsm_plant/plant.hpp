@@ -10,6 +10,7 @@
 // k_s_theta about X and Z (7). The guides' mechanical stops clamp the gap and
 // the horizontal travel.
 #include <array>
+#include <cstdint>
 
 #include "maglev/pmlsm_plant/amplifier.hpp"
 #include "maglev/pmlsm_plant/force_law.hpp"
@@ -49,11 +50,18 @@ class Plant {
   // and phase clamp), holds them for dt_s (zero-order hold, as the 1 kHz DAC
   // does) and advances the state by one RK4 step. Returns the delivered currents.
   MotorCurrents Step(const MotorCurrents& command, double dt_s);
+  // The same from the phase currents a firmware's commutation commands (the
+  // amplifiers' clamp, then the motor sees the Park transform at the TRUE
+  // mover position): the bench's path, where the kernel commutates.
+  MotorCurrents StepPhases(const std::array<PhaseCurrents, kMotors>& command, double dt_s);
+  // Encoder counts of y = [x1 x3 x5 x7 x9] (round to nearest count).
+  std::array<std::int32_t, 5> EncoderCounts() const;
   bool last_step_saturated() const { return saturated_; }
 
   Measurement Measure() const { return MeasureEncoders(e_, x_); }
 
  private:
+  MotorCurrents Advance(const MotorCurrents& delivered, double dt_s);
   StageParams p_;
   AmplifierParams a_;
   EncoderParams e_;

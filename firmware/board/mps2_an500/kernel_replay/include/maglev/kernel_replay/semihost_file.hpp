@@ -19,5 +19,8 @@ bool semihost_read(int handle, void* buffer, std::size_t bytes);
 bool semihost_write_file(int handle, const void* buffer, std::size_t bytes);
 // File length in bytes, or -1.
 long semihost_file_length(int handle);
+// Splits the semihosting command line in place at spaces into at most
+// max_words words; returns how many.
+int split_words(char* text, const char** words, int max_words);
 
 }  // namespace maglev::kernel_replay
