@@ -63,6 +63,9 @@ function(maglev_firmware_image)
 
   maglev_add_script_test(NAME ${F_TARGET}-no-heap LABEL ${F_CHECK_LABEL} TIMEOUT 60
     COMMAND sh ${MAGLEV_CMAKE_DIR}/check-no-heap.sh ${CMAKE_NM} $<TARGET_FILE:${F_TARGET}>)
+  # Bit-exact by construction: no libm transcendental function in any image.
+  maglev_add_script_test(NAME ${F_TARGET}-no-libm LABEL ${F_CHECK_LABEL} TIMEOUT 60
+    COMMAND sh ${MAGLEV_CMAKE_DIR}/check-no-libm.sh ${CMAKE_NM} $<TARGET_FILE:${F_TARGET}>)
 endfunction()
 
 # maglev_add_qemu_test(NAME <test> IMAGE <exe> [LABEL target] [ARGS <word>...]

@@ -4,6 +4,7 @@
 //   maglev-can-gen --check --dbc FILE --doc FILE  exit 1 if either differs
 // In docs/CAN.md only the text between "<!-- BEGIN GENERATED: name -->" and
 // "<!-- END GENERATED: name -->" markers is generated; the rest is by hand.
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -228,6 +229,13 @@ std::string budget_section() {
   o << "With the 8 coil current monitors inside the sensor frame (3 + 28 + 16 = 47 -> 48 bytes) the servo pair "
        "would take "
     << fixed(alt, 1) << " us per tick = " << fixed(100.0 * alt / period_us, 1) << " %.\n";
+  // The servo rate this link can carry: every periodic frame's period is in
+  // ticks, so the load grows in proportion to the rate.
+  constexpr double kUsable = 0.8;  // 20 % left for commands, acks, error frames and retransmissions
+  o << "**Highest servo rate over this link**: the periodic load scales with the rate, so the bus is full at "
+    << num(std::floor(fs / total)) << " Hz and " << num(kUsable * 100.0) << " % full at "
+    << num(std::floor(kUsable * fs / total)) << " Hz. Rates of 5 kHz and above (issue 16) run in process "
+       "(lockstep without the bus), or need a faster data phase.\n";
   return o.str();
 }
 

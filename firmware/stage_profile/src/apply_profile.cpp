@@ -8,6 +8,7 @@
 #include "maglev/axis_loops/loop_check.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
 #include "maglev/io/stage_parameters.hpp"
+#include "maglev/numeric/elementary.hpp"
 
 namespace maglev::stage_profile {
 
@@ -82,7 +83,7 @@ void observation_row(const Sensor& s, double row[kA]) {
   switch (s.kind) {
     case SensorKind::kInterferometer:
     case SensorKind::kLinearEncoder: {
-      const double c = std::cos(s.direction_rad), sn = std::sin(s.direction_rad);
+      const double c = numeric::dcos(s.direction_rad), sn = numeric::dsin(s.direction_rad);
       row[0] = c;
       row[1] = sn;
       row[2] = -s.y_m * c + s.x_m * sn;  // theta_z moves the point by theta x (-y, x)
@@ -264,7 +265,7 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
       const Sensor& sensor = p.sensors[s];
       if (sensor.kind == SensorKind::kInterferometer) {
         ++beams;
-        const double c = std::fabs(std::cos(sensor.direction_rad)), sn = std::fabs(std::sin(sensor.direction_rad));
+        const double c = std::fabs(numeric::dcos(sensor.direction_rad)), sn = std::fabs(numeric::dsin(sensor.direction_rad));
         if (!(c > 1.0 - 1e-9 || sn > 1.0 - 1e-9)) return fail(ProfileError::kUnsupportedSensors);
       } else if (sensor.kind == SensorKind::kLaserDisplacement) {
         ++heights;
@@ -401,12 +402,12 @@ kernel::KernelConfig config_of(const StageProfile& p) {
       case SensorKind::kInterferometer:
         if (beams < io::kInterferometerAxes) {
           // Along X (direction 0 or pi) or along Y (+-pi/2): the check admits no other.
-          const bool along_x = std::fabs(std::cos(sensor.direction_rad)) > 0.5;
+          const bool along_x = std::fabs(numeric::dcos(sensor.direction_rad)) > 0.5;
           kernel::BeamConfig& b = c.measurement.beam[beams++];
           b.axis = along_x ? kernel::BeamAxis::kX : kernel::BeamAxis::kY;
           b.perpendicular_m = along_x ? sensor.y_m : sensor.x_m;
           // A beam that looks along -X or -Y counts down as the stage moves +.
-          b.sign = (along_x ? std::cos(sensor.direction_rad) : std::sin(sensor.direction_rad)) < 0.0 ? -1 : 1;
+          b.sign = (along_x ? numeric::dcos(sensor.direction_rad) : numeric::dsin(sensor.direction_rad)) < 0.0 ? -1 : 1;
         }
         break;
       case SensorKind::kLaserDisplacement:

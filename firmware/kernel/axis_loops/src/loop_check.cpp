@@ -1,6 +1,7 @@
 #include "maglev/axis_loops/loop_check.hpp"
 
 #include <cmath>
+#include "maglev/numeric/elementary.hpp"
 
 namespace maglev::kernel {
 
@@ -25,28 +26,28 @@ LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant,
     const double c_re = kp + d_re, c_im = -ki / w + d_im;
     const double p_re = plant.stiffness_per_s2 - w * w, p_im = plant.damping_per_s * w;
     *mag = std::sqrt(c_re * c_re + c_im * c_im) * plant.gain / std::sqrt(p_re * p_re + p_im * p_im);
-    *phase = std::atan2(c_im, c_re) - std::atan2(p_im, p_re) - 0.5 * T * w;
+    *phase = numeric::datan2(c_im, c_re) - numeric::datan2(p_im, p_re) - 0.5 * T * w;
     // Each filter stage: (b0 + b1 z^-1 + b2 z^-2) / (1 + a1 z^-1 + a2 z^-2) at z = e^{jwT}.
-    const double c1 = std::cos(w * T), s1 = std::sin(w * T), c2 = std::cos(2.0 * w * T), s2 = std::sin(2.0 * w * T);
+    const double c1 = numeric::dcos(w * T), s1 = numeric::dsin(w * T), c2 = numeric::dcos(2.0 * w * T), s2 = numeric::dsin(2.0 * w * T);
     for (int k = 0; k < stages; ++k) {
       const BiquadDesign& d = stage[k];
       const double n_re = d.b0 + d.b1 * c1 + d.b2 * c2, n_im = -(d.b1 * s1 + d.b2 * s2);
       const double q_re = 1.0 + d.a1 * c1 + d.a2 * c2, q_im = -(d.a1 * s1 + d.a2 * s2);
       *mag *= std::sqrt(n_re * n_re + n_im * n_im) / std::sqrt(q_re * q_re + q_im * q_im);
-      *phase += std::atan2(n_im, n_re) - std::atan2(q_im, q_re);
+      *phase += numeric::datan2(n_im, n_re) - numeric::datan2(q_im, q_re);
     }
   };
   const double f_lo = 0.1, f_hi = 0.5 * servo_rate_Hz;
   constexpr int kSteps = 1000;
-  const double ratio = std::pow(f_hi / f_lo, 1.0 / kSteps);
+  const double ratio = numeric::dpow(f_hi / f_lo, 1.0 / kSteps);
   double prev_mag = 0.0, prev_f = f_lo, f = f_lo;
   for (int i = 0; i <= kSteps; ++i, f *= ratio) {
     double mag = 0.0, ph = 0.0;
     loop(2.0 * kPi * f, &mag, &ph);
     if (i > 0 && prev_mag >= 1.0 && mag < 1.0) {
       // Log-linear interpolation between the two samples.
-      const double t = std::log(prev_mag) / (std::log(prev_mag) - std::log(mag));
-      const double fc = prev_f * std::pow(f / prev_f, t);
+      const double t = numeric::dlog(prev_mag) / (numeric::dlog(prev_mag) - numeric::dlog(mag));
+      const double fc = prev_f * numeric::dpow(f / prev_f, t);
       double mc = 0.0, pc = 0.0;
       loop(2.0 * kPi * fc, &mc, &pc);
       double deg = pc * 180.0 / kPi;  // unwrapped into (-360, 0]

@@ -5,6 +5,7 @@
 
 #include "maglev/io/stage_parameters.hpp"
 #include "maglev/numeric/fixed.hpp"
+#include "maglev/numeric/elementary.hpp"
 
 namespace maglev::kernel {
 namespace {
@@ -42,8 +43,8 @@ void LayoutGeometry(const ForceAllocationConfig& c, ForcerGeometry g[kForcers]) 
       g[3] = {l, -l, 0.0, 1.0, true};
       break;
     case ForceLayout::kTriangular: {
-      const double s = std::sin(c.triangle_alpha_rad);
-      const double co = std::cos(c.triangle_alpha_rad);
+      const double s = numeric::dsin(c.triangle_alpha_rad);
+      const double co = numeric::dcos(c.triangle_alpha_rad);
       g[0] = {l * co, l * s, -s, co, true};
       g[1] = {-l * co, l * s, -s, -co, true};
       g[2] = {0.0, -l, 1.0, 0.0, true};
@@ -153,10 +154,10 @@ double BStarFromGeometry(const ForceAllocationConfig& c) {
   // eq (20):        b*(z)  = p c_1(z) 4N / (d a g^2) sin(g a / 2) (1 - e^{-g d})
   const double g = 2.0 * stage::kPi / c.pitch_m;
   const double c1 = 2.0 * std::sqrt(2.0) * stage::kMu0 * c.magnetization_A_per_m / stage::kPi *
-                    (1.0 - std::exp(-g * c.magnet_thickness_m)) * std::exp(-g * c.nominal_gap_m);
+                    (1.0 - numeric::dexp(-g * c.magnet_thickness_m)) * numeric::dexp(-g * c.nominal_gap_m);
   return c.coil_effective_length_m * c1 * 4.0 * c.coil_turns /
-         (c.coil_thickness_m * c.coil_side_width_m * g * g) * std::sin(g * c.coil_side_width_m / 2.0) *
-         (1.0 - std::exp(-g * c.coil_thickness_m));
+         (c.coil_thickness_m * c.coil_side_width_m * g * g) * numeric::dsin(g * c.coil_side_width_m / 2.0) *
+         (1.0 - numeric::dexp(-g * c.coil_thickness_m));
 }
 
 ForceAllocationError ComputeForceAllocationTables(const ForceAllocationConfig& c,
@@ -200,7 +201,7 @@ ForceAllocationError ComputeForceAllocationTables(const ForceAllocationConfig& c
   // Coil pairs must be in quadrature (orthogonal 2x2 commutation blocks).
   for (int k = 0; k < kForcers; ++k) {
     if (!t.forcer_used[k]) continue;
-    if (!(std::fabs(std::cos(c.coil_phase_rad[2 * k] - c.coil_phase_rad[2 * k + 1])) < 1e-9)) {
+    if (!(std::fabs(numeric::dcos(c.coil_phase_rad[2 * k] - c.coil_phase_rad[2 * k + 1])) < 1e-9)) {
       return ForceAllocationError::kBadCoilPhases;
     }
   }

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "maglev/numeric/saturation.hpp"
+#include "maglev/numeric/elementary.hpp"
 
 namespace maglev::kernel {
 
@@ -242,7 +243,9 @@ ReferenceError CircleReference::plan(std::int64_t x0_pico, std::int64_t y0_pico,
   const double jlim = std::fmin(lx.max_jerk, ly.max_jerk);
   if (speed > vlim) return ReferenceError::kVelocityLimit;
   // Worst-case per-axis acceleration <= |(a_t, v^2/r)|.
-  if (std::hypot(at, speed * speed / r) > alim) return ReferenceError::kAccelerationLimit;
+  // (sqrt of the sum of squares: IEEE-exact everywhere, where hypot is not.)
+  const double an = speed * speed / r;
+  if (std::sqrt(at * at + an * an) > alim) return ReferenceError::kAccelerationLimit;
   // Worst-case per-axis jerk <= j + 3 v a_t / r + v^3 / r^2.
   if (jerk + 3.0 * speed * at / r + speed * speed * speed / (r * r) > jlim) return ReferenceError::kJerkLimit;
   const std::int64_t r_pico = numeric::si_to_pico(r);
@@ -271,7 +274,7 @@ ReferenceError CircleReference::plan(std::int64_t x0_pico, std::int64_t y0_pico,
 void CircleReference::sample(std::int64_t tick, AxisReference* x, AxisReference* y) const {
   const AxisReference s = arc_.sample(tick);  // arc length in pm
   const double theta = static_cast<double>(s.position_pico) / kPicoPerSi / radius_m_;
-  const double c = std::cos(theta), sn = std::sin(theta);
+  const double c = numeric::dcos(theta), sn = numeric::dsin(theta);
   const double v = static_cast<double>(s.velocity), at = static_cast<double>(s.acceleration);
   *x = AxisReference{};
   *y = AxisReference{};
@@ -297,7 +300,7 @@ ReferenceError SinusoidReference::plan(std::int64_t start_pico, double amplitude
   const double a = std::fabs(amplitude_m);
   if (a * w > limits.max_velocity) return ReferenceError::kVelocityLimit;
   if (a * w * w > limits.max_acceleration) return ReferenceError::kAccelerationLimit;
-  const double s0 = std::sin(phase_rad);
+  const double s0 = numeric::dsin(phase_rad);
   // p - p0 = A sin(ph) - A sin(phi), and A sin(ph) spans [-|A|, |A|].
   const std::int64_t hi = start_pico + numeric::si_to_pico(a - amplitude_m * s0);
   const std::int64_t lo = start_pico + numeric::si_to_pico(-a - amplitude_m * s0);
@@ -319,10 +322,10 @@ AxisReference SinusoidReference::sample(std::int64_t tick) const {
   const bool finished = total_ticks_ > 0 && tick >= total_ticks_;
   const double t = finished ? static_cast<double>(total_ticks_) * period_s_ : static_cast<double>(tick) * period_s_;
   const double ph = omega_ * t + phase_;
-  r.position_pico = start_ + numeric::si_to_pico(amplitude_ * (std::sin(ph) - std::sin(phase_)));
+  r.position_pico = start_ + numeric::si_to_pico(amplitude_ * (numeric::dsin(ph) - numeric::dsin(phase_)));
   if (!finished) {
-    r.velocity = static_cast<float>(amplitude_ * omega_ * std::cos(ph));
-    r.acceleration = static_cast<float>(-amplitude_ * omega_ * omega_ * std::sin(ph));
+    r.velocity = static_cast<float>(amplitude_ * omega_ * numeric::dcos(ph));
+    r.acceleration = static_cast<float>(-amplitude_ * omega_ * omega_ * numeric::dsin(ph));
   }
   return r;
 }

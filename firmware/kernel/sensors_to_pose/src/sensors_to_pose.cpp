@@ -5,6 +5,7 @@
 
 #include "maglev/io/stage_parameters.hpp"
 #include "maglev/sensors_to_pose/internal/wide_math.hpp"
+#include "maglev/numeric/elementary.hpp"
 
 namespace maglev::kernel {
 namespace {
@@ -65,8 +66,8 @@ constexpr double kPradToQ40Rad = 1099511627776.0 * 1e-12;
 double HalbachHarmonicRatio(int n, double z_m, double delta_m, double pitch_m) {
   const double g1 = 2.0 * stage::kPi / pitch_m;
   const double gn = g1 * n;
-  return (1.0 / n) * (1.0 - std::exp(-gn * delta_m)) / (1.0 - std::exp(-g1 * delta_m)) *
-         std::exp(-(gn - g1) * z_m);
+  return (1.0 / n) * (1.0 - numeric::dexp(-gn * delta_m)) / (1.0 - numeric::dexp(-g1 * delta_m)) *
+         numeric::dexp(-(gn - g1) * z_m);
 }
 
 SensorsToPoseConfig DefaultSensorsToPoseConfig() {
@@ -386,10 +387,10 @@ namespace {
 // map contracts by 4 eps / (1 - eps) (0.52 for eps = 0.114), so 24 passes
 // leave < 1e-7 rad. Fixed count: no data-dependent exit.
 double HallAxisPhase(double a, double b, double eps) {
-  const double phi = std::atan2(a, b);
+  const double phi = numeric::datan2(a, b);
   double theta = phi;
   for (int k = 0; k < 24; ++k) {
-    const double delta = std::atan2(-eps * std::sin(4.0 * theta), 1.0 - eps * std::cos(4.0 * theta));
+    const double delta = numeric::datan2(-eps * numeric::dsin(4.0 * theta), 1.0 - eps * numeric::dcos(4.0 * theta));
     theta = phi - delta;
   }
   return theta;

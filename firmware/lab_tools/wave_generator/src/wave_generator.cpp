@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "maglev/numeric/sin_cos.hpp"
+#include "maglev/numeric/elementary.hpp"
 
 namespace maglev::lab {
 namespace {
@@ -71,7 +72,7 @@ WaveError WaveGenerator::start(const WaveConfig& c, const kernel::KernelConfig& 
       sweep_phase_ = 0.0;
       sweep_increment_ = static_cast<double>(c.f_start_Hz) / fs;
       const double n = static_cast<double>(duration_ticks_ > 1 ? duration_ticks_ - 1 : 1);
-      sweep_ratio_ = std::pow(static_cast<double>(c.f_end_Hz) / static_cast<double>(c.f_start_Hz), 1.0 / n);
+      sweep_ratio_ = numeric::dpow(static_cast<double>(c.f_end_Hz) / static_cast<double>(c.f_start_Hz), 1.0 / n);
       break;
     }
     case WaveShape::kMultisine: {
@@ -82,7 +83,7 @@ WaveError WaveGenerator::start(const WaveConfig& c, const kernel::KernelConfig& 
       for (std::uint16_t t = 0; t < c.tones; ++t) {
         const double f = c.tones == 1 ? static_cast<double>(c.f_start_Hz)
                                       : static_cast<double>(c.f_start_Hz) *
-                                            std::pow(static_cast<double>(c.f_end_Hz) / static_cast<double>(c.f_start_Hz),
+                                            numeric::dpow(static_cast<double>(c.f_end_Hz) / static_cast<double>(c.f_start_Hz),
                                                      static_cast<double>(t) / (c.tones - 1));
         auto b = static_cast<std::uint32_t>(std::llround(f / df));
         if (b < 1) b = 1;
@@ -97,8 +98,8 @@ WaveError WaveGenerator::start(const WaveConfig& c, const kernel::KernelConfig& 
         const double kk = static_cast<double>(t + 1);
         const double phi = -kPi * kk * (kk - 1.0) / nt;  // Schroeder phases: low crest factor
         const double w = 2.0 * kPi * static_cast<double>(bins[t]) / static_cast<double>(period_);
-        const double cw = std::cos(w), sw = std::sin(w);
-        double re = std::cos(phi), im = std::sin(phi);  // e^{j(w i + phi)}
+        const double cw = numeric::dcos(w), sw = numeric::dsin(w);
+        double re = numeric::dcos(phi), im = numeric::dsin(phi);  // e^{j(w i + phi)}
         for (std::uint32_t i = 0; i < period_; ++i) {
           table_[i] += static_cast<float>(im);
           const double r2 = re * cw - im * sw;

@@ -20,6 +20,7 @@
 
 #include "maglev/axis_loops/design_error.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
+#include "maglev/numeric/elementary.hpp"
 
 namespace maglev::kernel {
 
@@ -78,7 +79,7 @@ inline LoopDesignError design_biquad_double(const BiquadConfig& config, double s
   const double nyq = 0.5 * servo_rate_Hz;
   if (f0 <= 0.0 || f0 >= nyq) return LoopDesignError::kFilterAboveNyquist;
   const double K = 2.0 / T;  // s = K (z-1)/(z+1)
-  auto warp = [&](double f) { return K * std::tan(kPi * f * T); };
+  auto warp = [&](double f) { return K * numeric::dtan(kPi * f * T); };
   // Bilinear of (n2 s^2 + n1 s + n0)/(d2 s^2 + d1 s + d0).
   auto bilinear = [&](double n2, double n1, double n0, double d2, double d1, double d0) {
     const double A0 = d2 * K * K + d1 * K + d0;
@@ -93,7 +94,7 @@ inline LoopDesignError design_biquad_double(const BiquadConfig& config, double s
       if (q <= 0.0 || depth < 0.0) return LoopDesignError::kBadQuality;
       const double w0 = warp(f0);
       const double zp = 1.0 / (2.0 * q);
-      const double zz = zp * std::pow(10.0, -depth / 20.0);
+      const double zz = zp * numeric::dpow(10.0, -depth / 20.0);
       bilinear(1.0, 2.0 * zz * w0, w0 * w0, 1.0, 2.0 * zp * w0, w0 * w0);
       break;
     }

@@ -38,6 +38,7 @@
 #include "maglev/axis_loops/loop_terms.hpp"
 #include "maglev/numeric/saturation.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
+#include "maglev/numeric/elementary.hpp"
 
 namespace maglev::kernel {
 
@@ -222,7 +223,7 @@ inline LoopDesignError design_internal_model_double(const InternalModelConfig& c
   double Ap[2][2];
   double Bp[2];
   detail::zoh2(kp, cp, g, T, Ap, Bp);
-  const double eps = 2.0 * std::sin(0.5 * w0 * T);
+  const double eps = 2.0 * numeric::dsin(0.5 * w0 * T);
   // Augmented A, B (e = -y).
   double A[5][5] = {
       {Ap[0][0], Ap[0][1], 0, 0, 0},
@@ -279,7 +280,7 @@ inline LoopDesignError design_internal_model_double(const InternalModelConfig& c
   ++n_pairs;
   double phi[5][5] = {{1, 0, 0, 0, 0}, {0, 1, 0, 0, 0}, {0, 0, 1, 0, 0}, {0, 0, 0, 1, 0}, {0, 0, 0, 0, 1}};
   for (int p = 0; p < n_real; ++p) {
-    const double z = std::exp(real_poles[p] * T);
+    const double z = numeric::dexp(real_poles[p] * T);
     double F[5][5];
     for (int i = 0; i < 5; ++i) {
       for (int j = 0; j < 5; ++j) F[i][j] = A[i][j] - (i == j ? z : 0.0);
@@ -291,8 +292,8 @@ inline LoopDesignError design_internal_model_double(const InternalModelConfig& c
     }
   }
   for (int p = 0; p < n_pairs; ++p) {
-    const double mag = std::exp(pairs[p][0] * T);
-    const double re = mag * std::cos(pairs[p][1] * T);
+    const double mag = numeric::dexp(pairs[p][0] * T);
+    const double re = mag * numeric::dcos(pairs[p][1] * T);
     double A2[5][5];
     detail::matmul5(A, A, A2);
     double F[5][5];
