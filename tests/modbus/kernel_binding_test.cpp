@@ -165,6 +165,34 @@ TEST(KernelBinding, GainWriteWhileTheKernelIsBusyIsServerBusy) {
   LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kRefusedNotReady), result);
 }
 
+TEST(KernelBinding, ALiveGainStepBeyondTwiceIsIllegalDataValueAndChangesNothing) {
+  Stage st(flash);
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::tuning_live), 1));
+  // Home: off rest, so the gains may move only by live tuning's step.
+  std::uint16_t cmd[4] = {0, 0, 0, static_cast<std::uint16_t>(maglev::can::HostCommandCode::kHome)};
+  LONGS_EQUAL(4, modbus_write_registers(st.ctx, addr(RegId::cmd_axis), 4, cmd));
+  const kernel::KernelConfig before = st.config();
+  // theta_x kp and kd x3 in one 0x10 (run 3013 of the campaign wrote x20): 03.
+  std::uint16_t w[6];
+  set_f32(70.0f * 3.0f, w);
+  set_f32(17600.0f, w + 2);
+  set_f32(0.09f * 3.0f, w + 4);
+  EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::gain_theta_x_kp), 6, w), 3);
+  CHECK(same_config(before, st.config()));
+  {
+    std::lock_guard<std::mutex> lock(st.m);
+    LONGS_EQUAL(static_cast<int>(kernel::ConfigError::kGainStepTooLarge),
+                static_cast<int>(st.controller->status().last_config_error));
+    LONGS_EQUAL(4, st.controller->status().config_axis);
+  }
+  // x2: applied.
+  set_f32(70.0f * 2.0f, w);
+  set_f32(0.09f * 2.0f, w + 4);
+  LONGS_EQUAL(6, modbus_write_registers(st.ctx, addr(RegId::gain_theta_x_kp), 6, w));
+  DOUBLES_EQUAL(140.0, static_cast<double>(st.config().axis[4].pid.kp), 0.0);
+}
+
 TEST(KernelBinding, SavedConfigurationIsAppliedAtBoot) {
   {
     Stage st(flash);

@@ -636,6 +636,7 @@ FAULT_CODES = (
     (18, "kStageProfileInvalid", "StageProfileInvalid"),
     (19, "kCurrentMismatch", "CurrentMismatch"),
     (20, "kFrozenSample", "FrozenSample"),
+    (21, "kCounterGlitch", "CounterGlitch"),
 )
 
 # controller.hpp MAGLEV_COMMAND_RESULTS (cmd.result)
@@ -669,6 +670,7 @@ CONFIG_ERRORS = (
     (10, "kLockedWhileLevitated", "LockedWhileLevitated"),
     (11, "kGainsLockedWhileLevitated", "GainsLockedWhileLevitated"),
     (12, "kUnstableLoop", "UnstableLoop"),
+    (13, "kGainStepTooLarge", "GainStepTooLarge"),
 )
 
 # stage_profile.hpp MAGLEV_PROFILE_ERRORS (status.profile_error)

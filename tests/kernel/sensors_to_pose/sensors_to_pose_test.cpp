@@ -464,3 +464,160 @@ TEST(SensorsToPose, PoseErrorsSaturate) {
   CHECK(q[1] == maglev::numeric::Q7_24::min());
   DOUBLES_EQUAL(30.0, q[3].to_double(), 1e-7);
 }
+
+// --- acceleration plausibility: a count step no actuator can produce --------
+namespace {
+
+// Beam 0 (x) moving at a constant 25 mm/s (10 um = 16 181 counts per tick at
+// 2.5 kHz), beam 1 still plus `offset_beam1`, beam 2 still: tick n.
+io::SensorSample MovingSample(int n, std::int32_t offset_beam1 = 0) {
+  io::SensorSample s = ZeroSample();
+  s.interferometer_counts[0] = static_cast<std::uint32_t>(16181 * n);
+  s.interferometer_counts[1] = static_cast<std::uint32_t>(5000 + offset_beam1);
+  s.interferometer_counts[2] = 5000u;
+  return s;
+}
+
+std::int64_t Beam1Pm(const SensorsToPoseState& st) { return CountsToPicometres(st.counts[1], st); }
+
+}  // namespace
+
+TEST(SensorsToPose, AJumpNoActuatorCanProduceIsReplacedByThePreviousStepAndFlagged) {
+  const SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
+  SensorsToPoseState& st = FreshState(cfg);
+  // 80 m/s^2 at 2.5 kHz: a step change of ceil(80 / 2500^2 / lsb) counts.
+  LONGS_EQUAL(static_cast<long>(std::ceil(80.0 / (2500.0 * 2500.0) / kLsb_m)), st.max_counts_step_change);
+  LONGS_EQUAL(20707, st.max_counts_step_change);
+  int n = 0;
+  for (; n < 10; ++n) {
+    const PoseMeasurement pm = SensorsToPoseStep(MovingSample(n), &st);
+    LONGS_EQUAL(0, pm.beam_glitch);  // constant speed: no change of step at all
+  }
+  const std::int64_t x_before = st.counts[0];
+  const std::int64_t y1_before = Beam1Pm(st);
+  // Run 5693 of the campaign: -35 943 counts (22 um) on beam 1 in one tick,
+  // kept from then on, while the stage moves in x.
+  PoseMeasurement pm = SensorsToPoseStep(MovingSample(n++, -35943), &st);
+  LONGS_EQUAL(2, pm.beam_glitch);
+  LONGS_EQUAL(-35943, pm.glitch_counts[1]);
+  LONGS_EQUAL(0, pm.glitch_counts[0]);
+  CHECK_EQUAL(kPoseValidAll, pm.valid_axes);  // repaired: the pose stays usable
+  LONGS_EQUAL(0, pm.beam_jump);
+  LONGS_EQUAL(y1_before, Beam1Pm(st));          // beam 1 took its previous step (zero)
+  LONGS_EQUAL(x_before + 16181, st.counts[0]);  // beam 0 moved on untouched
+  // The jump stays in the raw counter: taken as an offset, the pose does not move.
+  for (int k = 0; k < 20; ++k, ++n) {
+    pm = SensorsToPoseStep(MovingSample(n, -35943), &st);
+    LONGS_EQUAL(0, pm.beam_glitch);
+    LONGS_EQUAL(y1_before, Beam1Pm(st));
+  }
+  // Real motion after the glitch is measured as before (+100 counts).
+  pm = SensorsToPoseStep(MovingSample(n++, -35943 + 100), &st);
+  LONGS_EQUAL(0, pm.beam_glitch);
+  LONGS_EQUAL(y1_before + CountsToPicometres(100, st), Beam1Pm(st));
+}
+
+TEST(SensorsToPose, AOneTickSpikeIsRepairedBothWaysAndRealAccelerationIsMotion) {
+  SensorsToPoseState& st = FreshState(DefaultSensorsToPoseConfig());
+  int n = 0;
+  for (; n < 5; ++n) (void)SensorsToPoseStep(MovingSample(n), &st);
+  const std::int64_t y1 = st.counts[1];
+  // Out on one tick, back on the next: both steps are glitches, the count never moves.
+  PoseMeasurement pm = SensorsToPoseStep(MovingSample(n++, 50000), &st);
+  LONGS_EQUAL(2, pm.beam_glitch);
+  LONGS_EQUAL(y1, st.counts[1]);
+  pm = SensorsToPoseStep(MovingSample(n++, 0), &st);
+  LONGS_EQUAL(2, pm.beam_glitch);
+  LONGS_EQUAL(-50000, pm.glitch_counts[1]);
+  LONGS_EQUAL(y1, st.counts[1]);
+  pm = SensorsToPoseStep(MovingSample(n++, 0), &st);
+  LONGS_EQUAL(0, pm.beam_glitch);
+  // From rest, a step change just inside the bound (79.99 m/s^2) is motion.
+  pm = SensorsToPoseStep(MovingSample(n++, 20707), &st);
+  LONGS_EQUAL(0, pm.beam_glitch);
+  LONGS_EQUAL(y1 + 20707, st.counts[1]);
+  // Stopping dead again is motion too: at speed, one tick's worth of steps
+  // more or less is allowed (a sample a tick early or late over a link).
+  pm = SensorsToPoseStep(MovingSample(n++, 20707), &st);
+  LONGS_EQUAL(0, pm.beam_glitch);
+  pm = SensorsToPoseStep(MovingSample(n++, 20707), &st);
+  LONGS_EQUAL(0, pm.beam_glitch);
+  // At rest, one count beyond the bound is a glitch: the predicted step (0) is counted.
+  pm = SensorsToPoseStep(MovingSample(n++, 20707 + 20708), &st);
+  LONGS_EQUAL(2, pm.beam_glitch);
+  LONGS_EQUAL(20708, pm.glitch_counts[1]);
+  LONGS_EQUAL(y1 + 20707, st.counts[1]);
+}
+
+TEST(SensorsToPose, AStaleSampleIsNoStepAndTheNextFreshStepCoversTheTicksMissed) {
+  SensorsToPoseState& st = FreshState(DefaultSensorsToPoseConfig());
+  // Beam 0 at 60 mm/s (the campaign's moves): 24 um = 38 835 counts per tick.
+  const std::int64_t v = 38835;
+  io::SensorSample s = ZeroSample();
+  int n = 0;
+  auto at = [&](int k) {
+    io::SensorSample x = s;
+    x.interferometer_counts[0] = static_cast<std::uint32_t>(v * k);
+    return x;
+  };
+  for (; n < 5; ++n) LONGS_EQUAL(0, SensorsToPoseStep(at(n), &st).beam_glitch);
+  // Two ticks with nothing new (the previous sample repeated, flagged), then
+  // the newest sample: three ticks of motion in one step. Not a glitch.
+  io::SensorSample rep = at(n - 1);
+  rep.status_flags = io::kStaleFrame;
+  LONGS_EQUAL(0, SensorsToPoseStep(rep, &st).beam_glitch);
+  LONGS_EQUAL(0, SensorsToPoseStep(rep, &st).beam_glitch);
+  n += 2;
+  LONGS_EQUAL(0, SensorsToPoseStep(at(n++), &st).beam_glitch);
+  LONGS_EQUAL(v * (n - 1), st.counts[0]);
+  LONGS_EQUAL(v, st.last_step[0]);
+  LONGS_EQUAL(0, SensorsToPoseStep(at(n++), &st).beam_glitch);
+  // A jump on beam 0 while it moves this fast: beyond 80 m/s^2 plus one
+  // tick's worth of steps, repaired like at rest.
+  io::SensorSample j = at(n++);
+  j.interferometer_counts[0] += 60000;
+  const PoseMeasurement pm = SensorsToPoseStep(j, &st);
+  LONGS_EQUAL(1, pm.beam_glitch);
+  LONGS_EQUAL(v * (n - 1), st.counts[0]);
+}
+
+TEST(SensorsToPose, TheAccelerationCheckArmsTwoStepsAfterASeedAndCanBeSwitchedOff) {
+  SensorsToPoseState& st = FreshState(DefaultSensorsToPoseConfig());
+  // Seed while the counters read far from zero, then a first real step that
+  // is large (the stage moving when the counters were re-seeded): not a glitch.
+  io::SensorSample s = MovingSample(0, 0);
+  CHECK_EQUAL(0, SensorsToPoseStep(s, &st).beam_glitch);  // seed
+  s.interferometer_counts[1] += 60000;
+  CHECK_EQUAL(0, SensorsToPoseStep(s, &st).beam_glitch);  // first step: nothing to compare with
+  s.interferometer_counts[1] += 60000;
+  CHECK_EQUAL(0, SensorsToPoseStep(s, &st).beam_glitch);  // same step again
+  s.interferometer_counts[1] += 60000 + 90000;
+  CHECK_EQUAL(2, SensorsToPoseStep(s, &st).beam_glitch);  // armed: 90 000 > 20 707 + 60 000
+  ReseedInterferometers(&st);
+  CHECK_EQUAL(0, SensorsToPoseStep(s, &st).beam_glitch);
+  s.interferometer_counts[0] += 90000;
+  CHECK_EQUAL(0, SensorsToPoseStep(s, &st).beam_glitch);
+  // Off (0): the same jump is read as motion, as before the check existed.
+  SensorsToPoseConfig off = DefaultSensorsToPoseConfig();
+  off.max_acceleration_m_per_s2 = 0.0;
+  SensorsToPoseState& so = FreshState(off);
+  LONGS_EQUAL(0, so.max_counts_step_change);
+  int n = 0;
+  for (; n < 5; ++n) (void)SensorsToPoseStep(MovingSample(n), &so);
+  const std::int64_t y1 = so.counts[1];
+  CHECK_EQUAL(0, SensorsToPoseStep(MovingSample(n, -35943), &so).beam_glitch);
+  LONGS_EQUAL(y1 - 35943, so.counts[1]);
+  // Bounds that are not numbers, negative, finer than a count or beyond the
+  // speed bound are refused, and the state is left as it was.
+  SensorsToPoseState other{};
+  SensorsToPoseConfig bad = DefaultSensorsToPoseConfig();
+  bad.max_acceleration_m_per_s2 = -1.0;
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadPlausibilityBound);
+  bad.max_acceleration_m_per_s2 = std::nan("");
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadPlausibilityBound);
+  bad.max_acceleration_m_per_s2 = 1e-3;  // 0.0003 counts per tick^2
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadPlausibilityBound);
+  bad.max_acceleration_m_per_s2 = 1e8;  // beyond the 2 m/s speed bound per tick
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadPlausibilityBound);
+  LONGS_EQUAL(0, other.lsb_den);
+}

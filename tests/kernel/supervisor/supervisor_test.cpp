@@ -359,3 +359,34 @@ TEST(Supervisor, TheFrozenSampleCheckCanBeSwitchedOff) {
   r.live = false;
   for (int n = 0; n < 100; ++n) CHECK(r.tick().active == FaultCode::kNone);
 }
+
+TEST(Supervisor, ACounterGlitchThatSensorsToPoseRepairedLatchesAndLands) {
+  Rig r;
+  for (int n = 0; n < 5; ++n) CHECK(r.tick().active == FaultCode::kNone);
+  // sensors_to_pose replaced beam 1's step (a -22 um jump, campaign seed 1,
+  // run 5693): the pose is still valid, so the stage lands on its in-plane
+  // loops rather than dropping with the currents off.
+  r.in.beam_glitch = 1u << 1;
+  r.in.beam_glitch_m[1] = -22.2e-6f;
+  const auto& s = r.tick();
+  CHECK(s.first_fault.code == FaultCode::kCounterGlitch);
+  LONGS_EQUAL(1, s.first_fault.axis);
+  DOUBLES_EQUAL(-22.2e-6, s.first_fault.value, 1e-9);
+  CHECK(s.reaction == FaultReaction::kLand);
+  CHECK(s.in_plane_sensors_valid);
+  STRCMP_EQUAL("CounterGlitch", to_string(FaultCode::kCounterGlitch));
+  LONGS_EQUAL(21, static_cast<int>(FaultCode::kCounterGlitch));
+  // The glitch is one tick: the cause is gone on the next, and the latch can be cleared.
+  r.in.beam_glitch = 0;
+  CHECK(r.tick().active == FaultCode::kNone);
+  CHECK(r.sup.clear_fault());
+  // A jump beyond the plausible speed in the same tick is the more fundamental
+  // cause: CounterJump first, and the in-plane sensors are gone (currents off).
+  Rig j;
+  j.tick();
+  j.sample.interferometer_counts[1] += 300000;  // 185 um in one tick
+  j.in.beam_glitch = 1u << 1;
+  const auto& sj = j.tick();
+  CHECK(sj.first_fault.code == FaultCode::kCounterJump);
+  CHECK(sj.reaction == FaultReaction::kCurrentsOff);
+}

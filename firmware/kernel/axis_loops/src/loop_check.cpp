@@ -56,6 +56,7 @@ LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant,
       m.crossover_found = true;
       m.crossover_Hz = fc;
       m.phase_margin_deg = 180.0 + deg;
+      m.delay_margin_ticks = m.phase_margin_deg / (360.0 * fc) * servo_rate_Hz;
     }
     prev_mag = mag;
     prev_f = f;

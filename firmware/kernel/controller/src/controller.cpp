@@ -185,6 +185,20 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
     gains_same = gains_same && c.acceleration_feedforward == config_.acceleration_feedforward &&
                  c.antiwindup == config_.antiwindup;
     if (!gains_same && !c.live_tuning) return refuse(ConfigError::kGainsLockedWhileLevitated);
+    // Live tuning: a bounded step per write (kMaxLiveGainStep).
+    auto step_ok = [](float now, float next) {
+      if (now == 0.0f) return next == 0.0f;
+      const float ratio = next / now;  // NaN (refused) if next is NaN
+      return ratio >= 1.0f / kMaxLiveGainStep && ratio <= kMaxLiveGainStep;
+    };
+    for (int a = 0; a < kAxisCount; ++a) {
+      const Pid2DofConfig& now = config_.axis[a].pid;
+      const Pid2DofConfig& next = c.axis[a].pid;
+      if (!step_ok(now.kp, next.kp) || !step_ok(now.ki, next.ki) || !step_ok(now.kd, next.kd)) {
+        status_.config_axis = static_cast<std::uint8_t>(a);
+        return refuse(ConfigError::kGainStepTooLarge);
+      }
+    }
   }
 
   // --- 3. swap. Measurement state is only replaced when its config changed
@@ -443,6 +457,10 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
     t.abs_err[a] = std::fabs(si.following_error[a]);
   }
   si.current_limited = last_current_limited_;
+  si.beam_glitch = t.m.beam_glitch;
+  for (int b = 0; b < io::kInterferometerAxes; ++b) {
+    si.beam_glitch_m[b] = pico_to_si(CountsToPicometres(t.m.glitch_counts[b], s2p_));
+  }
   si.stage_profile_error = stage_profile_error_;
   for (int j = 0; j < io::kCoils; ++j) {
     si.coil_current_cmd_A[j] = last_current_A_[j];

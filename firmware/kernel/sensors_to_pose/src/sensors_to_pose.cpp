@@ -101,6 +101,14 @@ SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   // (ours) accept 10%..105% of full scale: a detached/unpowered sensor reads ~0.
   c.hall_min_amplitude_codes = 3276.8;
   c.hall_max_amplitude_codes = 34406.0;
+  // (ours) 80 m/s^2 at a beam's mirror. Upper bound of what the coils can do:
+  // 8 coils at the 4 A peak give at most 8 * 4 A * b* (0.85 N/A) = 27 N,
+  // 36 m/s^2 on the 0.75 kg platen, plus at most 27 N * 0.07 m / Iz *
+  // 0.05 m = 26 m/s^2 of rotation at a y beam: 63 m/s^2. Measured: at most
+  // 7.8 m/s^2 in the 19 suite scenarios and 21.7 m/s^2 in 400 fault-campaign
+  // runs (shorted amplifiers and pushes included). 80 m/s^2 is a step change
+  // of 20 707 counts (12.8 um) in one tick at 2.5 kHz (docs/RELIABILITY.md).
+  c.max_acceleration_m_per_s2 = 80.0;
   return c;
 }
 
@@ -129,6 +137,17 @@ SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
   const double max_counts = std::ceil(config.max_speed_m_per_s / config.servo_rate_Hz / lsb_m);
   if (!(max_counts >= 1.0 && max_counts < 1.0e9)) return SensorsToPoseError::kBadPlausibilityBound;
   s.max_counts_per_tick = static_cast<std::int64_t>(max_counts);
+  // Step change per tick: a * T^2 / lsb. 0 disables; otherwise at least one
+  // count and below the speed bound (a finer bound would refuse noise).
+  if (!(config.max_acceleration_m_per_s2 >= 0.0 && config.max_acceleration_m_per_s2 < 1.0e9)) {
+    return SensorsToPoseError::kBadPlausibilityBound;
+  }
+  const double change_counts = config.max_acceleration_m_per_s2 / (config.servo_rate_Hz * config.servo_rate_Hz) / lsb_m;
+  const double max_change = std::ceil(change_counts);
+  if (config.max_acceleration_m_per_s2 > 0.0 && !(change_counts >= 1.0 && max_change <= max_counts)) {
+    return SensorsToPoseError::kBadPlausibilityBound;
+  }
+  s.max_counts_step_change = config.max_acceleration_m_per_s2 > 0.0 ? static_cast<std::int64_t>(max_change) : 0;
 
   // --- beam layout -----------------------------------------------------------
   double m[3][3];
@@ -228,6 +247,7 @@ void ReseedInterferometers(SensorsToPoseState* state) {
   state->seeded = false;
   state->homed = false;
   state->jump_latched = 0;
+  state->steps_seen = 0;
 }
 
 PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseState* state) {
@@ -236,15 +256,51 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
 
   // --- counters ----------------------------------------------------------------
   const bool seed = !s.seeded;
+  s.steps_seen = seed ? std::uint8_t{0} : s.steps_seen;
+  s.stale_gap = seed ? std::uint8_t{0} : s.stale_gap;
+  // A stale sample repeats the previous one (the transport had nothing new):
+  // not a step of the mirror. The next fresh sample's step then covers
+  // n = stale_gap + 1 ticks.
+  const bool stale = (sample.status_flags & io::kStaleFrame) != 0;
+  const std::int64_t n = std::int64_t{s.stale_gap} + 1;
+  // The acceleration check needs two real steps after the seed (the seed's
+  // own step is zero by construction), and a fresh sample.
+  const bool armed = s.max_counts_step_change > 0 && s.steps_seen >= 2 && !stale;
   std::int64_t meas_pm[3];
   for (int b = 0; b < io::kInterferometerAxes; ++b) {
     const std::uint32_t raw = sample.interferometer_counts[b];
     s.last_raw[b] = seed ? raw : s.last_raw[b];
     s.counts[b] = Select(seed, 0, s.counts[b]);
-    const bool ok = ExtendCounter(raw, &s.last_raw[b], &s.counts[b], s.max_counts_per_tick);
+    s.last_step[b] = Select(seed, 0, s.last_step[b]);
+    // A step within the speed bound that differs from the one the last step
+    // predicts (n of them) by more than any actuator can make it, over n
+    // ticks, plus one tick's worth of steps (a sample that reaches the
+    // kernel a tick early or late over a link: its step is then one tick
+    // longer or shorter) is a glitch: lost or spurious fringes, a jumped
+    // counter. Count the predicted step instead and take the rest as an
+    // offset of the raw counter, so that a jump that stays, or one that
+    // comes back, leaves the pose where the mirror is.
+    const std::int64_t step = static_cast<std::int32_t>(raw - s.last_raw[b]);
+    const std::int64_t expected = n * s.last_step[b];
+    const std::int64_t change = step - expected;
+    const std::int64_t change_mag = change < 0 ? -change : change;
+    const std::int64_t step_mag = step < 0 ? -step : step;
+    const std::int64_t speed_mag = s.last_step[b] < 0 ? -s.last_step[b] : s.last_step[b];
+    const std::int64_t tolerance = s.max_counts_step_change * n * n + speed_mag;
+    const bool glitch = armed && step_mag <= s.max_counts_per_tick && change_mag > tolerance;
+    const std::uint32_t used = glitch ? s.last_raw[b] + static_cast<std::uint32_t>(expected) : raw;
+    const std::int64_t before = s.counts[b];
+    const bool ok = ExtendCounter(used, &s.last_raw[b], &s.counts[b], s.max_counts_per_tick);
+    s.last_raw[b] = glitch ? raw : s.last_raw[b];
+    s.last_step[b] = stale ? s.last_step[b] : (s.counts[b] - before) / n;
+    out.beam_glitch = static_cast<std::uint8_t>(out.beam_glitch | (glitch ? (1u << b) : 0u));
+    out.glitch_counts[b] = Select(glitch, change, 0);
     s.jump_latched = static_cast<std::uint8_t>(s.jump_latched | (ok ? 0u : (1u << b)));
     meas_pm[b] = s.beam_sign[b] * CountsToPicometres(s.counts[b], s);
   }
+  const bool counted = !stale || seed;
+  s.steps_seen = static_cast<std::uint8_t>(counted && s.steps_seen < 2 ? s.steps_seen + 1 : s.steps_seen);
+  s.stale_gap = static_cast<std::uint8_t>(stale && !seed ? (s.stale_gap < 255 ? s.stale_gap + 1 : 255) : 0);
   s.seeded = true;
 
   // --- beam solve: linear inverse, then four fixed Abbe/cosine corrections ---

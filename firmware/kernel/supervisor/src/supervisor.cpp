@@ -125,6 +125,16 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
          static_cast<float>(delta) * config_.interferometer_lsb_m);
     previous_counts_[a] = s.interferometer_counts[a];
   }
+  // A glitch that sensors_to_pose repaired: the pose stays valid (the step
+  // was replaced by the previous one and the jump taken as an offset), but a
+  // sensor that glitches once is not trusted to hold the stage: land. A
+  // 22 um jump of one beam during a landing otherwise read as motion, the
+  // in-plane loops chased it and a corner touched down at 0.73 mm/s
+  // (campaign seed 1, run 5693).
+  for (int a = 0; a < io::kInterferometerAxes; ++a) {
+    note(t, (in.beam_glitch & (1u << a)) != 0, FaultCode::kCounterGlitch, static_cast<std::uint8_t>(a),
+         in.beam_glitch_m[a]);
+  }
   const bool stale = (flags & io::kStaleFrame) != 0;
   stale_run_ = next_run(stale, stale_run_);
   // Only while a loop is closed: a landed stage's sensors may legitimately

@@ -145,11 +145,23 @@ inline bool same_config(const KernelConfig& a, const KernelConfig& b) { return s
   X(kPayload, 9, "Payload") \
   X(kLockedWhileLevitated, 10, "LockedWhileLevitated")  /* an unsafe-to-change field differs while not on rest */ \
   X(kGainsLockedWhileLevitated, 11, "GainsLockedWhileLevitated")  /* gains differ while levitated and live_tuning is off */ \
-  X(kUnstableLoop, 12, "UnstableLoop")  /* the loop check finds a PID loop without crossover or phase margin (config_axis) */
+  X(kUnstableLoop, 12, "UnstableLoop")  /* the loop check finds a PID loop without crossover, phase margin or delay margin (config_axis) */ \
+  X(kGainStepTooLarge, 13, "GainStepTooLarge")  /* live tuning: a PID gain (kp, ki, kd) moved by more than kMaxLiveGainStep in one write (config_axis) */
 
 enum class ConfigError : std::uint8_t {
   MAGLEV_CONFIG_ERRORS(MAGLEV_ENUMERATOR)
 };
+
+// Live tuning (levitated, KernelConfig::live_tuning): one write may move
+// each PID gain (kp, ki, kd) of an axis by at most this factor up or down,
+// keeping its sign; a zero gain stays zero until the stage rests. 2 = 6 dB,
+// the gain margin a loop is designed with: one write cannot take a loop that
+// holds the stage past its stability limit on the gain alone, whatever the
+// loop check's model misses (the real loop's extra delay; campaign seed 1,
+// run 3013: theta_x kp, kd x20 in one write, accepted, landed at 3.4 mm/s).
+// Larger changes take several writes, each checked and each seen on the
+// stage.
+inline constexpr float kMaxLiveGainStep = 2.0f;
 
 const char* to_string(ConfigError e);
 

@@ -99,6 +99,16 @@ struct SensorsToPoseConfig {
   // sqrt(A^2 + B^2) must be within [min, max] ADC codes to trust the phase.
   double hall_min_amplitude_codes;
   double hall_max_amplitude_codes;
+
+  // Acceleration plausibility (0 disables): a count step whose change from
+  // the previous step implies more than this acceleration of the beam's
+  // mirror is a glitch (lost or spurious fringes), not motion: no actuator of
+  // the stage can produce it. The step is replaced by the previous one (the
+  // counter extrapolates one tick and absorbs the jump as an offset) and
+  // PoseMeasurement::beam_glitch reports it. Within max_speed_m_per_s only;
+  // beyond it the jump check above acts. Applied from the third fresh sample
+  // after a re-seed (it needs two real steps).
+  double max_acceleration_m_per_s2;
 };
 
 // Defaults from io/stage_parameters.hpp. Not constexpr (uses std::exp).
@@ -130,6 +140,8 @@ struct SensorsToPoseState {
   std::int64_t lsb_num;
   std::int64_t lsb_den;
   std::int64_t max_counts_per_tick;
+  // |step - previous step| above this is a glitch (0: check off).
+  std::int64_t max_counts_step_change;
   std::int8_t beam_sign[io::kInterferometerAxes];
   std::int64_t beam_mirror_pm[io::kInterferometerAxes];
   std::uint8_t beam_is_y[io::kInterferometerAxes];
@@ -153,6 +165,9 @@ struct SensorsToPoseState {
   std::uint32_t last_raw[io::kInterferometerAxes];
   std::int64_t counts[io::kInterferometerAxes];
   std::uint8_t jump_latched;  // bit b: beam b saw an implausible jump (sticky until re-seed)
+  std::int64_t last_step[io::kInterferometerAxes];  // counts per tick of the last fresh step
+  std::uint8_t steps_seen;   // fresh steps since the re-seed (saturates at 2)
+  std::uint8_t stale_gap;    // stale samples since the last fresh one (saturates)
   bool seeded;
   // Homing offsets added to the interferometer x, y (magnet-frame absolute).
   std::int64_t home_offset_x_pm;
@@ -171,6 +186,14 @@ struct PoseMeasurement {
   std::uint8_t valid_axes;   // kPoseValid* bits
   std::uint8_t beam_loss;    // bit b: status kBeamLoss<b>
   std::uint8_t beam_jump;    // bit b: implausible count jump (latched)
+  // bit b: THIS tick's step of beam b implied an impossible acceleration and
+  // was replaced by the previous step (max_acceleration_m_per_s2); the pose
+  // stays valid. glitch_counts[b]: the step change that was refused (counts).
+  // The check skips samples flagged io::kStaleFrame (a repeat, not a step)
+  // and allows a step one tick longer or shorter than predicted (a sample
+  // that reached the kernel a tick early or late over a link).
+  std::uint8_t beam_glitch;
+  std::int64_t glitch_counts[io::kInterferometerAxes];
   std::uint8_t displacement_bad;  // bit s: out of range, or ADC at the rail
   bool adc_fault;
   bool stale_frame;

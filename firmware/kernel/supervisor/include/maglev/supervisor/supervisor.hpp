@@ -43,7 +43,8 @@ namespace maglev::kernel {
   X(kCurrentSaturation, 17, "CurrentSaturation")  /* the current limit acted for max_saturated_ticks in a row */ \
   X(kStageProfileInvalid, 18, "StageProfileInvalid")  /* the selected stage profile failed its boot check (value: ProfileError) */ \
   X(kCurrentMismatch, 19, "CurrentMismatch")  /* a coil's monitored current left its command for current_mismatch_ticks: amplifier shorted or open */ \
-  X(kFrozenSample, 20, "FrozenSample")  /* the whole sample bit-identical for more than max_identical_samples ticks while a loop is closed */
+  X(kFrozenSample, 20, "FrozenSample")  /* the whole sample bit-identical for more than max_identical_samples ticks while a loop is closed */ \
+  X(kCounterGlitch, 21, "CounterGlitch")  /* an interferometer step whose change no actuator can produce (sensors_to_pose replaced it): land */
 
 enum class FaultCode : std::uint8_t {
   MAGLEV_FAULT_CODES(MAGLEV_ENUMERATOR)
@@ -130,6 +131,11 @@ struct SupervisorInputs {
   float coil_current_cmd_A[io::kCoils] = {};
   float coil_current_measured_A[io::kCoils] = {};
   bool current_limited = false;  // last tick's allocation scaled its currents down (k < 1)
+  // sensors_to_pose replaced this tick's step of these beams (bit b: beam b)
+  // because its change implied an acceleration no actuator can produce
+  // (PoseMeasurement::beam_glitch); beam_glitch_m: the refused change, SI.
+  std::uint8_t beam_glitch = 0;
+  float beam_glitch_m[io::kInterferometerAxes] = {};
   // Nonzero: the stage profile selected in the persisted configuration was
   // refused at boot (its stage_profile::ProfileError). A cause that stays
   // present until a valid profile is selected: the stage cannot leave rest.
