@@ -274,6 +274,11 @@ TEST(KernelBinding, SelectingAStageProfileLoadsItsWholeConfigurationAndPersists)
     // Beyond the register's range, and inside it but not in the database: refused, nothing changed.
     EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::stage_profile), 16), 3);
     EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::stage_profile), 9), 3);
+    // In the database but of a family this kernel does not drive (paper 001,
+    // which has its own kernel): refused the same way.
+    const int selfstab = stage_profile::FindStageProfile("jb2002-selfstab");
+    CHECK(selfstab > 0);
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::stage_profile), static_cast<std::uint16_t>(selfstab)), 3);
     CHECK(same_config(kernel::default_kernel_config(), st.config()));
     LONGS_EQUAL(0, read_u16(st.ctx, RegId::stage_profile));
     // Landed, engineer: the square stage's configuration, whole.

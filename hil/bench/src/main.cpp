@@ -24,6 +24,7 @@
 #include "maglev/bench/pmlsm_bench.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/bench/profile_check.hpp"
+#include "maglev/bench/selfstab_suite.hpp"
 #include "maglev/bench/runner.hpp"
 #include "maglev/bench/serve.hpp"
 #include "maglev/report/report.hpp"
@@ -65,6 +66,7 @@ void usage() {
       "  maglev-hil suite --out DIR [run options but --can-log]\n"
       "  maglev-hil check NAME|FILE...\n"
       "  maglev-hil record-pmlsm VECTORS OUTPUTS [--profile P]   paper 002's session for the M7 replay\n"
+      "  maglev-hil selfstab-schedule --profile P   paper 001's z gain schedule from the plant\n"
       "  maglev-hil profiles                  the stage profiles; run/suite take --profile NAME|FILE\n"
       "  maglev-hil error-terms               the as-built error terms (markdown, docs/PLANT.md)\n"
       "  maglev-hil check-profile NAME|FILE   allocation, passive axes, loops, current headroom\n"
@@ -338,6 +340,10 @@ int main(int argc, char** argv) {
       }
       return pm::suite_main(pp.profile, a.out, a.cmd == "run" ? a.positional[0] : std::string());
     }
+  }
+  int selfstab_rc = 0;  // a solenoid_magnet stage (paper 001): its own bench, selfstab_suite.hpp
+  if (a.run.profile && maglev::bench::selfstab_dispatch(a.cmd, a.positional, *a.run.profile, a.out, &selfstab_rc)) {
+    return selfstab_rc;
   }
   if (a.cmd == "record-pmlsm") {
     if (a.positional.size() != 2) {

@@ -284,6 +284,8 @@ Keys solenoid_keys(sp::SolenoidParameters* s) {
       {"turns_in_plane", integer(&s->turns_in_plane, 1, 100000)},
       {"turns_out_of_plane", integer(&s->turns_out_of_plane, 1, 100000)},
       {"coil_resistance_Ohm", real(&s->coil_resistance_Ohm, 0.0, 1e4)},
+      {"force_constant_in_plane_N_per_A", real(&s->force_constant_in_plane_N_per_A, 0.0, 1e3)},
+      {"force_constant_out_of_plane_N_per_A", real(&s->force_constant_out_of_plane_N_per_A, 0.0, 1e3)},
   };
 }
 

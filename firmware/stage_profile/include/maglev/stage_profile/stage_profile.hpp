@@ -188,6 +188,10 @@ struct SolenoidParameters {
   double nominal_current_in_plane_A, nominal_current_out_of_plane_A;
   int turns_in_plane, turns_out_of_plane;
   double coil_resistance_Ohm;
+  // Force per ampere of one coil on its magnet at the nominal position
+  // (eq (13)'s k_ipi, k_opi): the controller's dynamic transform T and its
+  // loop gains need them.
+  double force_constant_in_plane_N_per_A, force_constant_out_of_plane_N_per_A;
 };
 
 struct Limits {
@@ -237,7 +241,8 @@ struct StageProfile {
   X(kChecksum, 13, "checksum mismatch") /* the stored record's CRC */ \
   X(kUnknownProfile, 14, "no such profile") /* the selected index is not in the database */ \
   X(kUnsupportedSensors, 15, "sensor set not supported by this firmware's pose solver") \
-  X(kCount, 16, "?")
+  X(kBadActuatorParameters, 16, "actuator parameters missing or not positive") \
+  X(kCount, 17, "?")
 
 enum class ProfileError : std::uint8_t {
   MAGLEV_PROFILE_ERRORS(MAGLEV_ENUMERATOR)
