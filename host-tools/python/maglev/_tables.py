@@ -691,6 +691,7 @@ PROFILE_ERRORS = (
     (13, "kChecksum", "checksum mismatch"),
     (14, "kUnknownProfile", "no such profile"),
     (15, "kUnsupportedSensors", "sensor set not supported by this firmware's pose solver"),
-    (16, "kCount", "?"),
+    (16, "kBadActuatorParameters", "actuator parameters missing or not positive"),
+    (17, "kCount", "?"),
 )
 # END GENERATED FIRMWARE TABLES
