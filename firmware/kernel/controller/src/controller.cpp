@@ -458,8 +458,11 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
   }
   si.current_limited = last_current_limited_;
   si.beam_glitch = t.m.beam_glitch;
+  // Only a glitching beam's refused step needs converting (two int64
+  // divisions each): the fault record's value, almost never.
   for (int b = 0; b < io::kInterferometerAxes; ++b) {
-    si.beam_glitch_m[b] = pico_to_si(CountsToPicometres(t.m.glitch_counts[b], s2p_));
+    si.beam_glitch_m[b] =
+        (t.m.beam_glitch & (1u << b)) != 0 ? pico_to_si(CountsToPicometres(t.m.glitch_counts[b], s2p_)) : 0.0f;
   }
   si.stage_profile_error = stage_profile_error_;
   for (int j = 0; j < io::kCoils; ++j) {

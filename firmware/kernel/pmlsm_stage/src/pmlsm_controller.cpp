@@ -1,5 +1,7 @@
 #include "maglev/pmlsm_stage/pmlsm_controller.hpp"
 
+#include <cmath>
+
 #include "maglev/numeric/sin_cos.hpp"
 
 namespace maglev::pmlsm_stage {
@@ -12,8 +14,7 @@ constexpr float kQ30 = 1.0f / 1073741824.0f;
 constexpr float kRangeTolerance = 1e-6f;
 constexpr std::uint32_t kThirdTurn = 1431655765u;  // 2^32 / 3
 
-bool finite(float v) { return v == v && v - v == 0.0f; }
-float absf(float v) { return v < 0.0f ? -v : v; }
+bool finite(float v) { return std::isfinite(v); }
 
 std::int16_t to_dac(float amps, float amps_per_code) {
   float code = amps / amps_per_code;
@@ -194,7 +195,7 @@ CommandResult PmlsmController::command(const MotionCommand& cmd) {
       // Up to a tenth of the servo rate, so the sampled sine stays a sine.
       const float turns_per_tick = cmd.omega_rad_per_s / (kTwoPi * config_.servo_rate_Hz);
       if (!positive_finite(turns_per_tick) || turns_per_tick > 0.1f || !finite(cmd.phase_rad) ||
-          absf(cmd.phase_rad) > 2.0f * kTwoPi) {
+          std::fabs(cmd.phase_rad) > 2.0f * kTwoPi) {
         return CommandResult::kRefusedBadProfile;
       }
       cancel(a);
@@ -261,7 +262,7 @@ bool PmlsmController::supervise(const SensorSample& s) {
     for (int a = 0; a < kAxes && !first_sample_; ++a) {
       // int64: a wrapped or corrupted counter cannot overflow the difference.
       const std::int64_t d = std::int64_t{s.encoder_counts[a]} - std::int64_t{last_counts_[a]};
-      const float speed = absf(static_cast<float>(d)) * config_.encoder_resolution[a] * config_.servo_rate_Hz;
+      const float speed = std::fabs(static_cast<float>(d)) * config_.encoder_resolution[a] * config_.servo_rate_Hz;
       if (speed > config_.max_speed[a]) latch(FaultCode::kCounterJump, static_cast<std::uint8_t>(1u << a));
     }
     static constexpr FaultCode kWindowFault[kAxes] = {FaultCode::kZEnvelope, FaultCode::kTravelX,
@@ -288,7 +289,7 @@ void PmlsmController::advance_references() {
     Ramp& r = ramp_[a];
     if (r.active) {
       const float d = r.target - ref_[a];
-      if (absf(d) <= r.step) {
+      if (std::fabs(d) <= r.step) {
         ref_[a] = r.target;
         r.active = false;
       } else {
@@ -383,7 +384,7 @@ ActuatorCommand PmlsmController::step(const SensorSample& sample) {
       const float c = static_cast<float>(numeric::cos_q30(p)) * kQ30;
       const float s = static_cast<float>(numeric::sin_q30(p)) * kQ30;
       ph[k] = id * c - iq * s;
-      if (absf(ph[k]) > peak) peak = absf(ph[k]);
+      if (std::fabs(ph[k]) > peak) peak = std::fabs(ph[k]);
     }
     if (peak > config_.phase_peak_A) {
       // Star winding: the whole vector scales, its direction kept (what the

@@ -292,7 +292,10 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
     const std::int64_t before = s.counts[b];
     const bool ok = ExtendCounter(used, &s.last_raw[b], &s.counts[b], s.max_counts_per_tick);
     s.last_raw[b] = glitch ? raw : s.last_raw[b];
-    s.last_step[b] = stale ? s.last_step[b] : (s.counts[b] - before) / n;
+    // The step per tick; divided only after a stale gap (n > 1, rare): an
+    // int64 division is a library call on the M7.
+    const std::int64_t moved = s.counts[b] - before;
+    s.last_step[b] = stale ? s.last_step[b] : (n == 1 ? moved : moved / n);
     out.beam_glitch = static_cast<std::uint8_t>(out.beam_glitch | (glitch ? (1u << b) : 0u));
     out.glitch_counts[b] = Select(glitch, change, 0);
     s.jump_latched = static_cast<std::uint8_t>(s.jump_latched | (ok ? 0u : (1u << b)));
