@@ -10,6 +10,9 @@ CPID=$!
 T0=$(date +%s)
 "$HIL" plant "$SC" --can vcan0 --out "$OUT" --no-plots --quiet > "$OUT/plant.log" 2>&1
 PRC=$?
+# A plant that failed to start never sends a frame: stop the controller now
+# rather than letting it wait out its 170 s duration.
+if [ $PRC -ne 0 ]; then kill $CPID 2>/dev/null; fi
 wait $CPID
 CRC=$?
 T1=$(date +%s)

@@ -557,8 +557,13 @@ ProfileParse find_profile(const std::string& name_or_path, const std::string& di
   if (is_file) {
     return load_profile_file(name_or_path);
   }
-  for (const auto& n : list_profiles(dir)) {
-    if (n == name_or_path) return load_profile_file(dir + "/" + n + ".profile");
+  // Open the named file directly rather than matching a directory listing:
+  // on the SocketCAN VM's 9p mount a readdir can end early under load, and
+  // a stage that exists was then reported missing (CI of 459a0f5).
+  const std::string direct = dir + "/" + name_or_path + ".profile";
+  if (name_or_path.find_first_of("/\\") == std::string::npos && !name_or_path.empty() &&
+      std::filesystem::is_regular_file(direct)) {
+    return load_profile_file(direct);
   }
   ProfileParse r;
   std::string known;
