@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "maglev/io/stage_parameters.hpp"
+#include "maglev/numeric/int64_double.hpp"
 #include "maglev/numeric/saturation.hpp"
 
 namespace maglev::kernel {
@@ -13,7 +14,7 @@ namespace {
 
 namespace stage = io::stage;
 
-float pico_to_si(std::int64_t v) { return static_cast<float>(static_cast<double>(v) * 1e-12); }
+float pico_to_si(std::int64_t v) { return static_cast<float>(numeric::Int64ToDouble(v) * 1e-12); }
 
 template <typename T>
 bool same_bytes(const T& a, const T& b) {

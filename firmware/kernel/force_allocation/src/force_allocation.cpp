@@ -6,6 +6,7 @@
 #include "maglev/io/stage_parameters.hpp"
 #include "maglev/numeric/fixed.hpp"
 #include "maglev/numeric/elementary.hpp"
+#include "maglev/numeric/int64_double.hpp"
 
 namespace maglev::kernel {
 namespace {
@@ -233,6 +234,18 @@ std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm) {
   return static_cast<std::int64_t>(static_cast<std::uint64_t>(q) << 32) + (f1 << 6) + f2;
 }
 
+std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm, double inv_pitch_pm) {
+  // The same two steps with exact floor divisions done in double
+  // (numeric::FloorDiv: |quotients| < 2^50 here).
+  const std::int64_t q = numeric::FloorDiv(pos_pm, pitch_pm, inv_pitch_pm);
+  const std::int64_t r = pos_pm - q * pitch_pm;
+  const std::int64_t n1 = r << 26;
+  const std::int64_t f1 = numeric::FloorDiv(n1, pitch_pm, inv_pitch_pm);
+  const std::int64_t r1 = n1 - f1 * pitch_pm;
+  const std::int64_t f2 = numeric::FloorDiv(r1 << 6, pitch_pm, inv_pitch_pm);
+  return static_cast<std::int64_t>(static_cast<std::uint64_t>(q) << 32) + (f1 << 6) + f2;
+}
+
 void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
                        std::uint32_t coil_phase_turn[io::kCoils]) {
   // Turns of each coordinate (Q32, NOT reduced: for a direction cosine h that
@@ -241,8 +254,10 @@ void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTa
   // formed in wrapping uint64, whose bits 30..61 are exact for any sign, so
   // the projection is exact mod one turn up to the Q30 rounding of h (for
   // h = +-1, 0 it is exactly the identity / zero).
-  const std::uint64_t tx = static_cast<std::uint64_t>(PositionToTurnsQ32(x_pm + t.base_x_pm, t.pitch_pm));
-  const std::uint64_t ty = static_cast<std::uint64_t>(PositionToTurnsQ32(y_pm + t.base_y_pm, t.pitch_pm));
+  const std::uint64_t tx =
+      static_cast<std::uint64_t>(PositionToTurnsQ32(x_pm + t.base_x_pm, t.pitch_pm, t.inv_pitch_pm));
+  const std::uint64_t ty =
+      static_cast<std::uint64_t>(PositionToTurnsQ32(y_pm + t.base_y_pm, t.pitch_pm, t.inv_pitch_pm));
   for (int k = 0; k < kForcers; ++k) {
     const std::uint64_t px = tx * static_cast<std::uint64_t>(t.h_q30[k][0]);
     const std::uint64_t py = ty * static_cast<std::uint64_t>(t.h_q30[k][1]);
@@ -258,6 +273,7 @@ ForceAllocationError FillCommon(const ForceAllocationConfig& c, const ForceAlloc
                                 CommutationTables* ct) {
   ct->pitch_pm = RoundToInt64(c.pitch_m * 1e12);
   if (ct->pitch_pm >= (std::int64_t{1} << 36)) return ForceAllocationError::kBadGeometry;
+  ct->inv_pitch_pm = 1.0 / static_cast<double>(ct->pitch_pm);
   ct->base_x_pm = RoundToInt64(c.base_point_x_m * 1e12);
   ct->base_y_pm = RoundToInt64(c.base_point_y_m * 1e12);
   for (int k = 0; k < kForcers; ++k) {

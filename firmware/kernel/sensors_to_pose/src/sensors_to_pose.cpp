@@ -6,13 +6,13 @@
 #include "maglev/io/stage_parameters.hpp"
 #include "maglev/sensors_to_pose/internal/wide_math.hpp"
 #include "maglev/numeric/elementary.hpp"
+#include "maglev/numeric/int64_double.hpp"
 
 namespace maglev::kernel {
 namespace {
 
 namespace stage = io::stage;
 using wide::MulShiftRound;
-using wide::ToQ40;
 
 constexpr std::int64_t Gcd(std::int64_t a, std::int64_t b) {
   while (b != 0) {
@@ -58,8 +58,7 @@ constexpr std::int64_t Select(bool c, std::int64_t a, std::int64_t b) {
   return (a & mask) | (b & ~mask);
 }
 
-// 1 prad in Q40 rad: theta_q40 = theta_prad * 2^40 / 1e12.
-constexpr double kPradToQ40Rad = 1099511627776.0 * 1e-12;
+using numeric::Int64ToDouble;
 
 }  // namespace
 
@@ -131,6 +130,7 @@ SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
     return SensorsToPoseError::kBadInterferometerScale;
   }
   const double lsb_m = config.wavelength_m / (config.fold * config.interpolation);
+  s.lsb_pm = static_cast<double>(s.lsb_num) / static_cast<double>(s.lsb_den);
   if (!(config.max_speed_m_per_s > 0.0) || !(config.servo_rate_Hz > 0.0)) {
     return SensorsToPoseError::kBadPlausibilityBound;
   }
@@ -156,7 +156,7 @@ SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
     if (beam.sign != 1 && beam.sign != -1) return SensorsToPoseError::kBadBeamSign;
     s.beam_sign[b] = beam.sign;
     s.beam_is_y[b] = beam.axis == BeamAxis::kY ? 1u : 0u;
-    s.beam_mirror_pm[b] = RoundToInt64(beam.mirror_distance_m * 1e12);
+    s.beam_mirror_pm[b] = beam.mirror_distance_m * 1e12;
     // Linear part, units pm per (pm, pm, prad): prad * m = pm.
     if (beam.axis == BeamAxis::kX) {
       m[b][0] = 1.0;
@@ -171,7 +171,7 @@ SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
   double inv[3][3];
   if (!Invert3(m, inv)) return SensorsToPoseError::kSingularBeamLayout;
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) s.inv_beam_q40[r][c] = ToQ40(inv[r][c]);
+    for (int c = 0; c < 3; ++c) s.inv_beam[r][c] = inv[r][c];
   s.abbe_cosine_correction = config.abbe_cosine_correction;
 
   // --- laser displacement sensors: z_i = z + theta_x*y_i - theta_y*x_i ------
@@ -179,8 +179,8 @@ SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
       config.adc_rail_code <= 0) {
     return SensorsToPoseError::kBadDisplacementScale;
   }
-  s.lds_zero_pm = RoundToInt64(config.displacement_zero_height_m * 1e12);
-  s.lds_gain_q40 = ToQ40(config.displacement_scale_m_per_V * config.adc_full_scale_V / 32768.0 * 1e12);
+  s.lds_zero_pm = config.displacement_zero_height_m * 1e12;
+  s.lds_gain_pm = config.displacement_scale_m_per_V * config.adc_full_scale_V / 32768.0 * 1e12;
   double p[3][3];
   for (int i = 0; i < io::kDisplacementSensors; ++i) {
     p[i][0] = 1.0;
@@ -189,7 +189,7 @@ SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
   }
   if (!Invert3(p, inv)) return SensorsToPoseError::kSingularDisplacementLayout;
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) s.inv_plane_q40[r][c] = ToQ40(inv[r][c]);
+    for (int c = 0; c < 3; ++c) s.inv_plane[r][c] = inv[r][c];
   s.adc_rail_code = config.adc_rail_code;
 
   // --- Hall / pitch ------------------------------------------------------------
@@ -266,7 +266,7 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   // The acceleration check needs two real steps after the seed (the seed's
   // own step is zero by construction), and a fresh sample.
   const bool armed = s.max_counts_step_change > 0 && s.steps_seen >= 2 && !stale;
-  std::int64_t meas_pm[3];
+  double meas_pm[3];
   for (int b = 0; b < io::kInterferometerAxes; ++b) {
     const std::uint32_t raw = sample.interferometer_counts[b];
     s.last_raw[b] = seed ? raw : s.last_raw[b];
@@ -292,14 +292,23 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
     const std::int64_t before = s.counts[b];
     const bool ok = ExtendCounter(used, &s.last_raw[b], &s.counts[b], s.max_counts_per_tick);
     s.last_raw[b] = glitch ? raw : s.last_raw[b];
-    // The step per tick; divided only after a stale gap (n > 1, rare): an
-    // int64 division is a library call on the M7.
+    // The step per tick; after a stale gap (n > 1) the gap's mean step,
+    // truncated toward zero. In double: an int64 division is a library call
+    // on the M7. Exact: |moved| < 2^31 n, and a non-integer moved/n lies at
+    // least 1/n from an integer, far beyond double's rounding.
     const std::int64_t moved = s.counts[b] - before;
-    s.last_step[b] = stale ? s.last_step[b] : (n == 1 ? moved : moved / n);
+    const double mean_step = Int64ToDouble(moved) / static_cast<double>(n);
+    const std::int64_t nearest = numeric::RoundToInt64(mean_step);
+    const double back = Int64ToDouble(nearest);
+    const std::int64_t truncated =
+        nearest - (mean_step >= 0.0 ? (back > mean_step ? 1 : 0) : (back < mean_step ? -1 : 0));
+    s.last_step[b] = stale ? s.last_step[b] : truncated;
     out.beam_glitch = static_cast<std::uint8_t>(out.beam_glitch | (glitch ? (1u << b) : 0u));
     out.glitch_counts[b] = Select(glitch, change, 0);
     s.jump_latched = static_cast<std::uint8_t>(s.jump_latched | (ok ? 0u : (1u << b)));
-    meas_pm[b] = s.beam_sign[b] * CountsToPicometres(s.counts[b], s);
+    // counts * lsb in double: |counts| < 2^53 converts exactly, and the
+    // product's rounding is < 1e-4 pm anywhere within a metre of travel.
+    meas_pm[b] = static_cast<double>(s.beam_sign[b]) * (Int64ToDouble(s.counts[b]) * s.lsb_pm);
   }
   const bool counted = !stale || seed;
   s.steps_seen = static_cast<std::uint8_t>(counted && s.steps_seen < 2 ? s.steps_seen + 1 : s.steps_seen);
@@ -311,55 +320,51 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   //   X beam:  + y*theta + d*theta^2/2      Y beam:  - x*theta + d*theta^2/2
   // so m_lin = m - nonlin(estimate); each pass shrinks the residual by about
   // |theta| (< 4e-3 at the 3.72 mrad travel): 65 um worst-case Abbe term ->
-  // 260 nm -> 1 nm -> 4 pm -> < 1 pm. In operation (|theta| ~ 1 urad) one
-  // pass would do; the count is fixed for a data-independent cost.
-  std::int64_t est[3] = {0, 0, 0};
+  // 260 nm -> 1 nm -> 4 pm -> 0.02 pm. In double (pm, prad) the arithmetic
+  // adds < 1e-3 pm; the result is rounded to whole pm / prad once, at the
+  // end (docs/PERFORMANCE.md, "Servo tick": the bound against the exact
+  // solve).
+  const double correct = s.abbe_cosine_correction ? 1.0 : 0.0;
+  double est[3] = {0.0, 0.0, 0.0};
   for (int pass = 0; pass < 5; ++pass) {
-    const bool correct = s.abbe_cosine_correction && pass > 0;
-    const std::int64_t theta_q40 = MulShiftRound(est[2], ToQ40(kPradToQ40Rad));
-    const std::int64_t theta2_q40 = MulShiftRound(theta_q40, theta_q40);
-    std::int64_t lin[3];
+    const double theta_rad = est[2] * 1e-12 * (pass > 0 ? correct : 0.0);
+    const double half_theta2 = 0.5 * theta_rad * theta_rad;
+    double lin[3];
     for (int b = 0; b < 3; ++b) {
-      const std::int64_t other = s.beam_is_y[b] ? -est[0] : est[1];
-      const std::int64_t abbe = MulShiftRound(other, theta_q40);
-      const std::int64_t cosine = MulShiftRound(s.beam_mirror_pm[b], theta2_q40, wide::kCoeffShift + 1);
-      lin[b] = meas_pm[b] - Select(correct, abbe + cosine, 0);
+      const double other = s.beam_is_y[b] ? -est[0] : est[1];
+      lin[b] = meas_pm[b] - (other * theta_rad + s.beam_mirror_pm[b] * half_theta2);
     }
     for (int r = 0; r < 3; ++r) {
-      est[r] = MulShiftRound(lin[0], s.inv_beam_q40[r][0]) + MulShiftRound(lin[1], s.inv_beam_q40[r][1]) +
-               MulShiftRound(lin[2], s.inv_beam_q40[r][2]);
+      est[r] = s.inv_beam[r][0] * lin[0] + s.inv_beam[r][1] * lin[1] + s.inv_beam[r][2] * lin[2];
     }
   }
 
   // --- laser displacement plane fit ------------------------------------------
-  std::int64_t h[3];
+  double h[3];
   std::uint8_t lds_bad = 0;
   for (int i = 0; i < io::kDisplacementSensors; ++i) {
     const std::int16_t code = sample.displacement_adc[i];
-    h[i] = s.lds_zero_pm + MulShiftRound(code, s.lds_gain_q40);
+    h[i] = s.lds_zero_pm + static_cast<double>(code) * s.lds_gain_pm;
     const bool railed = code >= s.adc_rail_code || code <= -s.adc_rail_code - 1;
     const bool oor = (sample.status_flags & (io::kDisplacementOutOfRange0 << i)) != 0;
     lds_bad = static_cast<std::uint8_t>(lds_bad | ((railed || oor) ? (1u << i) : 0u));
   }
-  std::int64_t plane[3];
+  double plane[3];
   for (int r = 0; r < 3; ++r) {
-    plane[r] = MulShiftRound(h[0], s.inv_plane_q40[r][0]) + MulShiftRound(h[1], s.inv_plane_q40[r][1]) +
-               MulShiftRound(h[2], s.inv_plane_q40[r][2]);
+    plane[r] = s.inv_plane[r][0] * h[0] + s.inv_plane[r][1] * h[1] + s.inv_plane[r][2] * h[2];
   }
 
   // The beams see tan(theta_z) (the mirror's slope): theta = atan(t) = t - t^3/3
   // (+ t^5/5 < 1.4e-13 rad at 3.72 mrad). Without it: 1.7e-8 rad at the travel limit.
-  const std::int64_t t_q40 = MulShiftRound(est[2], ToQ40(kPradToQ40Rad));
-  const std::int64_t t2_q40 = MulShiftRound(t_q40, t_q40);
-  const std::int64_t theta_z_prad =
-      est[2] - (s.abbe_cosine_correction ? MulShiftRound(est[2], t2_q40) / 3 : 0);
+  const double t_rad = est[2] * 1e-12;
+  const double theta_z_prad = est[2] - correct * (est[2] * (t_rad * t_rad) / 3.0);
 
-  out.pose_unhomed[Axis::kX] = est[0];
-  out.pose_unhomed[Axis::kY] = est[1];
-  out.pose_unhomed[Axis::kZ] = plane[0];
-  out.pose_unhomed[Axis::kThetaX] = plane[1];
-  out.pose_unhomed[Axis::kThetaY] = plane[2];
-  out.pose_unhomed[Axis::kThetaZ] = theta_z_prad;
+  out.pose_unhomed[Axis::kX] = numeric::RoundToInt64(est[0]);
+  out.pose_unhomed[Axis::kY] = numeric::RoundToInt64(est[1]);
+  out.pose_unhomed[Axis::kZ] = numeric::RoundToInt64(plane[0]);
+  out.pose_unhomed[Axis::kThetaX] = numeric::RoundToInt64(plane[1]);
+  out.pose_unhomed[Axis::kThetaY] = numeric::RoundToInt64(plane[2]);
+  out.pose_unhomed[Axis::kThetaZ] = numeric::RoundToInt64(theta_z_prad);
   out.pose = out.pose_unhomed;
   out.pose[Axis::kX] += s.home_offset_x_pm;
   out.pose[Axis::kY] += s.home_offset_y_pm;

@@ -95,6 +95,7 @@ ForceAllocationError ComputeForceAllocationTables(const ForceAllocationConfig& c
 // Integer commutation (shared by every Scalar): per-coil phase, 2^32 = one turn.
 struct CommutationTables {
   std::int64_t pitch_pm;
+  double inv_pitch_pm;  // 1 / pitch_pm: the tick's exact floor divisions (numeric::FloorDiv)
   std::int64_t base_x_pm;
   std::int64_t base_y_pm;
   std::int64_t h_q30[kForcers][2];  // direction cosines, Q2.30 (exactly +-2^30 for X/Y axes)
@@ -110,6 +111,9 @@ void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTa
 std::uint32_t PositionToTurn(std::int64_t pos_pm, std::int64_t pitch_pm);
 // Whole turns too: floor(pos * 2^32 / pitch) as int64 (exact, pitch < 2^36 pm).
 std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm);
+// The same value without an int64 division (inv_pitch_pm = 1.0 / pitch_pm):
+// the tick's form.
+std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm, double inv_pitch_pm);
 
 template <typename Scalar>
 struct ForceAllocationState {

@@ -23,6 +23,7 @@
 #include <compare>
 #include <cstdint>
 #include <limits>
+#include "maglev/numeric/int64_double.hpp"
 
 namespace maglev::numeric {
 
@@ -90,7 +91,9 @@ constexpr std::int64_t double_to_raw(double scaled, double limit) {
   if (!(scaled == scaled)) return 0;  // NaN
   if (scaled >= limit) return static_cast<std::int64_t>(limit);
   if (scaled <= -limit) return -static_cast<std::int64_t>(limit);
-  return static_cast<std::int64_t>(scaled >= 0.0 ? scaled + 0.5 : scaled - 0.5);
+  // Below 2^51 without libgcc's __aeabi_d2lz (int64_double.hpp): the same value.
+  const double t = scaled >= 0.0 ? scaled + 0.5 : scaled - 0.5;
+  return (t < 2251799813685248.0 && t > -2251799813685248.0) ? TruncToInt64(t) : static_cast<std::int64_t>(t);
 }
 
 }  // namespace detail

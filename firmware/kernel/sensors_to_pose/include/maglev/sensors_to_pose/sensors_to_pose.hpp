@@ -143,16 +143,20 @@ struct SensorsToPoseState {
   // |step - previous step| above this is a glitch (0: check off).
   std::int64_t max_counts_step_change;
   std::int8_t beam_sign[io::kInterferometerAxes];
-  std::int64_t beam_mirror_pm[io::kInterferometerAxes];
+  // The tick's arithmetic is double (one FPU instruction per operation on
+  // the M7, where int64 products need 128-bit limbs and divisions are
+  // library calls); positions stay int64 pm / prad at the interfaces.
+  double lsb_pm;  // lsb_num / lsb_den
+  double beam_mirror_pm[io::kInterferometerAxes];
   std::uint8_t beam_is_y[io::kInterferometerAxes];
   bool abbe_cosine_correction;
-  // [x, y, theta_z] = inv_beam * m (Q40; rows x, y in pm/pm, theta_z in prad/pm).
-  std::int64_t inv_beam_q40[3][3];
-  // heights: zero_height_pm + code * lds_gain_q40
-  std::int64_t lds_zero_pm;
-  std::int64_t lds_gain_q40;
-  // [z, theta_x, theta_y] = inv_plane * h (Q40).
-  std::int64_t inv_plane_q40[3][3];
+  // [x, y, theta_z] = inv_beam * m (rows x, y in pm/pm, theta_z in prad/pm).
+  double inv_beam[3][3];
+  // heights: lds_zero_pm + code * lds_gain_pm
+  double lds_zero_pm;
+  double lds_gain_pm;
+  // [z, theta_x, theta_y] = inv_plane * h.
+  double inv_plane[3][3];
   std::int16_t adc_rail_code;
   std::int64_t pitch_pm;
   std::int64_t hall_a_x_pm;

@@ -127,7 +127,9 @@ std::int16_t CurrentToDacCode(Scalar current_A, const ForceAllocationState<Scala
   } else {
     const double v = static_cast<double>(current_A) * state.dac_codes_per_A;
     const double c = v > 40000.0 ? 40000.0 : (v < -40000.0 ? -40000.0 : v);  // NaN -> 0 below
-    code = (c == c) ? static_cast<std::int64_t>(c >= 0.0 ? c + 0.5 : c - 0.5) : 0;
+    // int32: c is within +-40000, and the conversion is one VCVT on the M7
+    // (an int64 one is a libgcc call).
+    code = (c == c) ? static_cast<std::int32_t>(c >= 0.0 ? c + 0.5 : c - 0.5) : 0;
   }
   code = code > 32767 ? 32767 : (code < -32768 ? -32768 : code);
   return static_cast<std::int16_t>(code);
