@@ -569,10 +569,7 @@ __attribute__((always_inline)) inline V4 Splat4(double x) { return V4{x, x, x, x
 // SmallSinCos / SmallExp lane by lane: the Taylor branch as vectors, a lane
 // outside |x| < 0.02 (or NaN) takes the library call, as the scalar does.
 // |x| < 0.02 in every lane (false for a NaN lane, as the scalar test).
-__attribute__((always_inline)) inline M4 Small4(V4 x) {
-  const V4 ax = (V4)((M4)x & 0x7fffffffffffffffLL);  // |x|: clears the sign bit
-  return ax < 0.02;
-}
+__attribute__((always_inline)) inline M4 Small4(V4 x) { return (x < 0.02) & (x > -0.02); }
 __attribute__((always_inline)) inline bool All4(M4 m) { return (m[0] & m[1] & m[2] & m[3]) != 0; }
 __attribute__((always_inline)) inline void SmallSinCos4(V4 e, bool all_small, V4* s, V4* c) {
   const V4 e2 = e * e;
