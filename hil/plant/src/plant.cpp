@@ -117,6 +117,7 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
   } else {
     BuildArraySides();
   }
+  BuildSprings();
   for (int f = 0; f < kForcers; ++f) {
     if (config.forcer_errors.epsilon_tangential[f] != 0.0 || config.forcer_errors.epsilon_off_axis_z[f] != 0.0) {
       forcer_errors_active_ = true;
@@ -844,10 +845,22 @@ void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* ac
   }
 }
 
-void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
-  if (!config_.suspension.enabled) {
-    return;
-  }
+// The springs' attachments and constants, computed once exactly as the
+// per-evaluation code computed them (same expressions, same rounding).
+void Plant::BuildSprings() {
+  spring_count_ = 0;
+  auto add = [&](double x, double y, double k_spring, double c_spring) {
+    if (as_built_) {
+      x -= config_.as_built.com_offset_m[0];
+      y -= config_.as_built.com_offset_m[1];
+    }
+    Spring& s = springs_[static_cast<std::size_t>(spring_count_++)];
+    s.rb[0] = x;
+    s.rb[1] = y;
+    s.rb[2] = -com_arm_m_;
+    s.k_N_per_m = k_spring;
+    s.c_Ns_per_m = c_spring;
+  };
   if (triangle_) {
     // Three spring-dampers (k/3, c/3) at the triangle's forcer centres: their
     // centroid is the CoM and sum(y^2) = sum(x^2) = 3 l^2 / 2, sum(x y) = 0
@@ -855,37 +868,38 @@ void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
     // cross layout's four (eqs (29)-(31)).
     const double k3 = k_susp_ / 3.0;
     const double c3 = config_.suspension.damping_Ns_per_m / 3.0;
-    const double h0 = config_.suspension.neutral_height_m;
     for (int f = 0; f < kTriangleForcers; ++f) {
       double c[2], h[2];
       TriangleForcer(f, c, h);
-      AddSpring(k, c[0], c[1], k3, c3, h0, acc);
+      add(c[0], c[1], k3, c3);
     }
     return;
   }
   const double k4 = k_susp_ / 4.0;
   const double c4 = config_.suspension.damping_Ns_per_m / 4.0;
-  const double h0 = config_.suspension.neutral_height_m;
   for (int f = 0; f < kForcers; ++f) {
     const Eigen::Vector2d fc = ForcerCentre(f, config_.body.lever_arm_m, config_.body.layout);
-    AddSpring(k, fc.x(), fc.y(), k4, c4, h0, acc);
+    add(fc.x(), fc.y(), k4, c4);
   }
+}
+
+void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
+  if (!config_.suspension.enabled) {
+    return;
+  }
+  const double h0 = config_.suspension.neutral_height_m;
+  for (int i = 0; i < spring_count_; ++i) AddSpring(k, springs_[static_cast<std::size_t>(i)], h0, acc);
 }
 
 // One suspension spring-damper under the forcer at (x, y) of the platen frame
 // (at the coils' plane): its vertical force and the tilt torques it makes.
-void Plant::AddSpring(const Kinematics& k, double x, double y, double k_spring, double c_spring, double h0,
-                      Accum* acc) const {
-  if (as_built_) {
-    x -= config_.as_built.com_offset_m[0];
-    y -= config_.as_built.com_offset_m[1];
-  }
-  const Eigen::Vector3d rb(x, y, -com_arm_m_);
+void Plant::AddSpring(const Kinematics& k, const Spring& s, double h0, Accum* acc) {
+  const double* rb = s.rb;
   double rw[3];
-  Rotate(k.r, rb, rw);
-  const double h = k.p[2] + rw[2] - rb.z();
+  for (int a = 0; a < 3; ++a) rw[a] = k.r[a][0] * rb[0] + k.r[a][1] * rb[1] + k.r[a][2] * rb[2];
+  const double h = k.p[2] + rw[2] - rb[2];
   const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
-  const double fz = -k_spring * (h - h0) - c_spring * hdot;
+  const double fz = -s.k_N_per_m * (h - h0) - s.c_Ns_per_m * hdot;
   acc->f[2] += fz;
   acc->t[0] += rw[1] * fz;
   acc->t[1] -= rw[0] * fz;

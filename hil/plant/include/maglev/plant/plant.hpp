@@ -167,8 +167,15 @@ class Plant {
   // Forcer centre and unit thrust axis (platen frame) of the triangle's forcer f.
   void TriangleForcer(int f, double centre[2], double thrust[2]) const;
   void AddSuspension(const Kinematics& k, Accum* acc) const;
-  void AddSpring(const Kinematics& k, double x, double y, double k_spring, double c_spring, double h0,
-                 Accum* acc) const;
+  // One suspension spring-damper: its attachment (platen frame, about the
+  // CoM) and constants, fixed per run (BuildSprings).
+  struct Spring {
+    double rb[3];
+    double k_N_per_m;
+    double c_Ns_per_m;
+  };
+  void BuildSprings();
+  static void AddSpring(const Kinematics& k, const Spring& s, double h0, Accum* acc);
   void AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const;
   static Wrench ToWrench(const Kinematics& k, const Accum& acc);
   ContactResult ContactWrench(const BodyState& state) const;
@@ -215,6 +222,8 @@ class Plant {
     int coil[4];
   };
   std::array<SideLanes, 4> side_lanes_{};
+  std::array<Spring, 4> springs_{};
+  int spring_count_ = 0;
   int lane_axis_[4] = {};      // array axis of forcer f (lane f)
   bool lanes_ok_ = false;      // four sides per forcer on one array axis, 4 harmonics
   bool lanes_avx_ = false;     // the CPU has AVX: 4 lanes per instruction (else 2 x SSE2)
