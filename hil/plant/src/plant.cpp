@@ -883,26 +883,25 @@ void Plant::BuildSprings() {
   }
 }
 
+// The suspension spring-dampers under the forcers (at the coils' plane):
+// their vertical forces and the tilt torques they make.
 void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
   if (!config_.suspension.enabled) {
     return;
   }
   const double h0 = config_.suspension.neutral_height_m;
-  for (int i = 0; i < spring_count_; ++i) AddSpring(k, springs_[static_cast<std::size_t>(i)], h0, acc);
-}
-
-// One suspension spring-damper under the forcer at (x, y) of the platen frame
-// (at the coils' plane): its vertical force and the tilt torques it makes.
-void Plant::AddSpring(const Kinematics& k, const Spring& s, double h0, Accum* acc) {
-  const double* rb = s.rb;
-  double rw[3];
-  for (int a = 0; a < 3; ++a) rw[a] = k.r[a][0] * rb[0] + k.r[a][1] * rb[1] + k.r[a][2] * rb[2];
-  const double h = k.p[2] + rw[2] - rb[2];
-  const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
-  const double fz = -s.k_N_per_m * (h - h0) - s.c_Ns_per_m * hdot;
-  acc->f[2] += fz;
-  acc->t[0] += rw[1] * fz;
-  acc->t[1] -= rw[0] * fz;
+  for (int i = 0; i < spring_count_; ++i) {
+    const Spring& s = springs_[static_cast<std::size_t>(i)];
+    const double* rb = s.rb;
+    double rw[3];
+    for (int a = 0; a < 3; ++a) rw[a] = k.r[a][0] * rb[0] + k.r[a][1] * rb[1] + k.r[a][2] * rb[2];
+    const double h = k.p[2] + rw[2] - rb[2];
+    const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
+    const double fz = -s.k_N_per_m * (h - h0) - s.c_Ns_per_m * hdot;
+    acc->f[2] += fz;
+    acc->t[0] += rw[1] * fz;
+    acc->t[1] -= rw[0] * fz;
+  }
 }
 
 void Plant::AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const {
@@ -1259,8 +1258,9 @@ io::SensorSample Plant::sample() {
     }
     const Eigen::Vector3d w = body_.position_m + r * rb;
     const double height = hc.height_above_magnets_m + w.z() - rb.z();
-    const FieldSZ bx = field_.PointField(w.x(), height);
-    const FieldSZ by = field_.PointField(w.y(), height);
+    const double decay = field_.PointDecay(height);
+    const FieldSZ bx = field_.PointFieldAt(w.x(), decay);
+    const FieldSZ by = field_.PointFieldAt(w.y(), decay);
     const Eigen::Vector3d b_body = r.transpose() * Eigen::Vector3d(bx.b_s_T, by.b_s_T, bx.b_z_T + by.b_z_T);
     for (int c = 0; c < 2; ++c) {
       const double noise = noisy ? hc.noise_T * rng_.Normal() : 0.0;

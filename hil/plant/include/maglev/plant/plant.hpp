@@ -175,7 +175,6 @@ class Plant {
     double c_Ns_per_m;
   };
   void BuildSprings();
-  static void AddSpring(const Kinematics& k, const Spring& s, double h0, Accum* acc);
   void AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const;
   static Wrench ToWrench(const Kinematics& k, const Accum& acc);
   ContactResult ContactWrench(const BodyState& state) const;
