@@ -126,12 +126,32 @@ void unpack_raw(const Message& m, const std::uint8_t* data, std::int64_t* raw) {
   for (std::size_t i = 0; i < m.signal_count; ++i) raw[i] = read_signal(m.signals[i], data);
 }
 
+namespace {
+// write_signal on a whole frame: one 8-byte read-modify-write when the 8
+// bytes from the signal's first byte are inside the frame, else
+// write_signal. Same bytes as write_signal.
+void write_frame_signal(const Signal& s, std::int64_t raw, std::uint8_t* data) {
+  const std::uint32_t first = s.start_bit / 8u;
+  const std::uint32_t off = s.start_bit % 8u;
+  if (std::endian::native == std::endian::little && first + 8u <= kMaxCanFdPayload && off + s.length_bits <= 64u) {
+    std::uint64_t w;
+    std::memcpy(&w, data + first, sizeof w);
+    const std::uint64_t mask = field_mask(s) << off;
+    w = (w & ~mask) | ((static_cast<std::uint64_t>(raw) << off) & mask);
+    std::memcpy(data + first, &w, sizeof w);
+    return;
+  }
+  write_signal(s, raw, data);
+}
+}  // namespace
+
 void encode_raw(const Message& m, const std::int64_t* raw, std::uint8_t counter, CanFrame& frame) {
   frame.id = m.can_id;
   frame.len = m.length;
   frame.flags = static_cast<std::uint8_t>(kFlagFd | kFlagBrs);
   for (auto& b : frame.data) b = 0;
-  pack_raw(m, raw, frame.data);
+  // pack_raw on the cleared frame.
+  for (std::size_t i = 0; i < m.signal_count; ++i) write_frame_signal(m.signals[i], raw[i], frame.data);
   e2e_protect(frame.data, m.length, m.data_id, counter);
 }
 
