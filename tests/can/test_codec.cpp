@@ -348,3 +348,51 @@ TEST(HostCommand, RejectionsAreCountedAndNeverAccepted) {
   f.id = 0x042;
   LONGS_EQUAL(static_cast<int>(RxStatus::kUnknownId), static_cast<int>(rx.accept(f)));
 }
+
+// read_signal / write_signal against the DBC Intel definition bit by bit
+// (signal bit i = frame bit start + i, frame bit b = byte b / 8, bit b % 8),
+// at every start bit of a 64-byte frame, lengths 1-32 and 64, signed and
+// unsigned: the word-wise codec must equal it, and a write must leave every
+// other bit of the frame as it was.
+TEST_GROUP(SignalLayout){};
+
+TEST(SignalLayout, WordWiseReadWriteEqualsTheBitwiseDefinition) {
+  std::mt19937_64 rng(7);
+  auto bit_of = [](const std::uint8_t* d, std::uint32_t b) { return (d[b / 8u] >> (b % 8u)) & 1u; };
+  std::uint8_t lengths[33];
+  for (std::uint8_t l = 1; l <= 32; ++l) lengths[l - 1] = l;
+  lengths[32] = 64;
+  int checked = 0;
+  for (std::uint8_t len : lengths) {
+    for (std::uint32_t start = 0; start + len <= 64u * 8u; ++start) {
+      for (int is_signed = 0; is_signed < 2; ++is_signed) {
+        Signal s{};
+        s.name = "probe";
+        s.start_bit = static_cast<std::uint16_t>(start);
+        s.length_bits = len;
+        s.is_signed = is_signed != 0;
+        std::uint8_t frame[64];
+        for (auto& b : frame) b = static_cast<std::uint8_t>(rng());
+        // Read.
+        std::uint64_t want = 0;
+        for (std::uint32_t i = 0; i < len; ++i) want |= static_cast<std::uint64_t>(bit_of(frame, start + i)) << i;
+        if (s.is_signed && len < 64 && ((want >> (len - 1u)) & 1u) != 0) want |= ~std::uint64_t{0} << len;
+        CHECK_EQUAL(want, static_cast<std::uint64_t>(read_signal(s, frame)));
+        // Write: the field takes the value's low bits, nothing else moves.
+        const std::uint64_t value = rng();
+        std::uint8_t before[64];
+        std::memcpy(before, frame, sizeof frame);
+        write_signal(s, static_cast<std::int64_t>(value), frame);
+        for (std::uint32_t b = 0; b < 64u * 8u; ++b) {
+          const bool in_field = b >= start && b < start + len;
+          const std::uint32_t expect = in_field ? static_cast<std::uint32_t>((value >> (b - start)) & 1u) : bit_of(before, b);
+          if (expect != bit_of(frame, b)) {
+            FAIL("write_signal: a frame bit differs from the bitwise definition");
+          }
+        }
+        ++checked;
+      }
+    }
+  }
+  CHECK(checked > 30000);
+}

@@ -1,5 +1,7 @@
 #include "internal/run_common.hpp"
 
+#include <ctime>
+
 #include "maglev/can_port/open_can_port.hpp"
 
 namespace maglev::bench::internal {
@@ -90,6 +92,12 @@ bool open_can_log(const Link& link, const std::string& can_name, const std::stri
     return false;
   }
   return true;
+}
+
+double thread_cpu_s() {
+  timespec ts{};
+  if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) != 0) return 0.0;
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 double set_run_timing(RunResult* R, double wall_s, const can::BusLoadMeter& meter, double dt) {

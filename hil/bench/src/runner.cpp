@@ -121,6 +121,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   bool aborted = false;
   lockstep::ActuatorWatchdog watchdog;  // the amplifier board's command watchdog
   const auto wall0 = std::chrono::steady_clock::now();
+  const double cpu0 = internal::thread_cpu_s();
 
   for (std::uint64_t n = 0; n < n_ticks; ++n) {
     const double t = static_cast<double>(n) * dt;
@@ -204,6 +205,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     if (ready_t < 0 && st.state == kernel::SequencerState::kReady) ready_t = t;
   }
   const auto wall1 = std::chrono::steady_clock::now();
+  R.cpu_s = internal::thread_cpu_s() - cpu0;
   if (tap.port) {
     std::string err;
     if (!tap.log.close(&err)) {

@@ -84,16 +84,22 @@ void Amplifiers::BeginSubstep(double h_s) {
   const double r = config_.coil_resistance_Ohm;
   const double l = config_.coil_inductance_H;
   const double k = config_.loop_transresistance_V_per_A;
-  const double lin_half = std::exp(-omega_ * h_s / 2.0);
+  if (h_s != decay_h_s_) {
+    decay_h_s_ = h_s;
+    lin_half_ = std::exp(-omega_ * h_s / 2.0);
+    sat_half_ = std::exp(-r / l * h_s / 2.0);
+    for (int j = 0; j < kCoils; ++j) coil_lin_half_[j] = std::exp(-omega_coil_[j] * h_s / 2.0);
+  }
+  const double lin_half = lin_half_;
   const double lin_full = lin_half * lin_half;
-  const double sat_half = std::exp(-r / l * h_s / 2.0);
+  const double sat_half = sat_half_;
   const double sat_full = sat_half * sat_half;
   for (int j = 0; j < kCoils; ++j) {
     const double i0 = current_[j];
     const double it = target_[j];
     double lh = lin_half, lf = lin_full, kj = k;
     if (bandwidth_spread_) {
-      lh = std::exp(-omega_coil_[j] * h_s / 2.0);
+      lh = coil_lin_half_[j];
       lf = lh * lh;
       kj = k_coil_[j];
     }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace maglev::hil {
 namespace {
@@ -116,6 +117,7 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
   } else {
     BuildArraySides();
   }
+  BuildSprings();
   for (int f = 0; f < kForcers; ++f) {
     if (config.forcer_errors.epsilon_tangential[f] != 0.0 || config.forcer_errors.epsilon_off_axis_z[f] != 0.0) {
       forcer_errors_active_ = true;
@@ -251,6 +253,34 @@ void Plant::BuildArraySides() {
     c.ax = cs.array_axis;
     c.coil = cs.coil;
   }
+  // Lanes: side 4 f + q -> lane f, position q (q = 0 is the forcer's
+  // reference side, as in AddMagnetic's loop).
+  lanes_ok_ = field_.harmonics() == 4;
+  for (int f = 0; f < kForcers; ++f) {
+    lane_axis_[f] = side_constants_[static_cast<std::size_t>(4 * f)].ax;
+    for (int q = 0; q < 4; ++q) {
+      const SideConstants& c = side_constants_[static_cast<std::size_t>(4 * f + q)];
+      SideLanes& lane = side_lanes_[static_cast<std::size_t>(q)];
+      if (c.ax != lane_axis_[f] || sides_[static_cast<std::size_t>(4 * f + q)].forcer != f) lanes_ok_ = false;
+      lane.rb0[f] = c.rb[0];
+      lane.rb1[f] = c.rb[1];
+      lane.rb2[f] = c.rb[2];
+      lane.ux[f] = c.ux;
+      lane.uy[f] = c.uy;
+      lane.qc[f] = c.qc;
+      lane.qs[f] = c.qs;
+      lane.q_half_pi[f] = c.q_half_pi;
+      lane.sel_x[f] = c.sel_x;
+      lane.sel_y[f] = c.sel_y;
+      lane.eps_t_x[f] = c.eps_t_x;
+      lane.eps_t_y[f] = c.eps_t_y;
+      lane.eps_z[f] = c.eps_z;
+      lane.gain[f] = c.gain;
+      lane.roll[f] = c.roll;
+      lane.coil[f] = c.coil;
+    }
+  }
+  lanes_avx_ = __builtin_cpu_supports("avx") != 0;
 }
 
 void Plant::TriangleForcer(int f, double centre[2], double thrust[2]) const {
@@ -514,9 +544,206 @@ void Plant::AddMagneticOblique(const Kinematics& k, const double* currents_A, Ac
   }
 }
 
+// ---------------------------------------------------------------------------
+// AddMagnetic, four forcers at a time. Lane f of every vector is forcer f's
+// side at position q (q = 0: its reference side): the operations are
+// AddMagnetic's below, written once for a vector of 4 doubles, in the same
+// order with the same parentheses, so every lane rounds exactly as the
+// scalar loop does (IEEE-754 add/mul/sub are lane-wise; -ffp-contract=off
+// keeps them apart; the library sin/cos/exp stay scalar calls). Only the
+// force and torque sums cross sides: they are added in the scalar loop's
+// side order after the lanes are done. GCC vector extensions: 4 doubles are
+// one AVX register, or two SSE2 registers on a baseline x86-64.
+// ---------------------------------------------------------------------------
+#pragma GCC diagnostic ignored "-Wpsabi"
+namespace {
+typedef double V4 __attribute__((vector_size(32)));
+typedef long long M4 __attribute__((vector_size(32)));
+
+__attribute__((always_inline)) inline V4 Load4(const double* p) {
+  V4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+__attribute__((always_inline)) inline V4 Splat4(double x) { return V4{x, x, x, x}; }
+
+// SmallSinCos / SmallExp lane by lane: the Taylor branch as vectors, a lane
+// outside |x| < 0.02 (or NaN) takes the library call, as the scalar does.
+// |x| < 0.02 in every lane (false for a NaN lane, as the scalar test).
+__attribute__((always_inline)) inline M4 Small4(V4 x) { return (x < 0.02) & (x > -0.02); }
+__attribute__((always_inline)) inline bool All4(M4 m) { return (m[0] & m[1] & m[2] & m[3]) != 0; }
+__attribute__((always_inline)) inline void SmallSinCos4(V4 e, bool all_small, V4* s, V4* c) {
+  const V4 e2 = e * e;
+  V4 sv = e * (1.0 - e2 * (1.0 / 6.0) * (1.0 - e2 * (1.0 / 20.0)));
+  V4 cv = 1.0 - e2 * 0.5 * (1.0 - e2 * (1.0 / 12.0) * (1.0 - e2 * (1.0 / 30.0)));
+  if (!all_small) {
+    for (int i = 0; i < 4; ++i) {
+      if (!(std::fabs(e[i]) < 0.02)) {
+        sv[i] = std::sin(e[i]);
+        cv[i] = std::cos(e[i]);
+      }
+    }
+  }
+  *s = sv;
+  *c = cv;
+}
+__attribute__((always_inline)) inline V4 SmallExp4(V4 x, bool all_small) {
+  V4 y = 1.0 + x * (1.0 + x * 0.5 *
+                              (1.0 + x * (1.0 / 3.0) *
+                                         (1.0 + x * 0.25 * (1.0 + x * 0.2 * (1.0 + x * (1.0 / 6.0))))));
+  if (!all_small) {
+    for (int i = 0; i < 4; ++i) {
+      if (!(std::fabs(x[i]) < 0.02)) y[i] = std::exp(x[i]);
+    }
+  }
+  return y;
+}
+}  // namespace
+
+__attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinematics& k, const double* currents_A,
+                                                                    Accum* acc) const {
+  const double gamma1 = field_.gamma1_per_m();
+  const double* amp = field_.side_amplitudes_T();
+  const double(&r)[3][3] = k.r;
+  const V4 g1 = Splat4(gamma1);
+  const V4 neg_g1 = Splat4(-gamma1);
+  // Per lane: the forcer's array axis picks the position and R's row.
+  V4 p_ax, r_ax0, r_ax1, r_ax2;
+  for (int f = 0; f < 4; ++f) {
+    const int ax = lane_axis_[f];
+    p_ax[f] = k.p[ax];
+    r_ax0[f] = r[ax][0];
+    r_ax1[f] = r[ax][1];
+    r_ax2[f] = r[ax][2];
+  }
+  const V4 r20 = Splat4(r[2][0]), r21 = Splat4(r[2][1]), r22 = Splat4(r[2][2]);
+  const V4 gap0 = Splat4(config_.field.rest_gap_m + k.p[2]);
+  const V4 force_per_A = Splat4(side_force_per_A_);
+  V4 ref_s{}, ref_gap{}, ref_sin{}, ref_cos{}, ref_exp{};
+  // Per side (index 4 f + q) force and torque, platen frame.
+  double side_f[3][16];
+  double side_t[3][16];
+  for (int q = 0; q < 4; ++q) {
+    const SideLanes& c = side_lanes_[static_cast<std::size_t>(q)];
+    const V4 rb0 = Load4(c.rb0), rb1 = Load4(c.rb1), rb2 = Load4(c.rb2);
+    const V4 s = p_ax + (r_ax0 * rb0 + r_ax1 * rb1 + r_ax2 * rb2);
+    const V4 gap = gap0 + (r20 * rb0 + r21 * rb1 + r22 * rb2) - rb2;
+    V4 sin1, cos1, exp1;
+    if (q == 0) {
+      ref_s = s;
+      ref_gap = gap;
+      const V4 gs = g1 * s;
+      const V4 gg = neg_g1 * gap;
+      for (int f = 0; f < 4; ++f) {
+        ref_sin[f] = std::sin(gs[f]);
+        ref_cos[f] = std::cos(gs[f]);
+        ref_exp[f] = std::exp(gg[f]);
+      }
+      sin1 = ref_sin;
+      cos1 = ref_cos;
+      exp1 = ref_exp;
+    } else {
+      const V4 qc = Load4(c.qc), qs = Load4(c.qs);
+      const V4 sq = ref_sin * qc + ref_cos * qs;
+      const V4 cq = ref_cos * qc - ref_sin * qs;
+      const V4 eps = g1 * (s - ref_s) - Load4(c.q_half_pi);
+      const V4 xe = neg_g1 * (gap - ref_gap);
+      const bool all_small = All4(Small4(eps) & Small4(xe));
+      V4 se, ce;
+      SmallSinCos4(eps, all_small, &se, &ce);
+      sin1 = sq * ce + cq * se;
+      cos1 = cq * ce - sq * se;
+      exp1 = ref_exp * SmallExp4(xe, all_small);
+    }
+    // n = 1, 5, 9, 13 (lanes_ok_ only with 4 harmonics).
+    const V4 s2 = 2.0 * sin1 * cos1;
+    const V4 c2 = cos1 * cos1 - sin1 * sin1;
+    const V4 s4 = 2.0 * s2 * c2;
+    const V4 c4 = c2 * c2 - s2 * s2;
+    const V4 e2 = exp1 * exp1;
+    const V4 e4 = e2 * e2;
+    const V4 s5 = sin1 * c4 + cos1 * s4, c5 = cos1 * c4 - sin1 * s4, e5 = exp1 * e4;
+    const V4 s9 = s5 * c4 + c5 * s4, c9 = c5 * c4 - s5 * s4, e9 = e5 * e4;
+    const V4 s13 = s9 * c4 + c9 * s4, c13 = c9 * c4 - s9 * s4, e13 = e9 * e4;
+    const V4 b_s = amp[0] * exp1 * sin1 + amp[1] * e5 * s5 + amp[2] * e9 * s9 + amp[3] * e13 * s13;
+    const V4 b_z = amp[0] * exp1 * cos1 + amp[1] * e5 * c5 + amp[2] * e9 * c9 + amp[3] * e13 * c13;
+    const V4 bb0 = b_s * r_ax0 + b_z * r20;
+    const V4 bb1 = b_s * r_ax1 + b_z * r21;
+    const V4 bb2 = b_s * r_ax2 + b_z * r22;
+    V4 cur;
+    for (int f = 0; f < 4; ++f) cur[f] = currents_A[c.coil[f]];
+    const V4 scale = force_per_A * cur;
+    const V4 ux = Load4(c.ux), uy = Load4(c.uy);
+    V4 f0 = scale * (uy * bb2);
+    V4 f1 = scale * (-ux * bb2);
+    V4 f2 = scale * (ux * bb1 - uy * bb0);
+    const V4 sel_x = Load4(c.sel_x), sel_y = Load4(c.sel_y);
+    if (as_built_) {
+      const V4 gain = Load4(c.gain), roll = Load4(c.roll);
+      f0 *= gain;
+      f1 *= gain;
+      f2 *= gain;
+      const V4 t0 = sel_x * f0 + sel_y * f1;
+      const V4 dt = -roll * f2;
+      f2 += roll * t0;
+      f0 += sel_x * dt;
+      f1 += sel_y * dt;
+    }
+    const V4 ft = sel_x * f0 + sel_y * f1;
+    f0 += Load4(c.eps_t_x) * ft;
+    f1 += Load4(c.eps_t_y) * ft;
+    f2 += Load4(c.eps_z) * ft;
+    const V4 t0 = rb1 * f2 - rb2 * f1;
+    const V4 t1 = rb2 * f0 - rb0 * f2;
+    const V4 t2 = rb0 * f1 - rb1 * f0;
+    for (int f = 0; f < 4; ++f) {
+      side_f[0][4 * f + q] = f0[f];
+      side_f[1][4 * f + q] = f1[f];
+      side_f[2][4 * f + q] = f2[f];
+      side_t[0][4 * f + q] = t0[f];
+      side_t[1][4 * f + q] = t1[f];
+      side_t[2][4 * f + q] = t2[f];
+    }
+  }
+  // The sums in the scalar loop's side order (six chains in registers).
+  double fb0 = 0.0, fb1 = 0.0, fb2 = 0.0, tb0 = 0.0, tb1 = 0.0, tb2 = 0.0;
+  for (int idx = 0; idx < 16; ++idx) {
+    fb0 += side_f[0][idx];
+    fb1 += side_f[1][idx];
+    fb2 += side_f[2][idx];
+    tb0 += side_t[0][idx];
+    tb1 += side_t[1][idx];
+    tb2 += side_t[2][idx];
+  }
+  const double fb[3] = {fb0, fb1, fb2};
+  const double tb[3] = {tb0, tb1, tb2};
+  for (int a = 0; a < 3; ++a) {
+    acc->f[a] += r[a][0] * fb[0] + r[a][1] * fb[1] + r[a][2] * fb[2];
+    acc->t[a] += r[a][0] * tb[0] + r[a][1] * tb[1] + r[a][2] * tb[2];
+  }
+}
+
+__attribute__((target("avx"))) void Plant::AddMagneticLanesAvx(const Kinematics& k, const double* currents_A,
+                                                               Accum* acc) const {
+  MagneticLanesBody(k, currents_A, acc);
+}
+void Plant::AddMagneticLanesBase(const Kinematics& k, const double* currents_A, Accum* acc) const {
+  MagneticLanesBody(k, currents_A, acc);
+}
+// (-Wpsabi stays off to the end of the file: GCC reports the 32-byte vector
+// ABI note at the end of the translation unit; no V4 crosses a call.)
+
 void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* acc) const {
   if (triangle_) {
     AddMagneticOblique(k, currents_A, acc);
+    return;
+  }
+  if (lanes_ok_) {
+    if (lanes_avx_) {
+      AddMagneticLanesAvx(k, currents_A, acc);
+    } else {
+      AddMagneticLanesBase(k, currents_A, acc);
+    }
     return;
   }
   // Evaluated in the PLATEN frame (the cheap frame: every side's r_body and
@@ -618,10 +845,22 @@ void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* ac
   }
 }
 
-void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
-  if (!config_.suspension.enabled) {
-    return;
-  }
+// The springs' attachments and constants, computed once exactly as the
+// per-evaluation code computed them (same expressions, same rounding).
+void Plant::BuildSprings() {
+  spring_count_ = 0;
+  auto add = [&](double x, double y, double k_spring, double c_spring) {
+    if (as_built_) {
+      x -= config_.as_built.com_offset_m[0];
+      y -= config_.as_built.com_offset_m[1];
+    }
+    Spring& s = springs_[static_cast<std::size_t>(spring_count_++)];
+    s.rb[0] = x;
+    s.rb[1] = y;
+    s.rb[2] = -com_arm_m_;
+    s.k_N_per_m = k_spring;
+    s.c_Ns_per_m = c_spring;
+  };
   if (triangle_) {
     // Three spring-dampers (k/3, c/3) at the triangle's forcer centres: their
     // centroid is the CoM and sum(y^2) = sum(x^2) = 3 l^2 / 2, sum(x y) = 0
@@ -629,40 +868,40 @@ void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
     // cross layout's four (eqs (29)-(31)).
     const double k3 = k_susp_ / 3.0;
     const double c3 = config_.suspension.damping_Ns_per_m / 3.0;
-    const double h0 = config_.suspension.neutral_height_m;
     for (int f = 0; f < kTriangleForcers; ++f) {
       double c[2], h[2];
       TriangleForcer(f, c, h);
-      AddSpring(k, c[0], c[1], k3, c3, h0, acc);
+      add(c[0], c[1], k3, c3);
     }
     return;
   }
   const double k4 = k_susp_ / 4.0;
   const double c4 = config_.suspension.damping_Ns_per_m / 4.0;
-  const double h0 = config_.suspension.neutral_height_m;
   for (int f = 0; f < kForcers; ++f) {
     const Eigen::Vector2d fc = ForcerCentre(f, config_.body.lever_arm_m, config_.body.layout);
-    AddSpring(k, fc.x(), fc.y(), k4, c4, h0, acc);
+    add(fc.x(), fc.y(), k4, c4);
   }
 }
 
-// One suspension spring-damper under the forcer at (x, y) of the platen frame
-// (at the coils' plane): its vertical force and the tilt torques it makes.
-void Plant::AddSpring(const Kinematics& k, double x, double y, double k_spring, double c_spring, double h0,
-                      Accum* acc) const {
-  if (as_built_) {
-    x -= config_.as_built.com_offset_m[0];
-    y -= config_.as_built.com_offset_m[1];
+// The suspension spring-dampers under the forcers (at the coils' plane):
+// their vertical forces and the tilt torques they make.
+void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
+  if (!config_.suspension.enabled) {
+    return;
   }
-  const Eigen::Vector3d rb(x, y, -com_arm_m_);
-  double rw[3];
-  Rotate(k.r, rb, rw);
-  const double h = k.p[2] + rw[2] - rb.z();
-  const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
-  const double fz = -k_spring * (h - h0) - c_spring * hdot;
-  acc->f[2] += fz;
-  acc->t[0] += rw[1] * fz;
-  acc->t[1] -= rw[0] * fz;
+  const double h0 = config_.suspension.neutral_height_m;
+  for (int i = 0; i < spring_count_; ++i) {
+    const Spring& s = springs_[static_cast<std::size_t>(i)];
+    const double* rb = s.rb;
+    double rw[3];
+    for (int a = 0; a < 3; ++a) rw[a] = k.r[a][0] * rb[0] + k.r[a][1] * rb[1] + k.r[a][2] * rb[2];
+    const double h = k.p[2] + rw[2] - rb[2];
+    const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
+    const double fz = -s.k_N_per_m * (h - h0) - s.c_Ns_per_m * hdot;
+    acc->f[2] += fz;
+    acc->t[0] += rw[1] * fz;
+    acc->t[1] -= rw[0] * fz;
+  }
 }
 
 void Plant::AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const {
@@ -1019,8 +1258,9 @@ io::SensorSample Plant::sample() {
     }
     const Eigen::Vector3d w = body_.position_m + r * rb;
     const double height = hc.height_above_magnets_m + w.z() - rb.z();
-    const FieldSZ bx = field_.PointField(w.x(), height);
-    const FieldSZ by = field_.PointField(w.y(), height);
+    const double decay = field_.PointDecay(height);
+    const FieldSZ bx = field_.PointFieldAt(w.x(), decay);
+    const FieldSZ by = field_.PointFieldAt(w.y(), decay);
     const Eigen::Vector3d b_body = r.transpose() * Eigen::Vector3d(bx.b_s_T, by.b_s_T, bx.b_z_T + by.b_z_T);
     for (int c = 0; c < 2; ++c) {
       const double noise = noisy ? hc.noise_T * rng_.Normal() : 0.0;

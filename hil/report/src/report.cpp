@@ -27,6 +27,11 @@ std::string num(double v) {
 // v rounded to `decimals` decimals, as plain fixed-point text ("-0.000000049626")
 // written at p (at most 48 chars); values too large for a 64-bit scaled
 // integer fall back to %.17g. Returns the end.
+// "00" .. "99": two digits per division.
+constexpr char kDigitPairs[] =
+    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+    "8081828384858687888990919293949596979899";
 char* put_fixed(char* p, double v, int decimals) {
   static constexpr double kPow10[] = {1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12};
   if (!std::isfinite(v)) {
@@ -39,20 +44,44 @@ char* put_fixed(char* p, double v, int decimals) {
   if (std::fabs(scaled) >= 9.0e18) {
     return std::to_chars(p, p + 40, v, std::chars_format::general, 17).ptr;
   }
-  long long q = std::llround(scaled);
+  // std::llround without the library call: truncate (exact below 2^63), then
+  // the exact remainder rounds half away from zero.
+  long long q = static_cast<long long>(scaled);
+  const double rest = scaled - static_cast<double>(q);
+  if (rest >= 0.5) {
+    ++q;
+  } else if (rest <= -0.5) {
+    --q;
+  }
   if (q < 0) {
     *p++ = '-';
     q = -q;
   }
+  // Digits from the least significant end, two at a time, then zeros up to
+  // decimals + 1 digits (at least one digit before the point).
   char digits[24];
-  int nd = 0;
-  do {
-    digits[nd++] = static_cast<char>('0' + q % 10);
-    q /= 10;
-  } while (q > 0 || nd <= decimals);  // at least one digit before the point
-  for (int i = nd - 1; i >= 0; --i) {
-    if (i == decimals - 1) *p++ = '.';
-    *p++ = digits[i];
+  char* d = digits + sizeof digits;
+  auto u = static_cast<unsigned long long>(q);
+  while (u >= 100) {
+    const auto pair = static_cast<std::size_t>(u % 100) * 2;
+    u /= 100;
+    d -= 2;
+    d[0] = kDigitPairs[pair];
+    d[1] = kDigitPairs[pair + 1];
+  }
+  if (u >= 10) {
+    d -= 2;
+    d[0] = kDigitPairs[u * 2];
+    d[1] = kDigitPairs[u * 2 + 1];
+  } else {
+    *--d = static_cast<char>('0' + u);
+  }
+  while (digits + sizeof digits - d <= decimals) *--d = '0';
+  const char* point = digits + sizeof digits - decimals;
+  while (d < point) *p++ = *d++;
+  if (decimals > 0) {
+    *p++ = '.';
+    while (d < digits + sizeof digits) *p++ = *d++;
   }
   return p;
 }

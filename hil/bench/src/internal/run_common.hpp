@@ -49,6 +49,8 @@ bool open_can_log(const Link& link, const std::string& can_name, const std::stri
 // Wall time, tick count, real-time factor and bus load of a finished run.
 // Returns the simulated time [s].
 double set_run_timing(RunResult* R, double wall_s, const can::BusLoadMeter& meter, double dt);
+// This thread's CPU time, s (CLOCK_THREAD_CPUTIME_ID; 0 where unavailable).
+double thread_cpu_s();
 
 // What the metrics need from the link and the kernel at the end of a run.
 struct LinkTotals {

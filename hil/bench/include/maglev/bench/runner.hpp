@@ -82,6 +82,10 @@ struct RunResult {
   std::vector<std::string> warnings;
   double wall_s = 0.0;
   double real_time_factor = 0.0;
+  // The run loop's CPU time (this thread's; 0 when not measured): on a shared
+  // machine simulated s / cpu_s is the factor the loop reaches on a core of
+  // its own (printed on the summary line, not in metrics.json).
+  double cpu_s = 0.0;
   double bus_load_percent = 0.0;
   std::uint64_t ticks = 0;
   std::string final_state;

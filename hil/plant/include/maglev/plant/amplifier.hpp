@@ -78,6 +78,12 @@ class Amplifiers {
   double target_[kCoils] = {};
   double stage_current_[3][kCoils] = {};
   bool enabled_ = false;
+  // BeginSubstep's decay factors for the last step length (every sub-step of
+  // a run has the same h): the same exp() calls, made once per h.
+  double decay_h_s_ = -1.0;
+  double lin_half_ = 1.0;
+  double sat_half_ = 1.0;
+  double coil_lin_half_[kCoils] = {};
 };
 
 }  // namespace maglev::hil

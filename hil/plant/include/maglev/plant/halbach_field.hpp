@@ -13,6 +13,8 @@
 //   c_n(z)    = 2 sqrt2 mu0 M0 / (pi n) (1 - e^{-gamma_n Delta}) e^{-gamma_n z}   eq (3)
 #pragma once
 
+#include <cmath>
+
 #include "maglev/plant/plant_config.hpp"
 
 namespace maglev::hil {
@@ -80,6 +82,13 @@ class HalbachField {
   // Point field of one linear array at coordinate s and height z above the
   // magnets' top surface (Hall sensors).
   FieldSZ PointField(double s_m, double height_m) const;
+  // PointField at several s for one height: PointDecay(height) once, then
+  // PointFieldAt(s, decay) equals PointField(s, height) bit for bit.
+  double PointDecay(double height_m) const { return std::exp(-gamma1_ * height_m); }
+  FieldSZ PointFieldAt(double s_m, double decay) const {
+    const double th = gamma1_ * s_m;
+    return SumHarmonicsFrom(point_amp_, harmonics_, std::sin(th), std::cos(th), decay);
+  }
 
   // Field averaged over a coil side's cross-section (width a centred at s,
   // from gap g to g + d). N * I * p * (u x B_avg) is then exactly the volume

@@ -153,6 +153,11 @@ class Plant {
     double t[3];
   };
   void AddMagnetic(const Kinematics& k, const double* currents_A, Accum* acc) const;
+  // AddMagnetic's cross/square loop, four forcers at a time (bit-identical);
+  // one body compiled for AVX and for the baseline x86-64 (SSE2).
+  void AddMagneticLanesAvx(const Kinematics& k, const double* currents_A, Accum* acc) const;
+  void AddMagneticLanesBase(const Kinematics& k, const double* currents_A, Accum* acc) const;
+  void MagneticLanesBody(const Kinematics& k, const double* currents_A, Accum* acc) const;
   // Triangle layout: every side over both arrays (its own loop, so that the
   // cross and square keep their arithmetic bit for bit).
   void AddMagneticOblique(const Kinematics& k, const double* currents_A, Accum* acc) const;
@@ -162,8 +167,14 @@ class Plant {
   // Forcer centre and unit thrust axis (platen frame) of the triangle's forcer f.
   void TriangleForcer(int f, double centre[2], double thrust[2]) const;
   void AddSuspension(const Kinematics& k, Accum* acc) const;
-  void AddSpring(const Kinematics& k, double x, double y, double k_spring, double c_spring, double h0,
-                 Accum* acc) const;
+  // One suspension spring-damper: its attachment (platen frame, about the
+  // CoM) and constants, fixed per run (BuildSprings).
+  struct Spring {
+    double rb[3];
+    double k_N_per_m;
+    double c_Ns_per_m;
+  };
+  void BuildSprings();
   void AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const;
   static Wrench ToWrench(const Kinematics& k, const Accum& acc);
   ContactResult ContactWrench(const BodyState& state) const;
@@ -196,6 +207,25 @@ class Plant {
     int coil;
   };
   std::array<SideConstants, 2 * kCoils> side_constants_{};
+  // The same 16 sides as 4 lanes (one per forcer) x 4 positions (the
+  // forcer's reference side first): the force loop evaluates the four
+  // forcers' sides together in SIMD registers, lane by lane the same
+  // operations in the same order as the one-side-at-a-time loop, so the
+  // results are identical bit for bit (plant.cpp, MagneticLanes).
+  struct SideLanes {
+    double rb0[4], rb1[4], rb2[4];
+    double ux[4], uy[4];
+    double qc[4], qs[4], q_half_pi[4];
+    double sel_x[4], sel_y[4], eps_t_x[4], eps_t_y[4], eps_z[4];
+    double gain[4], roll[4];
+    int coil[4];
+  };
+  std::array<SideLanes, 4> side_lanes_{};
+  std::array<Spring, 4> springs_{};
+  int spring_count_ = 0;
+  int lane_axis_[4] = {};      // array axis of forcer f (lane f)
+  bool lanes_ok_ = false;      // four sides per forcer on one array axis, 4 harmonics
+  bool lanes_avx_ = false;     // the CPU has AVX: 4 lanes per instruction (else 2 x SSE2)
   // Triangle layout: the 12 oblique sides of coils 1-6.
   struct ObliqueSide {
     double rb[3];                // midpoint, platen frame
