@@ -72,10 +72,11 @@ struct CouplingCalibrationConfig {
   // crossovers (50-83 Hz) where the closed loop passes most of d to Y, below
   // the amplifiers (5 kHz) and far from Nyquist (1250 Hz).
   float fundamental_Hz = 20.0f;
-  // Peak of the multisine per axis (A of effort, <= ExcitationLimits): a few
-  // nm / tens of nrad of motion at the lines, 5-20x the sensors' per-bin noise,
-  // and far inside every envelope (docs/KERNEL.md gives the numbers).
-  float amplitude_A[kAxisCount] = {0.3f, 0.3f, 0.03f, 0.3f, 0.03f, 0.03f};
+  // Peak of the multisine per axis (A of effort, <= ExcitationLimits):
+  // measured on the as-built bench, ~0.2 um p-p in x, y, z and ~2 urad p-p in
+  // the rotations -- 100x inside the tilt envelope, yet ~100x the per-bin
+  // noise of a 2 s DFT (docs/KERNEL.md gives the numbers).
+  float amplitude_A[kAxisCount] = {0.05f, 0.05f, 0.005f, 0.1f, 0.003f, 0.003f};
   float settle_s = 0.25f;        // after each start, before the DFT window
   std::uint16_t periods = 40;    // DFT window: whole periods of f0 (2 s at 20 Hz)
   // Checks (dimensionless: rotational efforts scaled by the axis' radius of
