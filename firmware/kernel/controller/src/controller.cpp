@@ -472,7 +472,7 @@ template <typename Scalar>
 void Controller<Scalar>::set_coupling(const CouplingCorrection& next) {
   // Ramp from what acts now (identity when off) to next.
   for (int e = 0; e < kCouplingMatrixSize; ++e) {
-    ramp_.from[e] = config_.coupling.enabled ? config_.coupling.matrix[e] : (e % (kAxisCount + 1) == 0 ? 1.0f : 0.0f);
+    ramp_.from[e] = config_.coupling.enabled ? config_.coupling.matrix[e] : identity_entry(e);
   }
   ramp_.left = kCouplingRampTicks;
   config_.coupling = next;
@@ -838,7 +838,7 @@ void Controller<Scalar>::allocate_forces(Tick& t) {
     float c[kCouplingMatrixSize];
     const float w = static_cast<float>(ramp_.left) / static_cast<float>(kCouplingRampTicks);  // weight of `from`
     for (int e = 0; e < kCouplingMatrixSize; ++e) {
-      const float to = config_.coupling.enabled ? config_.coupling.matrix[e] : (e % (kAxisCount + 1) == 0 ? 1.0f : 0.0f);
+      const float to = config_.coupling.enabled ? config_.coupling.matrix[e] : identity_entry(e);
       c[e] = to + w * (ramp_.from[e] - to);
     }
     if (ramp_.left != 0) --ramp_.left;

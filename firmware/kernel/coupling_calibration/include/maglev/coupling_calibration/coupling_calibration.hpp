@@ -32,6 +32,9 @@ namespace maglev::kernel {
 inline constexpr int kCouplingLines = 4;  // excitation lines k f0, k = 1..4
 inline constexpr int kCouplingMatrixSize = kAxisCount * kAxisCount;
 
+// Entry e (row-major) of the 6x6 identity.
+constexpr float identity_entry(int e) { return e % (kAxisCount + 1) == 0 ? 1.0f : 0.0f; }
+
 // The correction applied to the efforts, row-major: U'_i = sum_j C_ij U_j.
 // Off (enabled = 0) by default; the kernel then skips it entirely.
 struct CouplingCorrection {
@@ -73,9 +76,10 @@ struct CouplingCalibrationConfig {
   // the amplifiers (5 kHz) and far from Nyquist (1250 Hz).
   float fundamental_Hz = 20.0f;
   // Peak of the multisine per axis (A of effort, <= ExcitationLimits):
-  // measured on the as-built bench, ~0.2 um p-p in x, y, z and ~2 urad p-p in
-  // the rotations -- 100x inside the tilt envelope, yet ~100x the per-bin
-  // noise of a 2 s DFT (docs/KERNEL.md gives the numbers).
+  // measured on the as-built bench, 2.3 um p-p in x, y, 0.8 um in z, 23 urad
+  // in each rotation -- 13x inside the tilt envelope even on a platen that
+  // could not be levelled; 10x less leaves 10x more residual coupling (noise),
+  // 10x more tripped the envelope (docs/KERNEL.md, docs/PERFORMANCE.md).
   float amplitude_A[kAxisCount] = {0.05f, 0.05f, 0.005f, 0.1f, 0.003f, 0.003f};
   float settle_s = 0.25f;        // after each start, before the DFT window
   std::uint16_t periods = 40;    // DFT window: whole periods of f0 (2 s at 20 Hz)
