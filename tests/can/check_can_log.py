@@ -124,7 +124,8 @@ def check_host_commands(log_path, dbc_path, expected_path):
     lines, decoded = read_and_decode(log_path, dbc_path)
     with open(expected_path) as f:
         expected = [line.split() for line in f if line.strip()]
-    check(len(decoded) == len(expected) == 32, f"{len(decoded)} frames decoded, {len(expected)} expected, want 32")
+    # one command and its ack per host command code (17 since calibrate_coupling)
+    check(len(decoded) == len(expected) == 34, f"{len(decoded)} frames decoded, {len(expected)} expected, want 34")
     for (_, name, phys, raw), want in zip(decoded, expected):
         check(name == want[0], f"frame {name}, expected {want[0]}")
         code = int(want[1])

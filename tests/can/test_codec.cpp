@@ -323,12 +323,12 @@ TEST(HostCommand, RejectionsAreCountedAndNeverAccepted) {
   c.args.step.delta = 2e9;
   encode_host_command(c, 12, f);
   LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
-  // Command code 0 / 17 and axis 6: out of range.
+  // Command code 0 / kHostCommandCodeMax + 1 and axis 6: out of range.
   c = ok;
   c.code = static_cast<HostCommandCode>(0);
   encode_host_command(c, 12, f);
   LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
-  c.code = static_cast<HostCommandCode>(17);
+  c.code = static_cast<HostCommandCode>(kHostCommandCodeMax + 1);
   encode_host_command(c, 12, f);
   LONGS_EQUAL(static_cast<int>(RxStatus::kOutOfRange), static_cast<int>(rx.accept(f)));
   c = ok;

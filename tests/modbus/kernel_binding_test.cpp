@@ -418,3 +418,59 @@ TEST(KernelBinding, AFilterThatWouldDestabiliseTheAxisIsRefused) {
   LONGS_EQUAL(7, write_filter(st.ctx, RegId::filter_x_2_type, 2, 600.0f, 0.7071f, 0.0f));
   CHECK(st.config().axis[0].filters[1].type == kernel::BiquadType::kLowPass);
 }
+
+// Issue 15 item 5: the coupling calibration over Modbus. cmd.code 17 is refused
+// on rest (kernel CommandResult 7, status.calibration 3); the correction the
+// kernel holds (written here on rest as the kernel's calibration would write
+// it) shows in the coupling.* registers, is persisted by config.save and
+// loaded at the next boot; a matrix write the kernel's bound refuses changes
+// nothing; coupling.enabled 0 drops it.
+TEST(KernelBinding, CouplingCalibrationCommandStatusAndPersistedCorrection) {
+  {
+    Stage st(flash);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::cmd_code),
+                                         static_cast<std::uint16_t>(can::HostCommandCode::kCalibrateCoupling)));
+    std::uint16_t r[2] = {};
+    LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::cmd_result), 1, r));
+    LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kRefusedNotReady), r[0]);
+    LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::status_calibration), 1, r));
+    LONGS_EQUAL(static_cast<int>(kernel::CouplingCalibrationResult::kRefusedNotReady), r[0]);
+    LONGS_EQUAL(2, modbus_read_registers(st.ctx, addr(RegId::coupling_y_theta_z), 2, r));
+    DOUBLES_EQUAL(0.0, get_f32(r), 0.0);
+    {
+      std::lock_guard<std::mutex> lock(st.m);
+      kernel::KernelConfig c = st.controller->config();
+      c.coupling.enabled = 1;
+      c.coupling.matrix[1 * 6 + 2] = -0.0125f;  // y effort per theta_z effort
+      CHECK(st.controller->apply_config(c) == kernel::ConfigError::kOk);
+      c.coupling.matrix[0] = NAN;
+      CHECK(st.controller->apply_config(c) == kernel::ConfigError::kCouplingCorrection);
+    }
+    LONGS_EQUAL(2, modbus_read_registers(st.ctx, addr(RegId::coupling_y_theta_z), 2, r));
+    DOUBLES_EQUAL(-0.0125, get_f32(r), 1e-9);
+    LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::coupling_enabled), 1, r));
+    LONGS_EQUAL(1, r[0]);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+    std::uint16_t w[2];
+    // 5 A of theta_z effort per A of y: 72x a force over theta_z's 69 mm
+    // radius of gyration, beyond the kernel's bound -- refused, nothing changed.
+    set_f32(5.0f, w);
+    EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::coupling_theta_z_y), 2, w), 3);
+    DOUBLES_EQUAL(0.0, static_cast<double>(st.config().coupling.matrix[2 * 6 + 1]), 0.0);
+    // A gain write carries the kernel's correction along (the image was synced).
+    set_f32(250.0f, w);
+    LONGS_EQUAL(2, modbus_write_registers(st.ctx, addr(RegId::gain_theta_z_kp), 2, w));
+    DOUBLES_EQUAL(static_cast<double>(-0.0125f), static_cast<double>(st.config().coupling.matrix[1 * 6 + 2]), 0.0);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::config_save), 1));
+  }
+  {
+    Stage rebooted(flash);
+    const kernel::KernelConfig c = rebooted.config();
+    LONGS_EQUAL(1, c.coupling.enabled);
+    DOUBLES_EQUAL(static_cast<double>(-0.0125f), static_cast<double>(c.coupling.matrix[1 * 6 + 2]), 0.0);
+    DOUBLES_EQUAL(250.0, static_cast<double>(c.axis[2].pid.kp), 0.0);
+    LONGS_EQUAL(1, modbus_write_register(rebooted.ctx, addr(RegId::access_key), kEngineerKey));
+    LONGS_EQUAL(1, modbus_write_register(rebooted.ctx, addr(RegId::coupling_enabled), 0));
+    LONGS_EQUAL(0, rebooted.config().coupling.enabled);
+  }
+}

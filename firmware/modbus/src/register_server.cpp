@@ -249,6 +249,7 @@ void RegisterServer::advance_time_us(std::uint32_t dt_us) {
 
 std::size_t RegisterServer::handle_pdu(const std::uint8_t* req, std::size_t len, std::uint8_t* resp, bool broadcast) {
   if (len < 1) return 0;
+  sync();
   const std::uint8_t fc = req[0];
   std::uint16_t words[kMaxReadCount];
   ExceptionCode e = ExceptionCode::kNone;

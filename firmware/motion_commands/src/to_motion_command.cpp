@@ -59,6 +59,7 @@ bool to_motion_command(const can::HostCommandFrame& h, const kernel::Pose64& ref
       c.harmonics = static_cast<std::uint8_t>(std::clamp(a.excite.harmonics, 1.0, 255.0));
       break;
     case C::kStopExcitation: c.type = MotionType::kStopExcitation; break;
+    case C::kCalibrateCoupling: c.type = MotionType::kCalibrateCoupling; break;
     case C::kShutdown: return false;
     default: return false;  // a code this build does not know
   }

@@ -51,6 +51,7 @@ struct Args {
   std::string config;             // controller: scenario whose [controller]/kernel to apply
   std::string controller_record;  // plant: the controller's record file
   int seeds = 0;                  // run --seeds N: error seeds 1..N, median and spread
+  bool calibrate = false;         // run --calibrate: coupling calibration session first (issue 15)
   std::string error;
 };
 
@@ -63,6 +64,9 @@ void usage() {
       "                 [--can-log FILE]   the run's CAN traffic as a candump log (simulated time)\n"
       "                 [--plant default|ideal|nominal|as-built] [--error-seed N]   the plant model (docs/PLANT.md)\n"
       "                 [--seeds N]        as-built error seeds 1..N: per paper figure median, spread, ratio\n"
+      "                 [--calibrate]      first a coupling calibration session on the same plant (levitate,\n"
+      "                                    level, calibrate_coupling), then the scenario with its correction\n"
+      "                                    loaded as from the persisted configuration (DIR/calibration/)\n"
       "  maglev-hil suite --out DIR [run options but --can-log]\n"
       "  maglev-hil check NAME|FILE...\n"
       "  maglev-hil record-pmlsm VECTORS OUTPUTS [--profile P]   paper 002's session for the M7 replay\n"
@@ -149,6 +153,8 @@ Args parse_args(int argc, char** argv) {
       a.plots = false;
     } else if (s == "--quiet") {
       a.run.verbose = false;
+    } else if (s == "--calibrate") {
+      a.calibrate = true;
     } else if (s == "--levitate") {
       a.levitate = true;
     } else if (!s.empty() && s[0] == '-') {
@@ -223,9 +229,65 @@ int report_run(const maglev::scenario::Scenario& sc, const maglev::bench::RunRes
   return r.completed && wrote ? 0 : 1;
 }
 
+// run --calibrate: the calibration session on the scenario's plant and
+// controller (same error set and noise seed): levitate, level the platen
+// (as the ccq scenarios do), calibrate_coupling, hold. Its correction, if
+// the kernel kept one, is what the scenario run then boots with.
+constexpr double kCalibrateAt_s = 4.5;
+constexpr double kCalibrationSession_s = 36.0;
+maglev::scenario::Scenario calibration_session(const maglev::scenario::Scenario& sc) {
+  maglev::scenario::Scenario c = sc;
+  c.scenario["name"] = sc.name() + "_calibration";
+  c.scenario["title"] = "coupling calibration session (--calibrate)";
+  c.scenario["duration_s"] = std::to_string(kCalibrationSession_s);
+  c.timeline.clear();
+  c.metrics.clear();
+  c.paper.clear();
+  auto at = [&](double t, const std::string& verb, std::vector<std::string> args) {
+    maglev::scenario::TimelineEntry e;
+    e.t_s = t;
+    e.verb = verb;
+    e.args = std::move(args);
+    e.line = 0;
+    c.timeline.push_back(e);
+  };
+  at(0.0, "levitate", {});
+  at(2.5, "move_to", {"theta_x", "0urad", "1mrad/s", "10mrad/s^2"});
+  at(2.5, "move_to", {"theta_y", "0urad", "1mrad/s", "10mrad/s^2"});
+  at(kCalibrateAt_s, "calibrate_coupling", {});
+  return c;
+}
+
+int run_one_plain(const maglev::scenario::Scenario& sc, const Args& a, const std::string& dir,
+                  maglev::bench::RunResult* keep);
+
 // Runs one scenario into dir; returns 0 when it completed.
 int run_one(const maglev::scenario::Scenario& sc, const Args& a, const std::string& dir,
             maglev::bench::RunResult* keep) {
+  if (!a.calibrate) return run_one_plain(sc, a, dir, keep);
+  maglev::bench::RunResult cal;
+  const int rc = run_one_plain(calibration_session(sc), a, (fs::path(dir) / "calibration").string(), &cal);
+  const auto it = cal.metrics.find("calibration_result");
+  const int result = it == cal.metrics.end() ? 0 : static_cast<int>(it->second);
+  std::printf("  calibration: %s (coupling %.4g -> %.4g, line spread %.3g)\n",
+              maglev::kernel::to_string(static_cast<maglev::kernel::CouplingCalibrationResult>(result)),
+              cal.metrics.count("calibration_coupling_before") ? cal.metrics.at("calibration_coupling_before") : 0.0,
+              cal.metrics.count("calibration_coupling_after") ? cal.metrics.at("calibration_coupling_after") : 0.0,
+              cal.metrics.count("calibration_inconsistency") ? cal.metrics.at("calibration_inconsistency") : 0.0);
+  Args ak = a;
+  ak.run.coupling = cal.coupling;  // what the kernel stored (unchanged = off when it failed)
+  maglev::bench::RunResult r;
+  const int rr = run_one_plain(sc, ak, dir, &r);
+  r.metrics["calibration_result"] = result;
+  for (const char* k : {"calibration_coupling_before", "calibration_coupling_after", "calibration_inconsistency"}) {
+    if (cal.metrics.count(k)) r.metrics[k] = cal.metrics.at(k);
+  }
+  if (keep != nullptr) *keep = std::move(r);
+  return rc | rr;
+}
+
+int run_one_plain(const maglev::scenario::Scenario& sc, const Args& a, const std::string& dir,
+                  maglev::bench::RunResult* keep) {
   std::printf("== %s: %s (kernel %s, CAN %s, %s)\n", sc.name().c_str(),
               sc.scenario.count("title") ? sc.scenario.at("title").c_str() : "",
               a.run.kernel ? maglev::hil::to_string(*a.run.kernel)

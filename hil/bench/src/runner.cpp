@@ -90,7 +90,9 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   lockstep::PlantEndpoint endpoint(*link.plant_port, &meter);
   hil::CanServoIo cio(*link.ctrl_port, &meter);
   hil::ControllerNode node(ov.kernel, cio);
-  const kernel::ConfigError ce = node.apply_config(ov.controller);
+  kernel::KernelConfig boot_config = ov.controller;
+  if (opt.coupling) boot_config.coupling = *opt.coupling;
+  const kernel::ConfigError ce = node.apply_config(boot_config);
   if (ce != kernel::ConfigError::kOk) {
     if (errors != nullptr) {
       errors->push_back({sc.source + ": [controller] overrides refused by the kernel (ConfigError " +
@@ -223,6 +225,17 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
                                                  static_cast<double>(static_cast<int>(node.status().state)),
                                                  static_cast<double>(static_cast<int>(node.status().fault))});
   if (timer) internal::add_realtime_metrics(*timer, &R.metrics);
+  // Coupling calibration (issue 15): only when one ran or a correction was
+  // loaded, so other runs' metrics.json keep their keys.
+  R.coupling = node.config().coupling;
+  const kernel::ControllerStatus& fin = node.status();
+  if (opt.coupling) R.metrics["coupling_correction_loaded"] = opt.coupling->enabled;
+  if (fin.calibration_result != kernel::CouplingCalibrationResult::kNone) {
+    R.metrics["calibration_result"] = static_cast<double>(static_cast<int>(fin.calibration_result));
+    R.metrics["calibration_coupling_before"] = static_cast<double>(fin.calibration_coupling_before);
+    R.metrics["calibration_coupling_after"] = static_cast<double>(fin.calibration_coupling_after);
+    R.metrics["calibration_inconsistency"] = static_cast<double>(fin.calibration_inconsistency);
+  }
   compute_metrics(sc, MetricInputs{actions, tr, excitations, levitate_t, ready_t, sc.duration_s(), io::stage::kServoRate_Hz},
                   &R.metrics, &R.warnings);
   return R;

@@ -618,3 +618,56 @@ TEST(ClosedLoop, StepNeverAllocatesWithEveryProfileAndTheExcitation) {
   LONGS_EQUAL(0, static_cast<long>(after - before));
   CHECK(c.status().state == SequencerState::kReady);
 }
+
+// Coupling calibration (issue 15 item 5) on the decoupled AxisStage: refused
+// when not levitated and while running, abandoned by another command with
+// nothing kept, and on a stage without coupling it finds none (< 1 %, scaled).
+// No heap while it runs.
+TEST(ClosedLoop, CouplingCalibrationRefusedAbandonedAndFindsNoCouplingOnADecoupledStage) {
+  static Controller<float> c;
+  AxisStage s(11);
+  const CouplingCorrection before = c.config().coupling;
+  MotionCommand cal;
+  cal.type = MotionType::kCalibrateCoupling;
+  CHECK(c.command(cal) == CommandResult::kRefusedNotReady);
+  CHECK(c.status().calibration_result == CouplingCalibrationResult::kRefusedNotReady);
+  CHECK(levitate_to_ready(c, s));
+  for (int n = 0; n < 2500; ++n) s.tick(c);
+  CHECK(c.command(cal) == CommandResult::kAccepted);
+  CHECK(c.command(cal) == CommandResult::kRefusedBusy);  // one at a time
+  // Experiment 0 (x) takes 625 + 5000 ticks; stop in experiment 1 (y).
+  for (int n = 0; n < 6000; ++n) s.tick(c);
+  CHECK(c.status().excitation_active);
+  CHECK(c.status().excitation_axis == 1);
+  CHECK(c.status().calibration_experiment == 1);
+  CHECK(c.command(MotionCommand{MotionType::kHold}) == CommandResult::kAccepted);
+  s.tick(c);
+  CHECK(c.status().calibration_result == CouplingCalibrationResult::kAbandonedInterrupted);
+  CHECK_FALSE(c.status().excitation_active);
+  CHECK(same_value_bytes(before, c.config().coupling));
+
+  const unsigned long allocs = g_alloc_count;
+  CHECK(c.command(cal) == CommandResult::kAccepted);
+  int n = 0;
+  for (; n < 80000 && c.status().calibration_result == CouplingCalibrationResult::kRunning; ++n) s.tick(c);
+  CHECK(g_alloc_count == allocs);
+  CHECK(n < 80000);
+  CHECK(c.status().state == SequencerState::kReady);
+  const float found = c.status().calibration_coupling_before;
+  std::printf("\ncalibration on AxisStage: %s after %d ticks, coupling %.4g -> %.4g, spread %.3g\n",
+              to_string(c.status().calibration_result), n, static_cast<double>(found),
+              static_cast<double>(c.status().calibration_coupling_after),
+              static_cast<double>(c.status().calibration_inconsistency));
+  CHECK(found < 0.01f);
+  const CouplingCalibrationResult r = c.status().calibration_result;
+  if (r == CouplingCalibrationResult::kPassed) {
+    // Kept: near the identity, as the stage is decoupled.
+    for (int i = 0; i < kCouplingMatrixSize; ++i) {
+      DOUBLES_EQUAL(i % (kAxisCount + 1) == 0 ? 1.0 : 0.0, c.config().coupling.matrix[i], 0.05);
+    }
+  } else {
+    // Nothing to remove: the verification cannot halve noise, and nothing is kept.
+    CHECK(r == CouplingCalibrationResult::kFailedVerification);
+    CHECK(same_value_bytes(before, c.config().coupling));
+  }
+}

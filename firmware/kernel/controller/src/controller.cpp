@@ -51,6 +51,7 @@ KernelConfig default_kernel_config() {
   c.antiwindup = true;
   for (float& j : c.payload_inertia_kgm2) j = 0.0f;
   c.excitation = ExcitationLimits{};
+  c.coupling = CouplingCorrection{};  // off: the allocation as designed
   return c;
 }
 
@@ -139,6 +140,14 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
     // Acceleration feed-forward, eq (22) inverted: U = (m or I) a / (2 b*), A per SI acceleration.
     scratch.inertia_over_two_b_star[a] = inertia[a] / two_b_star;
   }
+  // Coupling correction: finite, near the identity (scaled by the radii of gyration).
+  {
+    float radius[kAxisCount];
+    for (int a = 0; a < kAxisCount; ++a) {
+      radius[a] = static_cast<float>(std::sqrt(scratch.inertia_over_two_b_star[a] / scratch.inertia_over_two_b_star[0]));
+    }
+    if (!correction_valid(c.coupling, radius)) return refuse(ConfigError::kCouplingCorrection);
+  }
   // Reference limits: inside the supervisor window, positive rates.
   const ReferenceLimits& r = c.references;
   const SupervisorConfig& sv = c.supervisor;
@@ -179,7 +188,8 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
                              same_bytes(c.sequencer, config_.sequencer) &&
                              same_bytes(c.supervisor, config_.supervisor) &&
                              c.payload_mass_kg == config_.payload_mass_kg &&
-                             same_bytes(c.payload_inertia_kgm2, config_.payload_inertia_kgm2);
+                             same_bytes(c.payload_inertia_kgm2, config_.payload_inertia_kgm2) &&
+                             same_bytes(c.coupling, config_.coupling);
     if (!locked_same) return refuse(ConfigError::kLockedWhileLevitated);
     bool gains_same = true;
     for (int a = 0; a < kAxisCount; ++a) gains_same = gains_same && same_bytes(c.axis[a], config_.axis[a]);
@@ -207,6 +217,7 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
   if (!same_bytes(c.measurement, config_.measurement) || !s2p_.lsb_den) s2p_ = s2p_scratch;
   active_ = 1 - active_;
   config_ = c;
+  ramp_.left = 0;  // on rest (or unchanged): no ramp needed
   // A live loop-type switch hands the effort over (approximately bumpless):
   // the new loop's integral state starts at the old loop's last output.
   for (int a = 0; a < kAxisCount; ++a) {
@@ -246,6 +257,11 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
     }
     return CommandResult::kRefusedBusy;
   };
+  // Any other command interrupts a running calibration (nothing is kept).
+  if (cal_.running && cmd.type != MotionType::kCalibrateCoupling) {
+    finish_calibration(CouplingCalibrationResult::kAbandonedInterrupted, true);
+  }
+  if (cmd.type == MotionType::kCalibrateCoupling) return start_calibration();
   switch (cmd.type) {
     case MotionType::kHome: return seq(SequencerCommand::kHome);
     case MotionType::kLevitate: return seq(SequencerCommand::kLevitate);
@@ -410,6 +426,162 @@ CommandResult Controller<Scalar>::start_excitation(const MotionCommand& cmd) {
   return CommandResult::kAccepted;
 }
 
+// ---- cross-coupling calibration (issue 15; coupling_calibration.hpp) ------
+
+template <typename Scalar>
+void Controller<Scalar>::radii(float r[kAxisCount]) const {
+  const Applied& ap = applied_[active_];
+  for (int a = 0; a < kAxisCount; ++a) {
+    r[a] = static_cast<float>(std::sqrt(ap.inertia_over_two_b_star[a] / ap.inertia_over_two_b_star[0]));
+  }
+}
+
+template <typename Scalar>
+CommandResult Controller<Scalar>::start_calibration() {
+  if (cal_.running) return CommandResult::kRefusedBusy;
+  const SequencerOutput& so = sequencer_.output();
+  if (so.state != SequencerState::kReady || !so.motion_allowed) {
+    status_.calibration_result = CouplingCalibrationResult::kRefusedNotReady;
+    return CommandResult::kRefusedNotReady;
+  }
+  if (motion_active()) {
+    status_.calibration_result = CouplingCalibrationResult::kRefusedBusy;
+    return CommandResult::kRefusedBusy;
+  }
+  const CouplingCalibrationConfig& k = calibration_config_;
+  const double fs = static_cast<double>(config_.servo_rate_Hz);
+  const double f0 = static_cast<double>(k.fundamental_Hz);
+  bool ok = f0 > 0.0 && f0 * kCouplingLines <= static_cast<double>(config_.excitation.max_frequency_Hz) &&
+            k.periods >= 1 && k.settle_s >= 0.0f;
+  for (float a : k.amplitude_A) ok = ok && a > 0.0f && a <= config_.excitation.max_amplitude_A;
+  if (!ok) return CommandResult::kRefusedExcitation;
+  Calibration c;
+  c.running = true;
+  c.increment = static_cast<std::uint32_t>(std::llround(f0 / fs * 4294967296.0));
+  const double f0_q = static_cast<double>(c.increment) * fs / 4294967296.0;  // as generated
+  c.settle_ticks = static_cast<std::uint32_t>(std::llround(static_cast<double>(k.settle_s) * fs));
+  c.window_ticks = static_cast<std::uint32_t>(std::llround(static_cast<double>(k.periods) * fs / f0_q));
+  c.previous = config_.coupling;
+  cal_ = c;
+  identifier_.reset();
+  status_.calibration_result = CouplingCalibrationResult::kRunning;
+  status_.calibration_experiment = 0;
+  return CommandResult::kAccepted;
+}
+
+template <typename Scalar>
+void Controller<Scalar>::set_coupling(const CouplingCorrection& next) {
+  // Ramp from what acts now (identity when off) to next.
+  for (int e = 0; e < kCouplingMatrixSize; ++e) {
+    ramp_.from[e] = config_.coupling.enabled ? config_.coupling.matrix[e] : identity_entry(e);
+  }
+  ramp_.left = kCouplingRampTicks;
+  config_.coupling = next;
+}
+
+template <typename Scalar>
+void Controller<Scalar>::finish_calibration(CouplingCalibrationResult r, bool restore) {
+  if (restore && !same_value_bytes(config_.coupling, cal_.previous)) {
+    // The old correction comes back; ramped unless the stage is going down anyway.
+    set_coupling(cal_.previous);
+    if (!sequencer_.output().motion_allowed) ramp_.left = 0;
+  }
+  cal_.running = false;
+  excitation_.active = false;
+  status_.calibration_result = r;
+}
+
+// Before excite(): abandon on a fault / state change, else start experiment
+// j's excitation (the kernel's multisine, f0..4 f0, axis j's amplitude).
+template <typename Scalar>
+void Controller<Scalar>::calibrate(Tick& t) {
+  if (!cal_.running) return;
+  if (!t.so->motion_allowed || t.so->state != SequencerState::kReady) {
+    finish_calibration(CouplingCalibrationResult::kAbandonedFault, true);
+    return;
+  }
+  const int j = cal_.experiment % kAxisCount;
+  if (cal_.tick == 0) {
+    MotionCommand ex;
+    ex.type = MotionType::kExcite;
+    ex.axis = static_cast<Axis>(j);
+    ex.amplitude = static_cast<double>(calibration_config_.amplitude_A[j]);
+    ex.frequency_Hz = static_cast<double>(calibration_config_.fundamental_Hz);
+    ex.harmonics = static_cast<std::uint8_t>(kCouplingLines);
+    ex.duration_s = 0.0;
+    if (start_excitation(ex) != CommandResult::kAccepted) {
+      finish_calibration(CouplingCalibrationResult::kAbandonedInterrupted, true);
+      return;
+    }
+  } else if (!excitation_.active) {
+    finish_calibration(CouplingCalibrationResult::kAbandonedInterrupted, true);
+  }
+}
+
+// After the axis loops: DFT of U (what goes into the allocation, d included)
+// and of Y (pose since the window's start) at the lines; closes experiments.
+template <typename Scalar>
+void Controller<Scalar>::calibration_accumulate() {
+  if (!cal_.running) return;
+  const int j = cal_.experiment % kAxisCount;
+  if (cal_.tick == cal_.settle_ticks) {
+    cal_.start = measured_;
+    cal_.phase = 0;
+  }
+  if (cal_.tick >= cal_.settle_ticks) {
+    float y[kAxisCount];
+    for (int a = 0; a < kAxisCount; ++a) y[a] = pico_to_si(measured_.pico[a] - cal_.start.pico[a]);
+    identifier_.accumulate(cal_.phase, calib_effort_, y);
+    cal_.phase += cal_.increment;
+  }
+  ++cal_.tick;
+  if (cal_.tick < cal_.settle_ticks + cal_.window_ticks) return;
+  identifier_.finish_experiment(j);
+  cal_.tick = 0;
+  ++cal_.experiment;
+  status_.calibration_experiment = static_cast<std::uint8_t>(cal_.experiment);
+  if (cal_.experiment != kAxisCount && cal_.experiment != 2 * kAxisCount) return;
+  float radius[kAxisCount];
+  radii(radius);
+  float r[kCouplingMatrixSize];
+  float coupling = 0.0f, spread = 0.0f;
+  CouplingCalibrationResult res = identifier_.solve(radius, r, &coupling, &spread);
+  identifier_.reset();
+  if (cal_.experiment == kAxisCount) {
+    // Identification done: check, then verify with the candidate applied.
+    status_.calibration_coupling_before = coupling;
+    status_.calibration_inconsistency = spread;
+    if (res == CouplingCalibrationResult::kPassed && spread > calibration_config_.max_inconsistency) {
+      res = CouplingCalibrationResult::kFailedInconsistent;
+    }
+    CouplingCorrection next;
+    next.enabled = 1;
+    if (res == CouplingCalibrationResult::kPassed) {
+      CouplingCorrection old = config_.coupling;
+      if (!old.enabled) old = CouplingCorrection{};
+      res = correction_from(r, old.matrix, radius, calibration_config_, next.matrix);
+    }
+    if (res != CouplingCalibrationResult::kPassed) {
+      finish_calibration(res, false);
+      return;
+    }
+    set_coupling(next);
+    // The verification's first settle also covers the ramp.
+    cal_.tick = 0;
+    if (cal_.settle_ticks < kCouplingRampTicks) {
+      cal_.settle_ticks = kCouplingRampTicks + cal_.settle_ticks;
+    }
+    return;
+  }
+  // Verification done: the coupling with C applied must have dropped.
+  status_.calibration_coupling_after = coupling;
+  if (res == CouplingCalibrationResult::kPassed &&
+      !(coupling * calibration_config_.min_improvement <= status_.calibration_coupling_before)) {
+    res = CouplingCalibrationResult::kFailedVerification;
+  }
+  finish_calibration(res, res != CouplingCalibrationResult::kPassed);
+}
+
 template <typename Scalar>
 AxisLoop<Scalar> Controller<Scalar>::loop(int a) {
   const Applied& ap = applied_[active_];
@@ -425,9 +597,11 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   home(sample, t);
   sequence(t);
   advance_references(t);
+  calibrate(t);
   excite(t);
   run_axis_loops(t);
   allocate_forces(t);
+  calibration_accumulate();
   const io::ActuatorCommand cmd = coil_currents_to_dac(t);
   publish_status(t, cmd.amplifier_enable);
   return cmd;
@@ -652,7 +826,35 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
 template <typename Scalar>
 void Controller<Scalar>::allocate_forces(Tick& t) {
   const Applied& ap = applied_[active_];
-  AllocateCurrents<Scalar>(t.effort, measured_.pico[0], measured_.pico[1], ap.allocation, &t.out);
+  // Cross-coupling correction U' = C U (issue 15): only when one is set or
+  // ramping, so the default kernel's arithmetic is untouched.
+  const bool coupled = config_.coupling.enabled != 0 || ramp_.left != 0;
+  status_.coupling_correction_active = coupled;
+  if (cal_.running) {
+    for (int a = 0; a < kAxisCount; ++a) calib_effort_[a] = Traits::to_float(t.effort[a]);
+  }
+  if (!coupled) {
+    AllocateCurrents<Scalar>(t.effort, measured_.pico[0], measured_.pico[1], ap.allocation, &t.out);
+  } else {
+    float c[kCouplingMatrixSize];
+    const float w = static_cast<float>(ramp_.left) / static_cast<float>(kCouplingRampTicks);  // weight of `from`
+    for (int e = 0; e < kCouplingMatrixSize; ++e) {
+      const float to = config_.coupling.enabled ? config_.coupling.matrix[e] : identity_entry(e);
+      c[e] = to + w * (ramp_.from[e] - to);
+    }
+    if (ramp_.left != 0) --ramp_.left;
+    float u[kAxisCount];
+    for (int a = 0; a < kAxisCount; ++a) u[a] = Traits::to_float(t.effort[a]);
+    Scalar corrected[kAxisCount];
+    for (int i = 0; i < kAxisCount; ++i) {
+      float s = 0.0f;
+      for (int j = 0; j < kAxisCount; ++j) s += c[i * kAxisCount + j] * u[j];
+      corrected[i] = Traits::from_float(s);
+    }
+    AllocateCurrents<Scalar>(corrected, measured_.pico[0], measured_.pico[1], ap.allocation, &t.out);
+    // The loops' anti-windup works in uncorrected efforts: what they got is k U.
+    for (int a = 0; a < kAxisCount; ++a) t.out.applied_effort_A[a] = t.out.scale_k * t.effort[a];
+  }
   for (int a = 0; a < kAxisCount; ++a) {
     AxisLoop<Scalar> l = loop(a);
     const bool closed = (t.so->closed_axes & (1u << a)) != 0;

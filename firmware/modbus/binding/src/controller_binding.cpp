@@ -207,6 +207,10 @@ double ControllerDevice<Scalar>::read_status(RegId id) const {
     case RegId::status_config_error: return static_cast<double>(st.last_config_error);
     case RegId::status_scale_k: return static_cast<double>(st.scale_k);
     case RegId::status_profile_error: return static_cast<double>(controller_.stage_profile_error());
+    case RegId::status_calibration: return static_cast<double>(st.calibration_result);
+    case RegId::status_calibration_step: return static_cast<double>(st.calibration_experiment);
+    case RegId::status_coupling_before: return static_cast<double>(st.calibration_coupling_before);
+    case RegId::status_coupling_after: return static_cast<double>(st.calibration_coupling_after);
     default: return 0.0;
   }
 }
@@ -246,6 +250,7 @@ std::uint16_t ControllerDevice<Scalar>::command(std::uint16_t code, std::uint16_
   can::HostCommandFrame h{};
   switch (c) {
     case C::kHome: case C::kLevitate: case C::kLand: case C::kStop: case C::kClearFault: case C::kHold:
+    case C::kCalibrateCoupling:
       h = can::make_host_command(c, 0, ax);
       break;
     case C::kStep:
@@ -276,6 +281,19 @@ bool ControllerDevice<Scalar>::save_config(const ConfigImage& config) {
   const bool ok = store_->save(config);
   boot_status_ = store_->status();
   return ok;
+}
+
+// The coupling correction is the one configuration the kernel writes itself
+// (a passed calibration): the image takes the kernel's values.
+template <typename Scalar>
+void ControllerDevice<Scalar>::sync_config(ConfigImage& config) {
+  const kernel::KernelConfig& cfg = controller_.config();
+  for (std::size_t s = 0; s < kPersistedCount; ++s) {
+    const RegisterDef& d = persisted_def(s);
+    if (d.id < RegId::coupling_enabled || d.id > RegId::coupling_theta_y_theta_y) continue;
+    double v = 0.0;
+    if (get_config_field(cfg, d.id, &v)) config.raw[s] = encode(d.type, v);
+  }
 }
 
 template <typename Scalar>

@@ -161,6 +161,11 @@ class GuardedDevice final : public modbus::Device {
     return ok;
   }
   modbus::PersistStatus persist_status() const override { return inner_.persist_status(); }
+  void sync_config(modbus::ConfigImage& config) override {
+    enter();
+    inner_.sync_config(config);
+    exit();
+  }
 
   std::uint32_t saves = 0;
 

@@ -37,8 +37,9 @@ enum class HostCommandCode : std::uint8_t {
   kExcite = 14,
   kStopExcitation = 15,
   kShutdown = 16,
+  kCalibrateCoupling = 17,
 };
-inline constexpr std::uint8_t kHostCommandCodeMax = 16;
+inline constexpr std::uint8_t kHostCommandCodeMax = 17;
 inline constexpr std::size_t kHostCommandMaxFields = 5;
 
 // What a field measures, so every parser applies the same unit rule. The
@@ -264,6 +265,7 @@ inline constexpr std::array<HostCommandSpec, kHostCommandCodeMax> kHostCommandSp
     host_command_detail::spec<ExciteArgs>(HostCommandCode::kExcite, "excite_effort", true, "kernel effort excitation (multisine)"),
     host_command_detail::spec<NoArgs>(HostCommandCode::kStopExcitation, "stop_excitation", true, "end the effort excitation"),
     host_command_detail::spec<NoArgs>(HostCommandCode::kShutdown, "shutdown", false, "bench controller node: acknowledge and stop"),
+    host_command_detail::spec<NoArgs>(HostCommandCode::kCalibrateCoupling, "calibrate_coupling", false, "identify and correct the 6x6 effort coupling (Ready, ~30 s)"),
 }};
 
 constexpr bool host_command_specs_consistent() {

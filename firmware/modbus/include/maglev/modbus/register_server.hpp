@@ -61,6 +61,10 @@ class Device {
   // Persist `config`; false when flash failed.
   virtual bool save_config(const ConfigImage& config) = 0;
   virtual PersistStatus persist_status() const = 0;
+  // Entries the device changed by itself since (the kernel's coupling
+  // calibration writes its correction): copied into `config` before every
+  // request, so reads, writes and config.save see them. Default: none.
+  virtual void sync_config(ConfigImage& /*config*/) {}
 
  protected:
   Device() = default;
@@ -125,6 +129,9 @@ class RegisterServer {
   bool live_tuning() const { return live_tuning_; }
   // The configuration now matches what flash holds (after load or save).
   void mark_saved() { saved_ = config_; }
+  // Takes in what the device changed by itself (Device::sync_config);
+  // handle_pdu does it before every request, direct callers before theirs.
+  void sync() { device_.sync_config(config_); }
   // The lab tools serving the kLab registers (nullptr: none, 02).
   void set_lab_tools(LabTools* lab) { lab_ = lab; }
 

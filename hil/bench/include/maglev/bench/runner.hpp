@@ -46,6 +46,9 @@ struct RunOptions {
   // Non-empty: run() writes every frame on the bus to this file as a candump
   // log (candump_log.hpp), stamped with the tick's simulated time.
   std::string can_log;
+  // --calibrate: a coupling correction loaded into the kernel's configuration
+  // before the run (as from the persisted configuration at boot); nullopt: none.
+  std::optional<kernel::CouplingCorrection> coupling;
 };
 
 // The recorded time series: one row per servo tick (SI units). Every
@@ -91,6 +94,8 @@ struct RunResult {
   std::string final_state;
   std::string fault;
   bool completed = false;  // ran to duration_s without a link/controller failure
+  // The kernel's coupling correction at the end (what a calibration stored).
+  kernel::CouplingCorrection coupling{};
 };
 
 // Runs one scenario. Errors in the scenario come back in *errors (nothing ran).

@@ -18,6 +18,7 @@
 #include "maglev/io/axis.hpp"
 #include "maglev/axis_loops/axis_loop.hpp"
 #include "maglev/axis_loops/defaults.hpp"
+#include "maglev/coupling_calibration/coupling_calibration.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
 #include "maglev/io/actuator_command.hpp"
 #include "maglev/io/sensor_sample.hpp"
@@ -94,6 +95,11 @@ struct KernelConfig {
   // Payload inertia about the platen CoM axes z, x, y (kg m^2), added to Iz, Ix, Iy.
   float payload_inertia_kgm2[3];
   ExcitationLimits excitation;
+  // --- issue 15: the cross-coupling correction U' = C U applied before the
+  // force allocation (firmware/kernel/coupling_calibration). Off by default;
+  // written by the kernel's own calibration (kCalibrateCoupling) or loaded
+  // from the persisted configuration; locked while levitated.
+  CouplingCorrection coupling;
 };
 
 KernelConfig default_kernel_config();
@@ -146,7 +152,8 @@ inline bool same_config(const KernelConfig& a, const KernelConfig& b) { return s
   X(kLockedWhileLevitated, 10, "LockedWhileLevitated")  /* an unsafe-to-change field differs while not on rest */ \
   X(kGainsLockedWhileLevitated, 11, "GainsLockedWhileLevitated")  /* gains differ while levitated and live_tuning is off */ \
   X(kUnstableLoop, 12, "UnstableLoop")  /* the loop check finds a PID loop without crossover, phase margin or delay margin (config_axis) */ \
-  X(kGainStepTooLarge, 13, "GainStepTooLarge")  /* live tuning: a PID gain (kp, ki, kd) moved by more than kMaxLiveGainStep in one write (config_axis) */
+  X(kGainStepTooLarge, 13, "GainStepTooLarge")  /* live tuning: a PID gain (kp, ki, kd) moved by more than kMaxLiveGainStep in one write (config_axis) */ \
+  X(kCouplingCorrection, 14, "CouplingCorrection")  /* coupling correction not finite, reserved bytes set or beyond kMaxCorrectionMagnitude */
 
 enum class ConfigError : std::uint8_t {
   MAGLEV_CONFIG_ERRORS(MAGLEV_ENUMERATOR)
@@ -178,6 +185,9 @@ enum class MotionType : std::uint8_t {
   // each amplitude/N), duration_s (0 = until kStopExcitation / kHold).
   kExcite,
   kStopExcitation,
+  // Cross-coupling calibration (issue 15): Ready, nothing else moving; runs
+  // ~30 s (12 excitations), see CouplingCalibrationConfig.
+  kCalibrateCoupling,
 };
 
 struct MotionCommand {
@@ -260,6 +270,13 @@ struct ControllerStatus {
   bool injection_at_reference = false;
   std::uint8_t injection_axis = 0;
   float reference_injection = 0.0f;  // m or rad, added to that axis loop's reference
+  // --- issue 15: the coupling calibration (last result / reason, progress) ---
+  CouplingCalibrationResult calibration_result = CouplingCalibrationResult::kNone;
+  std::uint8_t calibration_experiment = 0;  // 0-5 identification, 6-11 verification
+  float calibration_coupling_before = 0.0f;  // max scaled off-diagonal of R, identification
+  float calibration_coupling_after = 0.0f;   // the same with the new C applied (verification)
+  float calibration_inconsistency = 0.0f;    // max line spread of R (scaled)
+  bool coupling_correction_active = false;   // a correction (or its ramp) acts this tick
 };
 
 template <typename Scalar>
@@ -286,6 +303,9 @@ class Controller {
   void set_injection(const Injection& injection) { injection_ = injection; }
   const Injection& injection() const { return injection_; }
   std::uint8_t stage_profile_error() const { return stage_profile_error_; }
+  // The calibration's excitation and checks (not persisted; defaults documented there).
+  void set_calibration_config(const CouplingCalibrationConfig& c) { calibration_config_ = c; }
+  const CouplingCalibrationConfig& calibration_config() const { return calibration_config_; }
 
  private:
   // The generator driving an axis (firmware/kernel/references), sampled at
@@ -312,6 +332,25 @@ class Controller {
     Scalar amplitude[kMaxExcitationHarmonics] = {};
     std::uint32_t tick = 0;
     std::uint32_t duration_ticks = 0;  // 0: until stopped
+  };
+  // The running calibration (CouplingIdentifier holds the DFTs).
+  struct Calibration {
+    bool running = false;
+    int experiment = 0;            // 0-5 identify axis j, 6-11 verify axis j - 6
+    std::uint32_t tick = 0;        // within the experiment
+    std::uint32_t settle_ticks = 0;
+    std::uint32_t window_ticks = 0;
+    std::uint32_t increment = 0;   // the fundamental's phase increment
+    std::uint32_t phase = 0;       // DFT reference phase (0 at the window's start)
+    Pose64 start{};                // pose at the window's start
+    CouplingCorrection previous{};  // restored when the calibration fails
+  };
+  // Correction ramp: the applied matrix moves from `from` to config_.coupling
+  // over kCouplingRampTicks, so switching it while levitated is no effort step.
+  static constexpr std::uint32_t kCouplingRampTicks = 1250;  // 0.5 s at 2.5 kHz
+  struct CouplingRamp {
+    std::uint32_t left = 0;
+    float from[kCouplingMatrixSize] = {};
   };
   // Axis a's loop, whichever type the config selected (AxisLoop dispatches).
   AxisLoop<Scalar> loop(int a);
@@ -355,6 +394,12 @@ class Controller {
   AxisReferenceLimits axis_limits(int a) const;
   void cancel_profile(int a);
   CommandResult start_excitation(const MotionCommand& cmd);
+  CommandResult start_calibration();
+  void calibrate(Tick& t);            // before excite(): aborts, starts each experiment
+  void calibration_accumulate();      // after the loops: the DFTs of U and Y
+  void finish_calibration(CouplingCalibrationResult r, bool restore);
+  void set_coupling(const CouplingCorrection& c);  // with the ramp
+  void radii(float r[kAxisCount]) const;
 
   KernelConfig config_{};
   Applied applied_[2]{};
@@ -385,6 +430,11 @@ class Controller {
   std::uint32_t homing_ticks_ = 0;
   std::uint32_t homing_needed_ticks_ = 1;
   ControllerStatus status_{};
+  CouplingCalibrationConfig calibration_config_{};
+  Calibration cal_{};
+  CouplingIdentifier identifier_{};
+  CouplingRamp ramp_{};
+  float calib_effort_[kAxisCount] = {};  // this tick's U (float) for the DFT
 };
 
 extern template class Controller<float>;

@@ -51,6 +51,7 @@ class ControllerDevice final : public Device {
   std::uint16_t command(std::uint16_t code, std::uint16_t axis, float value) override;
   bool save_config(const ConfigImage& config) override;
   PersistStatus persist_status() const override;
+  void sync_config(ConfigImage& config) override;
 
  private:
   kernel::Controller<Scalar>& controller_;
