@@ -358,7 +358,7 @@ TEST_GROUP(SignalLayout){};
 
 TEST(SignalLayout, WordWiseReadWriteEqualsTheBitwiseDefinition) {
   std::mt19937_64 rng(7);
-  auto bit_of = [](const std::uint8_t* d, std::uint32_t b) { return (d[b / 8u] >> (b % 8u)) & 1u; };
+  auto bit_of = [](const std::uint8_t* d, std::uint32_t b) { return (static_cast<unsigned>(d[b / 8u]) >> (b % 8u)) & 1u; };
   std::uint8_t lengths[33];
   for (std::uint8_t l = 1; l <= 32; ++l) lengths[l - 1] = l;
   lengths[32] = 64;
