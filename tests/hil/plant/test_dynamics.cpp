@@ -285,13 +285,14 @@ TEST(PlantDynamics, PayloadAddsMassAndInertia) {
 // sub-steps (the reference); printed: fast / classic at 2 sub-steps (the
 // integrator before) / classic at 1 sub-step, pm and nrad. Amperes per coil
 // in one tick: fast is closer to the reference on every axis. A 50 mA step
-// (the size of the default scenario's 8 um step per tick): within 1 pm /
+// (the default scenario's largest is 0.12 A, at its 8 um step): within 1 pm /
 // 1 nrad and closer than classic on x, y and the angles; z is not asserted:
-// in this state (not at equilibrium: z moves 0.65 um in the tick) the
-// suspension damper sees RK4's stage velocities, which fast's non-physical
-// stage currents move, and fast is 0.9 nm off against classic's 0.12 nm
-// (docs/PERFORMANCE.md; along the default scenario's own trajectory fast's
-// one-tick z error is the smaller one, plant-integrator-accuracy).
+// this state is far from equilibrium (the currents do not hold the platen: z
+// falls 0.65 um in the tick, where the suspension damper's rate c/m =
+// 1187 1/s matters at h = 400 us) and fast is 0.9 nm off against classic's
+// 0.12 nm. Along the default scenario's own trajectory fast's one-tick z
+// error is the smaller one (8 pm against 20 pm levitated,
+// plant-integrator-accuracy, docs/PERFORMANCE.md).
 TEST(PlantDynamics, FastIntegratorMatchesAFineReferenceOverOneTick) {
   using Method = maglev::hil::IntegrationConfig::Method;
   PlantConfig c = PlantConfig::Default();
