@@ -189,10 +189,14 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       if (v == "fast") p.integration.method = hil::IntegrationConfig::Method::kFast;
       else if (v == "classic") p.integration.method = hil::IntegrationConfig::Method::kClassic;
       else fail("[plant] integrator = " + v + ": expected fast or classic");
+    } else if (k == "noise_generator") {
+      if (v == "ziggurat") p.noise_generator = hil::NormalMethod::kZiggurat;
+      else if (v == "polar") p.noise_generator = hil::NormalMethod::kPolar;
+      else fail("[plant] noise_generator = " + v + ": expected ziggurat or polar");
     } else {
       plant_fail(k, "unknown key (model, noise, error_seed, error_scale, an error term of docs/PLANT.md, payload_kg, "
                     "current_noise_scale, current_noise_density_A_per_rtHz, interferometer_noise_m, displacement_noise_m, "
-                    "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick, integrator)");
+                    "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick, integrator, noise_generator)");
     }
   }
   if (o->plant_model == hil::PlantModel::kAsBuilt) {

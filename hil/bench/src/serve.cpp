@@ -161,6 +161,10 @@ bool plant_overrides(const scenario::Scenario& sc, hil::PlantConfig* p, std::uin
       ok = v == "fast" || v == "classic";
       if (ok) p->integration.method = v == "fast" ? hil::IntegrationConfig::Method::kFast : hil::IntegrationConfig::Method::kClassic;
       else *err = sc.source + ": [plant] integrator: expected fast or classic";
+    } else if (k == "noise_generator") {
+      ok = v == "ziggurat" || v == "polar";
+      if (ok) p->noise_generator = v == "ziggurat" ? hil::NormalMethod::kZiggurat : hil::NormalMethod::kPolar;
+      else *err = sc.source + ": [plant] noise_generator: expected ziggurat or polar";
     } else {
       *err = sc.source + ": [plant] unknown key '" + k + "'";
       return false;

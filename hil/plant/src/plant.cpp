@@ -94,7 +94,7 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
     : config_(config),
       field_(FieldOf(config)),
       amplifiers_(config.amplifier),
-      rng_(seed),
+      rng_(seed, config.noise_generator),
       mass_(config.body.mass_kg + config.body.payload_kg),
       tick_s_(1.0 / config.integration.servo_rate_Hz),
       side_force_per_A_(config.field.coil_turns * config.field.coil_effective_length_m),

@@ -13,6 +13,7 @@
 
 #include "maglev/io/sensor_sample.hpp"
 #include "maglev/io/stage_parameters.hpp"
+#include "maglev/plant/rng.hpp"
 
 namespace maglev::hil {
 
@@ -261,6 +262,10 @@ struct PlantConfig {
   InitialState initial;
   AsBuiltConfig as_built;
   bool sensor_noise_enabled = true;
+  // How the noise's normal draws are made (rng.hpp; `[plant] noise_generator`):
+  // kZiggurat (issue 16, 4x cheaper) or kPolar (std::normal_distribution,
+  // the realization of every seed before; the pinned pre-issue-15 digests).
+  NormalMethod noise_generator = NormalMethod::kZiggurat;
 
   // The bench default: ideal + small realistic imperfections (docs/PLANT.md).
   static PlantConfig Default();
