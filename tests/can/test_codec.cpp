@@ -1,4 +1,5 @@
 // Codec, E2E and receiver tests: round trips, every rejection path, counter wrap.
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -395,4 +396,56 @@ TEST(SignalLayout, WordWiseReadWriteEqualsTheBitwiseDefinition) {
     }
   }
   CHECK(checked > 30000);
+}
+
+// check_frame skips the range check of signals whose every raw value is in
+// range (codec.cpp, range_checked_signals); it must decide every frame as
+// check_frame_all_signals does. Per catalog message: frames whose signals
+// take random raw values of their full width, and frames with one signal
+// at each end of its width (the rest random), all with a valid CRC.
+TEST(SignalLayout, SkippedRangeChecksDecideAsCheckingEverySignal) {
+  std::mt19937_64 rng(11);
+  int frames = 0, out_of_range = 0, skipped = 0;
+  for (const Message& m : kCatalog) {
+    const std::uint64_t checked = range_checked_signals(m);
+    for (std::size_t i = 0; i < m.signal_count; ++i) skipped += ((checked >> i) & 1u) == 0;
+    auto random_raw = [&](const Signal& s) -> std::int64_t {
+      if (s.is_float64) return static_cast<std::int64_t>(rng());
+      const std::uint64_t v = rng() & ((std::uint64_t{1} << s.length_bits) - 1u);
+      if (s.is_signed && ((v >> (s.length_bits - 1u)) & 1u) != 0) return static_cast<std::int64_t>(v | (~std::uint64_t{0} << s.length_bits));
+      return static_cast<std::int64_t>(v);
+    };
+    auto check = [&](const std::int64_t* raw) {
+      CanFrame f{};
+      encode_raw(m, raw, static_cast<std::uint8_t>(raw[1]), f);
+      const Message* a = nullptr;
+      const Message* b = nullptr;
+      const RxStatus fast = check_frame(f, nullptr, &a);
+      const RxStatus all = check_frame_all_signals(f, nullptr, &b);
+      CHECK(fast == all);
+      CHECK(a == b);
+      ++frames;
+      out_of_range += all == RxStatus::kOutOfRange;
+    };
+    std::int64_t raw[64] = {};
+    for (int n = 0; n < 2000; ++n) {
+      for (std::size_t i = 0; i < m.signal_count; ++i) raw[i] = random_raw(m.signals[i]);
+      check(raw);
+    }
+    for (std::size_t j = 2; j < m.signal_count; ++j) {  // 0, 1: CRC and counter
+      const Signal& s = m.signals[j];
+      if (s.is_float64) continue;
+      const std::int64_t lo = s.is_signed ? -(std::int64_t{1} << (s.length_bits - 1u)) : 0;
+      const std::int64_t hi = s.is_signed ? (std::int64_t{1} << (s.length_bits - 1u)) - 1
+                                          : static_cast<std::int64_t>((std::uint64_t{1} << s.length_bits) - 1u);
+      for (std::int64_t v : {lo, lo + 1, hi - 1, hi}) {
+        for (std::size_t i = 0; i < m.signal_count; ++i) raw[i] = random_raw(m.signals[i]);
+        raw[j] = v;
+        check(raw);
+      }
+    }
+  }
+  std::printf("\n  %d frames (%d out of range), %d signals' range checks skipped", frames, out_of_range, skipped);
+  CHECK(skipped > 0);
+  CHECK(out_of_range > 0);
 }

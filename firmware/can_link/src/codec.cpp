@@ -1,5 +1,6 @@
 #include "maglev/can_link/codec.hpp"
 
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -170,7 +171,55 @@ bool raw_in_range(const Signal& s, std::int64_t raw) {
 }
 }  // namespace
 
-RxStatus check_frame(const CanFrame& frame, const Message* expected, const Message** found) {
+namespace {
+// Bit i set: signal i of catalog message k can carry a raw value outside its
+// range, so check_frame reads and checks it in every frame. raw_in_range is
+// monotone in raw for a fixed signal (raw -> double, * factor, + offset are
+// each monotone under round-to-nearest, fused or not), so its accepted set
+// is an interval of raw values: a signal whose smallest and largest raw
+// values both pass passes for every raw value of its width, and the check
+// is skipped with the same result. Evaluated with raw_in_range itself on
+// the first call (the target's own arithmetic, so bit for bit the same
+// decision), not from constants. float64 signals are always checked (NaN).
+constexpr bool every_message_fits_a_mask() {
+  for (const Message& m : kCatalog) {
+    if (m.signal_count > 64) return false;
+  }
+  return true;
+}
+static_assert(every_message_fits_a_mask(), "a message with more than 64 signals needs a wider mask");
+struct RangeCheckMasks {
+  std::array<std::uint64_t, kCatalog.size()> needs_check{};
+};
+RangeCheckMasks make_range_check_masks() {
+  RangeCheckMasks r{};
+  for (std::size_t k = 0; k < kCatalog.size(); ++k) {
+    const Message& m = kCatalog[k];
+    for (std::size_t i = 0; i < m.signal_count; ++i) {
+      const Signal& s = m.signals[i];
+      bool full = !s.is_float64 && s.length_bits < 64;
+      if (full) {
+        const std::int64_t lo = s.is_signed ? -(std::int64_t{1} << (s.length_bits - 1u)) : 0;
+        const std::int64_t hi = s.is_signed ? (std::int64_t{1} << (s.length_bits - 1u)) - 1
+                                            : static_cast<std::int64_t>((std::uint64_t{1} << s.length_bits) - 1u);
+        full = raw_in_range(s, lo) && raw_in_range(s, hi);
+      }
+      if (!full) r.needs_check[k] |= std::uint64_t{1} << i;
+    }
+  }
+  return r;
+}
+const RangeCheckMasks& range_check_masks() {
+  static const RangeCheckMasks masks = make_range_check_masks();
+  return masks;
+}
+}  // namespace
+
+std::uint64_t range_checked_signals(const Message& m) {
+  return range_check_masks().needs_check[static_cast<std::size_t>(&m - kCatalog.data())];
+}
+
+RxStatus check_frame_all_signals(const CanFrame& frame, const Message* expected, const Message** found) {
   if (found != nullptr) *found = nullptr;
   if ((frame.flags & (kFlagExtendedId | kFlagErrorFrame)) != 0) return RxStatus::kWrongFormat;
   const Message* m = find_message(frame.id);
@@ -180,6 +229,24 @@ RxStatus check_frame(const CanFrame& frame, const Message* expected, const Messa
   if (frame.len != m->length) return RxStatus::kWrongLength;
   if (!e2e_crc_ok(frame.data, m->length, m->data_id)) return RxStatus::kBadCrc;
   for (std::size_t i = 0; i < m->signal_count; ++i) {
+    const Signal& s = m->signals[i];
+    if (!raw_in_range(s, read_frame_signal(s, frame.data))) return RxStatus::kOutOfRange;
+  }
+  return RxStatus::kOk;
+}
+
+RxStatus check_frame(const CanFrame& frame, const Message* expected, const Message** found) {
+  if (found != nullptr) *found = nullptr;
+  if ((frame.flags & (kFlagExtendedId | kFlagErrorFrame)) != 0) return RxStatus::kWrongFormat;
+  const Message* m = find_message(frame.id);
+  if (m == nullptr || (expected != nullptr && m != expected)) return RxStatus::kUnknownId;
+  if (found != nullptr) *found = m;
+  if ((frame.flags & kFlagFd) == 0) return RxStatus::kWrongFormat;
+  if (frame.len != m->length) return RxStatus::kWrongLength;
+  if (!e2e_crc_ok(frame.data, m->length, m->data_id)) return RxStatus::kBadCrc;
+  // Only the signals whose width can hold an out-of-range value (above).
+  for (std::uint64_t left = range_checked_signals(*m); left != 0; left &= left - 1u) {
+    const auto i = static_cast<std::size_t>(std::countr_zero(left));
     const Signal& s = m->signals[i];
     if (!raw_in_range(s, read_frame_signal(s, frame.data))) return RxStatus::kOutOfRange;
   }

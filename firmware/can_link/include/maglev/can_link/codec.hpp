@@ -48,6 +48,12 @@ void encode_raw(const Message& m, const std::int64_t* raw, std::uint8_t counter,
 // message), FD format, length, CRC, signal ranges. No counter check
 // (that is LinkReceiver's job).
 RxStatus check_frame(const CanFrame& frame, const Message* expected, const Message** found);
+// check_frame with every signal's range checked in every frame: the
+// definition check_frame must equal (it skips the signals whose every raw
+// value is in range; can_codec_test compares the two).
+RxStatus check_frame_all_signals(const CanFrame& frame, const Message* expected, const Message** found);
+// Bit i set: check_frame checks signal i of m's range.
+std::uint64_t range_checked_signals(const Message& m);
 
 // ---- typed records ------------------------------------------------------------------
 struct SyncFrame {
