@@ -521,7 +521,8 @@ int main(int argc, char** argv) {
       if (!maglev::bench::in_suite(sc, suite_profile)) continue;
       maglev::bench::RunResult r;
       const int rc = run_one(sc, a, (fs::path(a.out) / sc.name()).string(), &r);
-      const double sim = static_cast<double>(r.ticks) / 2500.0;
+      const auto sim_it = r.metrics.find("simulated_time_s");  // ticks at the run's servo rate
+      const double sim = sim_it != r.metrics.end() ? sim_it->second : 0.0;
       rows.push_back({sc.name(), r.final_state, rc, r.real_time_factor, r.bus_load_percent, sim, r.wall_s});
       sim_total += sim;
       wall_total += r.wall_s;
