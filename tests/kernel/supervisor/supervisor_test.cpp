@@ -13,7 +13,7 @@ constexpr float kRate = 2500.0f;
 struct Rig {
   Supervisor sup;
   io::SensorSample sample{};
-  SupervisorInputs in;
+  SupervisorInputs in{};
   Rig() {
     SupervisorConfig c;
     CHECK(validate(c, kRate) == SupervisorConfigError::kOk);

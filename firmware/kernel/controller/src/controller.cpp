@@ -762,11 +762,15 @@ void Controller<Scalar>::excite(Tick& t) {
   if (ex.active && (!t.so->motion_allowed || (ex.duration_ticks != 0 && ex.tick >= ex.duration_ticks))) {
     ex.active = false;
   }
+  // The harmonic sum only while an excitation runs (its output is zero
+  // otherwise); the phases advance on every tick either way.
   Scalar d_sum = Traits::zero();
-  for (int k = 0; k < kMaxExcitationHarmonics; ++k) {
-    d_sum += ex.amplitude[k] * Traits::sin_cos(ex.phase[k]).sin;  // the kernel's table
-    ex.phase[k] += ex.increment[k];  // uint32 wrap = one turn
+  if (ex.active) {
+    for (int k = 0; k < kMaxExcitationHarmonics; ++k) {
+      d_sum += ex.amplitude[k] * Traits::sin_cos(ex.phase[k]).sin;  // the kernel's table
+    }
   }
+  for (int k = 0; k < kMaxExcitationHarmonics; ++k) ex.phase[k] += ex.increment[k];  // uint32 wrap = one turn
   for (int a = 0; a < kAxisCount; ++a) t.excitation[a] = (ex.active && a == ex.axis) ? d_sum : Traits::zero();
   ex.tick += ex.active ? 1u : 0u;
   // External injection (lab wave generator): same rule as kExcite (motion

@@ -252,7 +252,8 @@ void ReseedInterferometers(SensorsToPoseState* state) {
 
 PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseState* state) {
   SensorsToPoseState& s = *state;
-  PoseMeasurement out{};
+  PoseMeasurement out;  // every field is written below (no memset per tick)
+  out.beam_glitch = 0;
 
   // --- counters ----------------------------------------------------------------
   const bool seed = !s.seeded;

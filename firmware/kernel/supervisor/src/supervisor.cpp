@@ -14,13 +14,6 @@ constexpr std::int16_t kAdcRailHigh = 32767;
 constexpr std::int16_t kAdcRailLow = -32768;
 bool at_rail(std::int16_t code) { return code >= kAdcRailHigh || code <= kAdcRailLow; }
 
-// A check that tripped this tick. Evaluated in priority order: the most
-// fundamental cause first (a lost beam also produces a following error).
-struct Trip {
-  FaultCode code = FaultCode::kNone;
-  std::uint8_t axis = kNoAxis;
-  float value = 0.0f;
-};
 
 // A run counter of consecutive ticks a condition held (saturating).
 std::uint16_t next_run(bool holds, std::uint16_t run) {
@@ -35,15 +28,6 @@ bool same_sample(const io::SensorSample& a, const io::SensorSample& b) {
   for (int k = 0; k < io::kHallChannels; ++k) same = same && a.hall_adc[k] == b.hall_adc[k];
   for (int k = 0; k < io::kCoils; ++k) same = same && a.coil_current_adc[k] == b.coil_current_adc[k];
   return same;
-}
-
-void note(Trip& t, bool tripped, FaultCode code, std::uint8_t axis, float value) {
-  // Branch-light: every check is computed; only the first tripping one is kept.
-  if (tripped && t.code == FaultCode::kNone) {
-    t.code = code;
-    t.axis = axis;
-    t.value = value;
-  }
 }
 
 }  // namespace
@@ -107,129 +91,113 @@ void Supervisor::reset() {
   for (float& v : i2_filtered_) v = 0.0f;
 }
 
+void Supervisor::note(Trip& t, bool tripped, FaultCode code, std::uint8_t axis, float value) {
+  if (tripped && t.code == FaultCode::kNone) {
+    t.code = code;
+    t.axis = axis;
+    t.value = value;
+  }
+}
+
+// Every check's outcome of one tick, one bit per check instance (axis, beam,
+// sensor or coil). Computed in one pass with no attribution; the priority
+// walk (attribute) runs only on the rare tick where any bit is set.
+struct Supervisor::Checks {
+  std::uint8_t beam_lost;     // kBeamLoss, bit = beam
+  std::uint8_t jump;          // kCounterJump, bit = beam
+  std::int32_t count_delta[io::kInterferometerAxes];
+  std::uint8_t lds_bad;       // kDisplacementOutOfRange, bit = sensor
+  std::uint8_t monitor_rail;  // kCurrentMonitorOutOfRange, bit = coil
+  std::uint8_t mismatch;      // kCurrentMismatch, bit = coil
+  std::uint8_t peak_measured;   // kPeakCurrentMeasured
+  std::uint8_t peak_commanded;  // kPeakCurrentCommanded
+  std::uint8_t rms;             // kRmsCurrent
+  std::uint8_t limits;          // bit a: kTravelX/Y/ThetaZ (0..2), kZEnvelope (3), kTiltEnvelope (4, 5)
+  std::uint8_t following;       // kFollowingError, bit = axis
+  bool stale, frozen, adc_fault, overrun, saturation;
+};
+
 const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   const io::SensorSample& s = *in.sample;
-  Trip t;
-
-  // --- configuration: first, so that it names the reason ---------------------
-  note(t, in.stage_profile_error != 0, FaultCode::kStageProfileInvalid, kNoAxis,
-       static_cast<float>(in.stage_profile_error));
+  Checks c;
+  c.jump = c.lds_bad = c.monitor_rail = c.mismatch = c.peak_measured = c.peak_commanded = c.rms = c.following = 0;
 
   // --- sensor plausibility --------------------------------------------------
   const std::uint16_t flags = s.status_flags;
-  const std::uint16_t beam_bits = io::kBeamLoss0 | io::kBeamLoss1 | io::kBeamLoss2;
-  const std::uint16_t lds_bits =
-      io::kDisplacementOutOfRange0 | io::kDisplacementOutOfRange1 | io::kDisplacementOutOfRange2;
-  const bool beam_loss = (flags & beam_bits) != 0;
-  for (int a = 0; a < io::kInterferometerAxes; ++a) {
-    const bool lost = (flags & (1u << a)) != 0;
-    note(t, lost, FaultCode::kBeamLoss, static_cast<std::uint8_t>(a), 0.0f);
-  }
-  bool jump = false;
+  c.beam_lost = static_cast<std::uint8_t>(flags & (io::kBeamLoss0 | io::kBeamLoss1 | io::kBeamLoss2));
   for (int a = 0; a < io::kInterferometerAxes; ++a) {
     // Wrap-safe difference of the 32-bit hardware counter.
     const auto delta = static_cast<std::int32_t>(s.interferometer_counts[a] - previous_counts_[a]);
     const std::int32_t mag = delta < 0 ? -delta : delta;
-    const bool j = have_previous_ && mag > max_count_step_;
-    jump = jump || j;
-    note(t, j, FaultCode::kCounterJump, static_cast<std::uint8_t>(a),
-         static_cast<float>(delta) * config_.interferometer_lsb_m);
+    c.count_delta[a] = delta;
+    c.jump = static_cast<std::uint8_t>(c.jump | ((have_previous_ && mag > max_count_step_) ? (1u << a) : 0u));
     previous_counts_[a] = s.interferometer_counts[a];
   }
-  // A glitch that sensors_to_pose repaired: the pose stays valid (the step
-  // was replaced by the previous one and the jump taken as an offset), but a
-  // sensor that glitches once is not trusted to hold the stage: land. A
-  // 22 um jump of one beam during a landing otherwise read as motion, the
-  // in-plane loops chased it and a corner touched down at 0.73 mm/s
-  // (campaign seed 1, run 5693).
-  for (int a = 0; a < io::kInterferometerAxes; ++a) {
-    note(t, (in.beam_glitch & (1u << a)) != 0, FaultCode::kCounterGlitch, static_cast<std::uint8_t>(a),
-         in.beam_glitch_m[a]);
-  }
-  const bool stale = (flags & io::kStaleFrame) != 0;
-  stale_run_ = next_run(stale, stale_run_);
+  stale_run_ = next_run((flags & io::kStaleFrame) != 0, stale_run_);
   // Only while a loop is closed: a landed stage's sensors may legitimately
   // sit still (and the check is armed again before the first loop closes).
   const bool identical = have_previous_ && in.closed_axes != 0 && same_sample(s, previous_sample_);
   identical_run_ = next_run(identical, identical_run_);
   previous_sample_ = s;
   have_previous_ = true;
-  const bool frozen = config_.max_identical_samples != 0 && identical_run_ > config_.max_identical_samples;
-  const bool stale_fault = stale_run_ > config_.max_consecutive_stale_frames || frozen;
-  note(t, stale_run_ > config_.max_consecutive_stale_frames, FaultCode::kStaleFrames, kNoAxis,
-       static_cast<float>(stale_run_));
-  note(t, frozen, FaultCode::kFrozenSample, kNoAxis, static_cast<float>(identical_run_));
-  const bool adc_fault = (flags & io::kAdcFault) != 0;
-  note(t, adc_fault, FaultCode::kAdcFault, kNoAxis, 0.0f);
-  bool lds_bad = (flags & lds_bits) != 0;
+  c.frozen = config_.max_identical_samples != 0 && identical_run_ > config_.max_identical_samples;
+  c.stale = stale_run_ > config_.max_consecutive_stale_frames;
+  c.adc_fault = (flags & io::kAdcFault) != 0;
   for (int k = 0; k < io::kDisplacementSensors; ++k) {
     const bool bad = (flags & (io::kDisplacementOutOfRange0 << k)) != 0 || at_rail(s.displacement_adc[k]);
-    lds_bad = lds_bad || bad;
-    note(t, bad, FaultCode::kDisplacementOutOfRange, static_cast<std::uint8_t>(k),
-         static_cast<float>(s.displacement_adc[k]));
-  }
-  for (int j = 0; j < io::kCoils; ++j) {
-    note(t, at_rail(s.coil_current_adc[j]), FaultCode::kCurrentMonitorOutOfRange,
-         static_cast<std::uint8_t>(j), static_cast<float>(s.coil_current_adc[j]));
+    c.lds_bad = static_cast<std::uint8_t>(c.lds_bad | (bad ? (1u << k) : 0u));
   }
 
   // --- timing ----------------------------------------------------------------
   overrun_run_ = next_run(in.tick_overrun, overrun_run_);
-  note(t, overrun_run_ > config_.max_consecutive_overruns, FaultCode::kTickOverrun, kNoAxis,
-       static_cast<float>(overrun_run_));
+  c.overrun = overrun_run_ > config_.max_consecutive_overruns;
 
-  // --- currents ----------------------------------------------------------------
+  // --- currents: one pass over the coils -------------------------------------
   saturated_run_ = next_run(in.current_limited, saturated_run_);
-  note(t, saturated_run_ >= config_.max_saturated_ticks, FaultCode::kCurrentSaturation, kNoAxis,
-       static_cast<float>(saturated_run_));
+  c.saturation = saturated_run_ >= config_.max_saturated_ticks;
   const float measured_limit = config_.peak_current_A + config_.measured_current_margin_A;
-  bool actuator_failed = false;
-  for (int j = 0; j < io::kCoils; ++j) {
-    const bool off = abs_f(in.coil_current_measured_A[j] - in.coil_current_cmd_A[j]) > config_.current_mismatch_A;
-    mismatch_run_[j] = next_run(off, mismatch_run_[j]);
-    const bool broken = mismatch_run_[j] >= config_.current_mismatch_ticks;
-    actuator_failed = actuator_failed || broken;  // the actuator does not follow: it cannot land the stage
-    note(t, broken, FaultCode::kCurrentMismatch, static_cast<std::uint8_t>(j), in.coil_current_measured_A[j]);
-  }
-  for (int j = 0; j < io::kCoils; ++j) {
-    const float m = in.coil_current_measured_A[j];
-    const bool over = abs_f(m) > measured_limit;
-    actuator_failed = actuator_failed || over;
-    note(t, over, FaultCode::kPeakCurrentMeasured, static_cast<std::uint8_t>(j), m);
-  }
+  const float commanded_limit = config_.peak_current_A * 1.001f;
   const float rms2_limit = config_.rms_current_A * config_.rms_current_A;
   for (int j = 0; j < io::kCoils; ++j) {
+    const std::uint32_t bit = 1u << j;
+    const float m = in.coil_current_measured_A[j];
     const float i = in.coil_current_cmd_A[j];
-    note(t, abs_f(i) > config_.peak_current_A * 1.001f, FaultCode::kPeakCurrentCommanded,
-         static_cast<std::uint8_t>(j), i);
+    const bool off = abs_f(m - i) > config_.current_mismatch_A;
+    mismatch_run_[j] = next_run(off, mismatch_run_[j]);
     // Thermal model: first-order low-pass of i^2 with the coil's time constant.
     i2_filtered_[j] += thermal_alpha_ * (i * i - i2_filtered_[j]);
     status_.rms_current_A[j] = std::sqrt(i2_filtered_[j]);
-  }
-  for (int j = 0; j < io::kCoils; ++j) {
-    note(t, i2_filtered_[j] > rms2_limit, FaultCode::kRmsCurrent, static_cast<std::uint8_t>(j),
-         status_.rms_current_A[j]);
+    c.monitor_rail = static_cast<std::uint8_t>(c.monitor_rail | (at_rail(s.coil_current_adc[j]) ? bit : 0u));
+    c.mismatch = static_cast<std::uint8_t>(c.mismatch | (mismatch_run_[j] >= config_.current_mismatch_ticks ? bit : 0u));
+    c.peak_measured = static_cast<std::uint8_t>(c.peak_measured | (abs_f(m) > measured_limit ? bit : 0u));
+    c.peak_commanded = static_cast<std::uint8_t>(c.peak_commanded | (abs_f(i) > commanded_limit ? bit : 0u));
+    c.rms = static_cast<std::uint8_t>(c.rms | (i2_filtered_[j] > rms2_limit ? bit : 0u));
   }
 
   // --- position limits ---------------------------------------------------------
   const float x = in.pose[0], y = in.pose[1], tz = in.pose[2], z = in.pose[3];
-  note(t, in.positions_valid && (x < config_.x_min_m || x > config_.x_max_m), FaultCode::kTravelX, 0, x);
-  note(t, in.positions_valid && (y < config_.y_min_m || y > config_.y_max_m), FaultCode::kTravelY, 1, y);
-  note(t, in.positions_valid && abs_f(tz) > config_.theta_z_limit_rad, FaultCode::kTravelThetaZ, 2, tz);
-  note(t, in.envelope_active && (z < config_.z_min_m || z > config_.z_max_m), FaultCode::kZEnvelope, 3, z);
-  for (int a = 4; a < kSequencedAxes; ++a) {
-    note(t, in.envelope_active && abs_f(in.pose[a]) > config_.tilt_limit_rad, FaultCode::kTiltEnvelope,
-         static_cast<std::uint8_t>(a), in.pose[a]);
-  }
+  const bool travel = in.positions_valid, envelope = in.envelope_active;
+  c.limits = static_cast<std::uint8_t>(
+      ((travel && (x < config_.x_min_m || x > config_.x_max_m)) ? 1u : 0u) |
+      ((travel && (y < config_.y_min_m || y > config_.y_max_m)) ? 2u : 0u) |
+      ((travel && abs_f(tz) > config_.theta_z_limit_rad) ? 4u : 0u) |
+      ((envelope && (z < config_.z_min_m || z > config_.z_max_m)) ? 8u : 0u) |
+      ((envelope && abs_f(in.pose[4]) > config_.tilt_limit_rad) ? 16u : 0u) |
+      ((envelope && abs_f(in.pose[5]) > config_.tilt_limit_rad) ? 32u : 0u));
   for (int a = 0; a < kSequencedAxes; ++a) {
-    const bool closed = (in.closed_axes & (1u << a)) != 0;
-    note(t, closed && abs_f(in.following_error[a]) > config_.following_error_limit[a],
-         FaultCode::kFollowingError, static_cast<std::uint8_t>(a), in.following_error[a]);
+    const bool over = abs_f(in.following_error[a]) > config_.following_error_limit[a];
+    c.following = static_cast<std::uint8_t>(c.following | (over ? (1u << a) : 0u));
   }
+  c.following = static_cast<std::uint8_t>(c.following & in.closed_axes);
 
   // --- latch and reaction --------------------------------------------------------
-  status_.in_plane_sensors_valid = !beam_loss && !jump && !stale_fault;
-  status_.z_sensors_valid = !lds_bad && !adc_fault;
+  const bool any = (in.stage_profile_error | c.beam_lost | c.jump | in.beam_glitch | c.lds_bad | c.monitor_rail |
+                    c.mismatch | c.peak_measured | c.peak_commanded | c.rms | c.limits | c.following) != 0 ||
+                   c.stale || c.frozen || c.adc_fault || c.overrun || c.saturation;
+  const Trip t = any ? attribute(in, c) : Trip{};
+  const bool actuator_failed = (c.mismatch | c.peak_measured) != 0;  // it cannot land the stage
+  status_.in_plane_sensors_valid = c.beam_lost == 0 && c.jump == 0 && !c.stale && !c.frozen;
+  status_.z_sensors_valid = c.lds_bad == 0 && !c.adc_fault;
   status_.active = t.code;
   if (t.code != FaultCode::kNone) {
     ++status_.fault_count;
@@ -247,6 +215,66 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
     }
   }
   return status_;
+}
+
+// The first tripping check in priority order -- the most fundamental cause
+// first (a lost beam also produces a following error) -- with its axis and
+// value. The order is the contract (tests/kernel/supervisor): configuration,
+// sensors, timing, currents, positions.
+Supervisor::Trip Supervisor::attribute(const SupervisorInputs& in, const Checks& c) const {
+  const io::SensorSample& s = *in.sample;
+  Trip t;
+  const auto bit = [](std::uint32_t mask, int k) { return (mask & (1u << k)) != 0; };
+  const auto u8 = [](int k) { return static_cast<std::uint8_t>(k); };
+  note(t, in.stage_profile_error != 0, FaultCode::kStageProfileInvalid, kNoAxis,
+       static_cast<float>(in.stage_profile_error));
+  for (int a = 0; a < io::kInterferometerAxes; ++a) note(t, bit(c.beam_lost, a), FaultCode::kBeamLoss, u8(a), 0.0f);
+  for (int a = 0; a < io::kInterferometerAxes; ++a) {
+    note(t, bit(c.jump, a), FaultCode::kCounterJump, u8(a),
+         static_cast<float>(c.count_delta[a]) * config_.interferometer_lsb_m);
+  }
+  // A glitch that sensors_to_pose repaired: the pose stays valid (the step
+  // was replaced by the previous one and the jump taken as an offset), but a
+  // sensor that glitches once is not trusted to hold the stage: land. A
+  // 22 um jump of one beam during a landing otherwise read as motion, the
+  // in-plane loops chased it and a corner touched down at 0.73 mm/s
+  // (campaign seed 1, run 5693).
+  for (int a = 0; a < io::kInterferometerAxes; ++a) {
+    note(t, bit(in.beam_glitch, a), FaultCode::kCounterGlitch, u8(a), in.beam_glitch_m[a]);
+  }
+  note(t, c.stale, FaultCode::kStaleFrames, kNoAxis, static_cast<float>(stale_run_));
+  note(t, c.frozen, FaultCode::kFrozenSample, kNoAxis, static_cast<float>(identical_run_));
+  note(t, c.adc_fault, FaultCode::kAdcFault, kNoAxis, 0.0f);
+  for (int k = 0; k < io::kDisplacementSensors; ++k) {
+    note(t, bit(c.lds_bad, k), FaultCode::kDisplacementOutOfRange, u8(k), static_cast<float>(s.displacement_adc[k]));
+  }
+  for (int j = 0; j < io::kCoils; ++j) {
+    note(t, bit(c.monitor_rail, j), FaultCode::kCurrentMonitorOutOfRange, u8(j),
+         static_cast<float>(s.coil_current_adc[j]));
+  }
+  note(t, c.overrun, FaultCode::kTickOverrun, kNoAxis, static_cast<float>(overrun_run_));
+  note(t, c.saturation, FaultCode::kCurrentSaturation, kNoAxis, static_cast<float>(saturated_run_));
+  for (int j = 0; j < io::kCoils; ++j) {
+    note(t, bit(c.mismatch, j), FaultCode::kCurrentMismatch, u8(j), in.coil_current_measured_A[j]);
+  }
+  for (int j = 0; j < io::kCoils; ++j) {
+    note(t, bit(c.peak_measured, j), FaultCode::kPeakCurrentMeasured, u8(j), in.coil_current_measured_A[j]);
+  }
+  for (int j = 0; j < io::kCoils; ++j) {
+    note(t, bit(c.peak_commanded, j), FaultCode::kPeakCurrentCommanded, u8(j), in.coil_current_cmd_A[j]);
+  }
+  for (int j = 0; j < io::kCoils; ++j) {
+    note(t, bit(c.rms, j), FaultCode::kRmsCurrent, u8(j), status_.rms_current_A[j]);
+  }
+  note(t, bit(c.limits, 0), FaultCode::kTravelX, 0, in.pose[0]);
+  note(t, bit(c.limits, 1), FaultCode::kTravelY, 1, in.pose[1]);
+  note(t, bit(c.limits, 2), FaultCode::kTravelThetaZ, 2, in.pose[2]);
+  note(t, bit(c.limits, 3), FaultCode::kZEnvelope, 3, in.pose[3]);
+  for (int a = 4; a < kSequencedAxes; ++a) note(t, bit(c.limits, a), FaultCode::kTiltEnvelope, u8(a), in.pose[a]);
+  for (int a = 0; a < kSequencedAxes; ++a) {
+    note(t, bit(c.following, a), FaultCode::kFollowingError, u8(a), in.following_error[a]);
+  }
+  return t;
 }
 
 bool Supervisor::clear_fault() {

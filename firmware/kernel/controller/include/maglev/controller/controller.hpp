@@ -360,25 +360,28 @@ class Controller {
   AxisLoop<Scalar> loop(int a);
 
   // The locals of one step(), handed from stage to stage of the data path.
+  // The arrays and results below are written in full by their stage every
+  // tick before anything reads them, so they are left uninitialized: zeroing
+  // the whole Tick was a ~600-byte memset per step() (issue 16, measured).
   struct Tick {
-    PoseMeasurement m{};
-    SupervisorInputs si{};
+    PoseMeasurement m;   // measure_pose()
+    SupervisorInputs si;  // supervise()
     const SupervisorStatus* sup = nullptr;
     const SequencerOutput* so = nullptr;
     SequencerInputs qi{};
-    float abs_err[kAxisCount] = {};
-    Scalar accel_ff[kAxisCount] = {};
-    std::int64_t step_pm[kAxisCount] = {};
-    Scalar excitation[kAxisCount] = {};
+    float abs_err[kAxisCount];           // supervise()
+    Scalar accel_ff[kAxisCount];         // advance_references()
+    std::int64_t step_pm[kAxisCount];    // advance_references()
+    Scalar excitation[kAxisCount];       // excite()
     // External injection at the reference: added to reference_ around the
     // axis loops (no per-axis cost), in pm / prad.
     std::int64_t reference_injection_pm = 0;
     float reference_injection = 0.0f;  // the same, m or rad (status)
     bool injecting = false;
-    Scalar effort[kAxisCount] = {};
-    Scalar loop_out[kAxisCount] = {};
-    Scalar aw_offset[kAxisCount] = {};  // loop output before the biquads minus after them
-    AllocationOutput<Scalar> out{};
+    Scalar effort[kAxisCount];     // run_axis_loops()
+    Scalar loop_out[kAxisCount];   // run_axis_loops()
+    Scalar aw_offset[kAxisCount];  // loop output before the biquads minus after them
+    AllocationOutput<Scalar> out;  // allocate_forces()
   };
   // step(), stage by stage: sensors -> pose -> supervision -> homing ->
   // sequencer -> references -> excitation -> axis loops -> force allocation

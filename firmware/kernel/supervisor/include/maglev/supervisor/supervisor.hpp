@@ -1,7 +1,9 @@
 // The supervisor: limits, sensor plausibility and the fault latch.
 //
-// Every tick it evaluates EVERY check (bounded, data-independent cost), and
-// the first one that trips while nothing is latched becomes the first-fault
+// Every tick it evaluates EVERY check into one bit each (bounded cost, one
+// pass); only on a tick where a bit is set does it walk the checks in their
+// priority order to name the first (code, axis, value). The first that trips
+// while nothing is latched becomes the first-fault
 // record (code, tick, axis, value). The reaction is the safest one still
 // possible: a controlled landing while the in-plane sensors (x, y, theta_z
 // interferometers) are valid -- the in-plane loops are what keep the floating
@@ -120,27 +122,30 @@ struct SupervisorConfig {
 
 SupervisorConfigError validate(const SupervisorConfig& config, float servo_rate_Hz);
 
+// An aggregate without member initializers: the controller fills every
+// field each tick (zeroing it first cost a memset per step()); elsewhere
+// value-initialize it (`SupervisorInputs in{};`).
 struct SupervisorInputs {
-  const io::SensorSample* sample = nullptr;
-  bool tick_overrun = false;
-  std::uint32_t tick = 0;
-  bool positions_valid = false;     // homed: the pose means something
-  bool envelope_active = false;     // z closed: z/tilt envelope applies
-  std::uint8_t closed_axes = 0;     // following error applies to these
-  float pose[kSequencedAxes] = {};      // measured, SI, Axis order
-  float following_error[kSequencedAxes] = {};  // reference - measured, SI
-  float coil_current_cmd_A[io::kCoils] = {};
-  float coil_current_measured_A[io::kCoils] = {};
-  bool current_limited = false;  // last tick's allocation scaled its currents down (k < 1)
+  const io::SensorSample* sample;
+  bool tick_overrun;
+  std::uint32_t tick;
+  bool positions_valid;     // homed: the pose means something
+  bool envelope_active;     // z closed: z/tilt envelope applies
+  std::uint8_t closed_axes;     // following error applies to these
+  float pose[kSequencedAxes];      // measured, SI, Axis order
+  float following_error[kSequencedAxes];  // reference - measured, SI
+  float coil_current_cmd_A[io::kCoils];
+  float coil_current_measured_A[io::kCoils];
+  bool current_limited;  // last tick's allocation scaled its currents down (k < 1)
   // sensors_to_pose replaced this tick's step of these beams (bit b: beam b)
   // because its change implied an acceleration no actuator can produce
   // (PoseMeasurement::beam_glitch); beam_glitch_m: the refused change, SI.
-  std::uint8_t beam_glitch = 0;
-  float beam_glitch_m[io::kInterferometerAxes] = {};
+  std::uint8_t beam_glitch;
+  float beam_glitch_m[io::kInterferometerAxes];
   // Nonzero: the stage profile selected in the persisted configuration was
   // refused at boot (its stage_profile::ProfileError). A cause that stays
   // present until a valid profile is selected: the stage cannot leave rest.
-  std::uint8_t stage_profile_error = 0;
+  std::uint8_t stage_profile_error;
 };
 
 struct SupervisorStatus {
@@ -166,6 +171,17 @@ class Supervisor {
   const SupervisorStatus& status() const { return status_; }
 
  private:
+  // A check that tripped this tick (the first in priority order).
+  struct Trip {
+    FaultCode code = FaultCode::kNone;
+    std::uint8_t axis = kNoAxis;
+    float value = 0.0f;
+  };
+  struct Checks;  // every check's outcome of one tick, as bits (supervisor.cpp)
+  Trip attribute(const SupervisorInputs& in, const Checks& c) const;
+  // Keeps the first tripping check only.
+  static void note(Trip& t, bool tripped, FaultCode code, std::uint8_t axis, float value);
+
   SupervisorConfig config_{};
   float thermal_alpha_ = 0.0f;     // dt / tau
   std::int32_t max_count_step_ = 0;
