@@ -145,7 +145,7 @@ Args parse_args(int argc, char** argv) {
         char* end = nullptr;
         const double r = std::strtod(v.c_str(), &end);
         if (end == v.c_str() || *end != '\0' || !maglev::io::stage::is_supported_servo_rate(r)) {
-          a.error = "--servo-rate: 2500, 5000, 10000 or 20000 (Hz), got '" + v + "'";
+          a.error = "--servo-rate: " + maglev::bench::offered_servo_rates() + ", got '" + v + "'";
         }
         a.run.servo_rate_Hz = r;
       }

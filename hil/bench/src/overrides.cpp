@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <iterator>
 
 #include "maglev/bench/axes.hpp"
 #include "maglev/bench/metrics_registry.hpp"
@@ -38,6 +39,16 @@ void apply_paper_controller(kernel::KernelConfig* c) {
     for (kernel::BiquadConfig& f : axis.filters) f = kernel::BiquadConfig{};
   }
   c->acceleration_feedforward = false;
+}
+
+std::string offered_servo_rates() {
+  std::string t;
+  const std::size_t n = std::size(io::stage::kSupportedServoRates_Hz);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i > 0) t += i + 1 < n ? ", " : " or ";
+    t += std::to_string(static_cast<long>(io::stage::kSupportedServoRates_Hz[i]));
+  }
+  return t + " Hz";
 }
 
 bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<ScenarioError>* errs) {
@@ -227,7 +238,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       // made at this rate); checked here so that validate() reports it.
       double r = 0;
       if (num("controller", k, v, Dim::kFrequency, &r) && !io::stage::is_supported_servo_rate(r)) {
-        fail("[controller] servo_rate_Hz = " + v + ": the controller offers 2500, 5000, 10000 or 20000 Hz");
+        fail("[controller] servo_rate_Hz = " + v + ": the controller offers " + offered_servo_rates());
       }
       continue;
     }
@@ -347,8 +358,8 @@ bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<Sc
   }
   if (servo_rate_Hz) {
     if (!io::stage::is_supported_servo_rate(*servo_rate_Hz)) {
-      errs->push_back({"servo rate " + std::to_string(*servo_rate_Hz) +
-                       " Hz: the controller offers 2500, 5000, 10000 or 20000 Hz"});
+      errs->push_back({"servo rate " + std::to_string(*servo_rate_Hz) + " Hz: the controller offers " +
+                       offered_servo_rates()});
       return false;
     }
     parsed.profile.servo_rate_Hz = *servo_rate_Hz;

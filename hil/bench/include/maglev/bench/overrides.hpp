@@ -53,6 +53,8 @@ bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<Sc
 // The scenario's `[controller] servo_rate_Hz`, if it has one (a number; not
 // checked here: apply_overrides reports a bad one).
 std::optional<double> servo_rate_of(const scenario::Scenario& sc);
+// "2500, 5000, 10000 or 20000 Hz": io::stage::kSupportedServoRates_Hz for messages.
+std::string offered_servo_rates();
 // The profile a scenario names ([scenario] profile), else the default.
 std::string profile_of(const scenario::Scenario& sc);
 
