@@ -389,6 +389,9 @@ extern "C" void board_main() {
                                              &maglev::lab::LabTick<float>::before_step};
   // The rate the persisted configuration (applied by Application above) asks for.
   g_servo_rate_Hz = configured_servo_rate_Hz();
+#if MAGLEV_BOARD_HIL
+  g_sensors.set_period_us(1000000u / g_servo_rate_Hz);  // the CAN sensor source's tick clock
+#endif
   static maglev::app::ServoLoop<b::ServoKernel> servo(g_sensors, actuators, g_kernel, servo_timing(g_servo_rate_Hz),
                                                       hooks);
   g_servo = &servo;
@@ -426,6 +429,7 @@ extern "C" void board_main() {
       g_bus.write32(r::tim::kTim2 + r::tim::kCr1, 0u);
       g_servo_rate_Hz = rate;
       servo.set_timing(servo_timing(rate));
+      g_sensors.set_period_us(1000000u / rate);
       start_tick_timer();
 #else
       g_bus.write32(r::tim::kTim1 + r::tim::kCr1, 0u);
