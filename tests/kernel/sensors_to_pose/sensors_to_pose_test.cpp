@@ -405,6 +405,34 @@ TEST(SensorsToPose, HallPhaseOverAFullPitchWithFifthHarmonic) {
   CHECK_FALSE(HallToPhase(z, st).plausible);
 }
 
+// The solver alone, on exact phases: one fixed-point pass + 6 Newton steps
+// reach the double floor over the whole valid range of eps (< 0.19).
+TEST(SensorsToPose, HallSolveConvergesOverTheValidHarmonicRange) {
+  const double eps_values[] = {0.0, 0.05, 0.114, 0.15, 0.18, 0.189};
+  for (double eps : eps_values) {
+    double worst = 0.0, worst_after_4 = 0.0;
+    for (int n = 0; n < 20000; ++n) {
+      const double truth = -stage::kPi + 2 * stage::kPi * (n + 0.5) / 20000.0;
+      HallSolve h{};
+      h.eps = eps;
+      for (int a = 0; a < 2; ++a) {
+        const double t = truth + 0.3 * a;
+        h.phi[a] = t + std::atan2(-eps * std::sin(4 * t), 1 - eps * std::cos(4 * t));
+        h.theta[a] = h.phi[a];
+      }
+      for (int k = 0; k < 4; ++k) HallSolveStep(&h);
+      worst_after_4 = std::fmax(worst_after_4, std::fabs(h.theta[0] - truth));
+      while (h.steps < kHallSolveSteps) HallSolveStep(&h);
+      HallSolveStep(&h);  // a step beyond the last is a no-op
+      LONGS_EQUAL(kHallSolveSteps, h.steps);
+      worst = std::fmax(worst, std::fmax(std::fabs(h.theta[0] - truth), std::fabs(h.theta[1] - truth - 0.3)));
+    }
+    std::printf("\n  Hall solve eps %.3f: |error| after 4 steps %.2g rad, after %d %.2g rad", eps, worst_after_4,
+                kHallSolveSteps, worst);
+    CHECK(worst < 2e-14);
+  }
+}
+
 TEST(SensorsToPose, HomingMakesXyMagnetFrame) {
   SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
   const double eps = cfg.hall_fifth_harmonic_ratio;

@@ -660,14 +660,30 @@ void Controller<Scalar>::home(const io::SensorSample& sample, Tick& t) {
   }
   if (homing_ticks_ == 0) ReseedInterferometers(&s2p_);
   ++homing_ticks_;
+  // The Hall solve runs in kHallSolveSteps steps, one per tick, over the
+  // window's last ticks, on the sample and the unhomed pose of the tick it
+  // starts on: offset = Hall - interferometer of the SAME sample, so motion
+  // in between cannot bias it. (It used to run whole on the last tick:
+  // 25 000 M7 instructions, three times a Ready tick.) A window too short to
+  // spread it over does it all on its last tick.
+  const std::uint32_t first = homing_needed_ticks_ > static_cast<std::uint32_t>(kHallSolveSteps) + 1u
+                                  ? homing_needed_ticks_ - static_cast<std::uint32_t>(kHallSolveSteps)
+                                  : homing_needed_ticks_;
+  if (homing_ticks_ < first) return;
+  if (homing_ticks_ == first) {
+    HallSolveBegin(sample, s2p_, &hall_solve_);
+    hall_pose_unhomed_ = t.m.pose_unhomed;
+  } else {
+    HallSolveStep(&hall_solve_);
+  }
   if (homing_ticks_ < homing_needed_ticks_) return;
-  // One-off double solve at the end of the averaging window (not per tick).
-  const HallPhase h = HallToPhase(sample, s2p_);
+  const HallPhase h = HallSolveFinish(&hall_solve_);
   if (h.plausible) {
-    SetHomingOffsets(ComputeHomingOffsets(h, t.m.pose_unhomed, s2p_), &s2p_);
-    // Re-evaluate this sample with the new zero (same raw counts: no
-    // counter motion) so that references start from the homed pose.
-    t.m = SensorsToPoseStep(sample, &s2p_);
+    SetHomingOffsets(ComputeHomingOffsets(h, hall_pose_unhomed_, s2p_), &s2p_);
+    // This tick's pose with the new zero, so that references start from the
+    // homed pose. (It used to run the whole sensors_to_pose step again on the
+    // same sample, which also fed the glitch check a zero step.)
+    ApplyHomingOffsets(s2p_, &t.m);
     measured_ = t.m.pose;
     t.qi.homing_done = true;
   } else {

@@ -436,6 +436,8 @@ class Controller {
   std::uint8_t stage_profile_error_ = 0;  // see set_stage_profile_error()
   std::uint32_t homing_ticks_ = 0;
   std::uint32_t homing_needed_ticks_ = 1;
+  HallSolve hall_solve_{};          // homing's Hall solve, one step per tick
+  Pose64 hall_pose_unhomed_{};      // the unhomed pose of the solve's sample
   ControllerStatus status_{};
   CouplingCalibrationConfig calibration_config_{};
   Calibration cal_{};

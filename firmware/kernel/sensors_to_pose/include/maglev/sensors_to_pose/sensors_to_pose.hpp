@@ -231,7 +231,25 @@ struct HallPhase {
 };
 
 // phase = atan2(A, B) of each axis, with the 5th harmonic removed. Homing
-// only (double, libm): not part of the tick.
+// only (double, the kernel's own atan2/sin/cos). The solve is split into
+// kHallSolveSteps bounded steps so that the controller can spread it over
+// the last ticks of the homing window, one step per tick (issue 16: the
+// one-off solve no longer lands on a single tick):
+//   HallSolveBegin (the sample's atan2s, amplitudes, plausibility),
+//   HallSolveStep x kHallSolveSteps (one fixed-point pass, then Newton),
+//   HallSolveFinish (any steps left, then the phases in turns).
+inline constexpr int kHallSolveSteps = 7;
+struct HallSolve {
+  double phi[2];    // atan2(A, B) of x and y
+  double theta[2];  // the solution so far
+  double eps;       // fifth-harmonic ratio
+  int steps;        // steps done
+  HallPhase result;  // amplitudes and plausibility (phases: HallSolveFinish)
+};
+void HallSolveBegin(const io::SensorSample& sample, const SensorsToPoseState& state, HallSolve* solve);
+void HallSolveStep(HallSolve* solve);
+HallPhase HallSolveFinish(HallSolve* solve);
+// All of it at once (tests, tools).
 HallPhase HallToPhase(const io::SensorSample& sample, const SensorsToPoseState& state);
 
 // Magnet-frame platen-centre coordinate (mod pitch, in [0, pitch)) from a
@@ -248,6 +266,10 @@ struct HomingOffsets {
 // chosen in [-pitch/2, pitch/2): the smallest correction.
 HomingOffsets ComputeHomingOffsets(const HallPhase& hall, const Pose64& pose_unhomed,
                                    const SensorsToPoseState& state);
+// pose = pose_unhomed with the homing offsets added to x and y (the last
+// part of SensorsToPoseStep; also used right after homing on that tick).
+void ApplyHomingOffsets(const SensorsToPoseState& state, PoseMeasurement* measurement);
+
 void SetHomingOffsets(const HomingOffsets& offsets, SensorsToPoseState* state);
 
 }  // namespace maglev::kernel
