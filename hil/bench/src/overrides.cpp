@@ -200,10 +200,14 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
         if (n < 1 || n > 64 || n != std::floor(n)) fail("[plant] substeps_per_tick must be an integer 1..64");
         p.integration.substeps_per_tick = static_cast<int>(n);
       }
+    } else if (k == "integrator") {
+      if (v == "fast") p.integration.method = hil::IntegrationConfig::Method::kFast;
+      else if (v == "classic") p.integration.method = hil::IntegrationConfig::Method::kClassic;
+      else fail("[plant] integrator = " + v + ": expected fast or classic");
     } else {
       plant_fail(k, "unknown key (model, noise, error_seed, error_scale, an error term of docs/PLANT.md, payload_kg, "
                     "current_noise_scale, current_noise_density_A_per_rtHz, interferometer_noise_m, displacement_noise_m, "
-                    "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick)");
+                    "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick, integrator)");
     }
   }
   if (o->plant_model == hil::PlantModel::kAsBuilt) {

@@ -157,6 +157,10 @@ bool plant_overrides(const scenario::Scenario& sc, hil::PlantConfig* p, std::uin
       ok = num(k, v, Dim::kNumber, &n) && n >= 1 && n <= 64;
       if (ok) p->integration.substeps_per_tick = static_cast<int>(n);
       else if (err->empty()) *err = sc.source + ": [plant] substeps_per_tick must be an integer 1..64";
+    } else if (k == "integrator") {
+      ok = v == "fast" || v == "classic";
+      if (ok) p->integration.method = v == "fast" ? hil::IntegrationConfig::Method::kFast : hil::IntegrationConfig::Method::kClassic;
+      else *err = sc.source + ": [plant] integrator: expected fast or classic";
     } else {
       *err = sc.source + ": [plant] unknown key '" + k + "'";
       return false;

@@ -14,6 +14,27 @@ constexpr int kTablePoints = 5;
 constexpr double kTableDesired_mA[kTablePoints] = {4.29, 12.62, 107.74, 213.40, 424.80};
 constexpr double kTableStd_mA[kTablePoints] = {4.79, 4.82, 5.60, 7.09, 10.93};
 
+// RkCurrent's weights for a first-order transient i = it + d exp(-w t) over
+// one step h, x = w h: with A = (1 - e^-x) / x (the mean of exp(-w t)) and
+// B = (x - 1 + e^-x) / x^2 (its (h - t)-weighted mean, / h^2), RK4's
+// increments with the pose held are dv ~ (i0 + 4 i_mid + i_end) / 6 and
+// dx - h v0 ~ h^2 (i0 + 2 i_mid) / 6; equal to the integrals when
+// i_mid = it + d (3 B - 1/2) and i_end = it + d (6 A + 1 - 12 B).
+// Small x: the series (the direct form cancels); both -> 1 as x -> 0.
+void QuadratureWeights(double x, double* mid, double* end) {
+  double a, b;
+  if (x < 1e-3) {
+    a = 1.0 - x / 2.0 + x * x / 6.0;
+    b = 0.5 - x / 6.0 + x * x / 24.0;
+  } else {
+    const double one_minus_e = -std::expm1(-x);
+    a = one_minus_e / x;
+    b = (x - one_minus_e) / (x * x);
+  }
+  *mid = 3.0 * b - 0.5;
+  *end = 6.0 * a + 1.0 - 12.0 * b;
+}
+
 }  // namespace
 
 double Table1CurrentNoiseStd_A(double commanded_abs_A) {
@@ -80,7 +101,7 @@ void Amplifiers::Apply(const io::ActuatorCommand& command, Rng* rng, bool noise_
   }
 }
 
-void Amplifiers::BeginSubstep(double h_s) {
+void Amplifiers::BeginSubstep(double h_s, bool exact_quadrature) {
   const double r = config_.coil_resistance_Ohm;
   const double l = config_.coil_inductance_H;
   const double k = config_.loop_transresistance_V_per_A;
@@ -89,6 +110,8 @@ void Amplifiers::BeginSubstep(double h_s) {
     lin_half_ = std::exp(-omega_ * h_s / 2.0);
     sat_half_ = std::exp(-r / l * h_s / 2.0);
     for (int j = 0; j < kCoils; ++j) coil_lin_half_[j] = std::exp(-omega_coil_[j] * h_s / 2.0);
+    QuadratureWeights(omega_ * h_s, &quad_mid_, &quad_end_);
+    for (int j = 0; j < kCoils; ++j) QuadratureWeights(omega_coil_[j] * h_s, &coil_quad_mid_[j], &coil_quad_end_[j]);
   }
   const double lin_half = lin_half_;
   const double lin_full = lin_half * lin_half;
@@ -105,9 +128,19 @@ void Amplifiers::BeginSubstep(double h_s) {
     }
     const double v_demand = r * i0 + kj * (it - i0);
     stage_current_[0][j] = i0;
+    rk_current_[0][j] = i0;
     if (std::fabs(v_demand) <= v_max_) {
       stage_current_[1][j] = it + (i0 - it) * lh;
       stage_current_[2][j] = it + (i0 - it) * lf;
+      if (exact_quadrature) {
+        const double qm = bandwidth_spread_ ? coil_quad_mid_[j] : quad_mid_;
+        const double qe = bandwidth_spread_ ? coil_quad_end_[j] : quad_end_;
+        rk_current_[1][j] = it + (i0 - it) * qm;
+        rk_current_[2][j] = it + (i0 - it) * qe;
+      } else {
+        rk_current_[1][j] = stage_current_[1][j];
+        rk_current_[2][j] = stage_current_[2][j];
+      }
     } else {
       // Output at the rail: L di/dt = +-V_max - R i, never past the target.
       const double i_inf = std::copysign(v_max_, v_demand) / r;
@@ -122,6 +155,10 @@ void Amplifiers::BeginSubstep(double h_s) {
       }
       stage_current_[1][j] = i1;
       stage_current_[2][j] = i2;
+      // At the rail (clipped at the target): the samples (not reached by
+      // the stage's +-5 A commands, docs/PLANT.md).
+      rk_current_[1][j] = i1;
+      rk_current_[2][j] = i2;
     }
   }
 }

@@ -629,7 +629,27 @@ __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinema
     const V4 s = p_ax + (r_ax0 * rb0 + r_ax1 * rb1 + r_ax2 * rb2);
     const V4 gap = gap0 + (r20 * rb0 + r21 * rb1 + r22 * rb2) - rb2;
     V4 sin1, cos1, exp1;
-    if (q == 0) {
+    if (q == 0 && lane_ref_mode_ == LaneRefMode::kFromStore) {
+      // kFast, RK4 stages 2-4: the reference side moved by at most microns
+      // since stage 1 (gamma_1 ds ~ 1e-3): its sin/cos/exp by angle addition
+      // from stage 1's, as the other sides are derived from it (Taylor
+      // branch, relative error < 1e-13; library calls past |x| = 0.02).
+      const V4 st_s = Load4(lane_ref_store_.s), st_gap = Load4(lane_ref_store_.gap);
+      const V4 st_sin = Load4(lane_ref_store_.sin), st_cos = Load4(lane_ref_store_.cos);
+      const V4 eps = g1 * (s - st_s);
+      const V4 xe = neg_g1 * (gap - st_gap);
+      const bool all_small = All4(Small4(eps) & Small4(xe));
+      V4 se, ce;
+      SmallSinCos4(eps, all_small, &se, &ce);
+      ref_s = s;
+      ref_gap = gap;
+      ref_sin = st_sin * ce + st_cos * se;
+      ref_cos = st_cos * ce - st_sin * se;
+      ref_exp = Load4(lane_ref_store_.exp) * SmallExp4(xe, all_small);
+      sin1 = ref_sin;
+      cos1 = ref_cos;
+      exp1 = ref_exp;
+    } else if (q == 0) {
       ref_s = s;
       ref_gap = gap;
       const V4 gs = g1 * s;
@@ -638,6 +658,13 @@ __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinema
         ref_sin[f] = std::sin(gs[f]);
         ref_cos[f] = std::cos(gs[f]);
         ref_exp[f] = std::exp(gg[f]);
+      }
+      if (lane_ref_mode_ == LaneRefMode::kStore) {
+        std::memcpy(lane_ref_store_.s, &ref_s, sizeof ref_s);
+        std::memcpy(lane_ref_store_.gap, &ref_gap, sizeof ref_gap);
+        std::memcpy(lane_ref_store_.sin, &ref_sin, sizeof ref_sin);
+        std::memcpy(lane_ref_store_.cos, &ref_cos, sizeof ref_cos);
+        std::memcpy(lane_ref_store_.exp, &ref_exp, sizeof ref_exp);
       }
       sin1 = ref_sin;
       cos1 = ref_cos;
@@ -1049,28 +1076,50 @@ void Plant::apply(const io::ActuatorCommand& command) {
   UpdateTruthCurrents();  // the body did not move
 }
 
+// True when no corner can reach the surface within 2 dt: the lowest corner's
+// height (AddContact's lower bound) exceeds 1 um plus twice the distance any
+// corner can move in 2 dt at the present speeds (|v_z| + |omega| times the
+// corner's distance from the CoM). Only then may kFast take a 400 us step.
+bool Plant::ClearOfSurface(double dt_s) const {
+  if (!config_.contact.enabled) return true;
+  const Eigen::Matrix3d r = body_.attitude.toRotationMatrix();
+  const double c = config_.contact.corner_half_size_m;
+  const double lowest = body_.position_m.z() - c * (std::fabs(r(2, 0)) + std::fabs(r(2, 1))) - com_arm_m_ * (r(2, 2) - 1.0);
+  const double reach_m = std::sqrt(2.0 * c * c + com_arm_m_ * com_arm_m_);
+  const double speed = std::fabs(body_.velocity_m_per_s.z()) + body_.omega_body_rad_per_s.norm() * reach_m;
+  return lowest > 1e-6 + 2.0 * (2.0 * dt_s) * speed;
+}
+
 void Plant::advance(double dt_s) {
   if (!(dt_s > 0.0)) {
     return;
   }
-  // Sub-steps of at most tick / substeps_per_tick.
-  const int per_tick = std::max(1, config_.integration.substeps_per_tick);
+  // Sub-steps of at most tick / substeps_per_tick (kFast: tick / 1 while
+  // clear of the surface).
+  const bool fast = config_.integration.method == IntegrationConfig::Method::kFast;
+  int per_tick = std::max(1, config_.integration.substeps_per_tick);
+  if (fast && ClearOfSurface(dt_s)) per_tick = 1;
   const int n = std::max(1, static_cast<int>(std::ceil(dt_s / (tick_s_ / per_tick) - 1e-9)));
   const double h = dt_s / n;
   double i0[kCoils];
   double i1[kCoils];
   double i2[kCoils];
   for (int step = 0; step < n; ++step) {
-    amplifiers_.BeginSubstep(h);
+    amplifiers_.BeginSubstep(h, fast);
     for (int j = 0; j < kCoils; ++j) {
-      i0[j] = amplifiers_.CurrentAt(j, 0);
-      i1[j] = amplifiers_.CurrentAt(j, 1);
-      i2[j] = amplifiers_.CurrentAt(j, 2);
+      i0[j] = amplifiers_.RkCurrent(j, 0);
+      i1[j] = amplifiers_.RkCurrent(j, 1);
+      i2[j] = amplifiers_.RkCurrent(j, 2);
     }
+    // kFast: stage 1 evaluates the reference sides' sin/cos/exp with the
+    // library and keeps them; stages 2-4 derive theirs from them.
+    if (fast) lane_ref_mode_ = LaneRefMode::kStore;
     const BodyDerivative k1 = Derivative(body_, i0);
+    if (fast) lane_ref_mode_ = LaneRefMode::kFromStore;
     const BodyDerivative k2 = Derivative(Step(body_, k1, h / 2), i1);
     const BodyDerivative k3 = Derivative(Step(body_, k2, h / 2), i1);
     const BodyDerivative k4 = Derivative(Step(body_, k3, h), i2);
+    lane_ref_mode_ = LaneRefMode::kLibrary;
     BodyDerivative sum;
     sum.velocity_m_per_s = k1.velocity_m_per_s + 2.0 * (k2.velocity_m_per_s + k3.velocity_m_per_s) + k4.velocity_m_per_s;
     sum.acceleration_m_per_s2 = k1.acceleration_m_per_s2 + 2.0 * (k2.acceleration_m_per_s2 + k3.acceleration_m_per_s2) +

@@ -164,3 +164,37 @@ TEST(PlantAmplifier, MonitorChannelReproducesTable1) {
     DOUBLES_EQUAL(table_mA[k] * 1e-3, st.monitor_std_A, 0.04 * table_mA[k] * 1e-3);
   }
 }
+
+// Issue 16 (integrator `fast`): RkCurrent's stage currents make RK4's two
+// quadratures of the current exact for the closed-form transient, the pose
+// held: (i0 + 4 i_mid + i_end) / 6 = mean of i over the step, and
+// (i0 + 2 i_mid) / 6 = int (h - t) i dt / h^2. Checked against a fine
+// midpoint-rule integration of i(t) = it + (i0 - it) exp(-w t), for the
+// 400 us tick (w h = 12.6), the 200 us sub-step and a short step (w h = 0.06).
+TEST(PlantAmplifier, RkStageCurrentsIntegrateTheTransientExactly) {
+  maglev::hil::AmplifierConfig ac = PlantConfig::Ideal().amplifier;
+  const double omega = ac.loop_transresistance_V_per_A / ac.coil_inductance_H;
+  for (const double h : {400e-6, 200e-6, 2e-6}) {
+    maglev::hil::Amplifiers amps(ac);
+    amps.set_current(2, -0.7);
+    amps.Apply(AllCoils(6554, true), nullptr, false);  // target 1.0000 A
+    amps.BeginSubstep(h, true);
+    const double i0 = amps.RkCurrent(2, 0), im = amps.RkCurrent(2, 1), ie = amps.RkCurrent(2, 2);
+    const double it = amps.target_A(2);
+    DOUBLES_EQUAL(-0.7, i0, 0.0);
+    constexpr int kN = 200000;
+    double mean = 0.0, moment = 0.0;
+    for (int n = 0; n < kN; ++n) {
+      const double t = (n + 0.5) * h / kN;
+      const double i = it + (i0 - it) * std::exp(-omega * t);
+      mean += i / kN;
+      moment += (h - t) * i * (h / kN) / (h * h);
+    }
+    DOUBLES_EQUAL(mean, (i0 + 4.0 * im + ie) / 6.0, 1e-9);
+    DOUBLES_EQUAL(moment, (i0 + 2.0 * im) / 6.0, 1e-9);
+    // Without exact_quadrature: the physical samples at 0, h/2, h.
+    amps.BeginSubstep(h, false);
+    DOUBLES_EQUAL(amps.CurrentAt(2, 1), amps.RkCurrent(2, 1), 0.0);
+    DOUBLES_EQUAL(amps.CurrentAt(2, 2), amps.RkCurrent(2, 2), 0.0);
+  }
+}

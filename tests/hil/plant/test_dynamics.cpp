@@ -277,3 +277,74 @@ TEST(PlantDynamics, PayloadAddsMassAndInertia) {
   DOUBLES_EQUAL(stage::kTwoBStarIdentified_N_per_A / (plant.mass_kg() * w * w), std::abs(g),
                 0.02 * std::abs(g));
 }
+
+// Issue 16 (integrator `fast`, docs/PERFORMANCE.md "Bench speed"): one
+// 400 us tick with a coil current transient inside it (every coil commanded
+// away from its present current; the 5 kHz loop settles within the tick), the
+// levitated platen moving at mm/s and turning, against `classic` at 64
+// sub-steps (the reference); printed: fast / classic at 2 sub-steps (the
+// integrator before) / classic at 1 sub-step, pm and nrad. Amperes per coil
+// in one tick: fast is closer to the reference on every axis. A 50 mA step
+// (the default scenario's largest is 0.12 A, at its 8 um step): within 1 pm /
+// 1 nrad and closer than classic on x, y and the angles; z is not asserted:
+// this state is far from equilibrium (the currents do not hold the platen: z
+// falls 0.65 um in the tick, where the suspension damper's rate c/m =
+// 1187 1/s matters at h = 400 us) and fast is 0.9 nm off against classic's
+// 0.12 nm. Along the default scenario's own trajectory fast's one-tick z
+// error is the smaller one (8 pm against 20 pm levitated,
+// plant-integrator-accuracy, docs/PERFORMANCE.md).
+TEST(PlantDynamics, FastIntegratorMatchesAFineReferenceOverOneTick) {
+  using Method = maglev::hil::IntegrationConfig::Method;
+  PlantConfig c = PlantConfig::Default();
+  c.sensor_noise_enabled = false;
+  c.amplifier.current_noise_scale = 0.0;
+  Plant start(c, 5);
+  BodyState s;
+  s.position_m = {3.1e-3, -4.2e-3, 30e-6};
+  s.velocity_m_per_s = {4e-3, -2e-3, 1e-4};
+  s.omega_body_rad_per_s = {1e-3, -2e-3, 3e-3};
+  start.set_body_state(s);
+  const std::array<double, 8> now_A = {0.9, -0.4, 0.3, 1.2, -0.8, 0.5, 0.7, -1.1};
+  const double to_A[8] = {-1.0, 1.5, 0.5, -0.5, 2.0, -1.5, 0.0, 1.0};
+  start.set_coil_currents(now_A);
+  const double codes_per_A = 32768.0 / (c.amplifier.dac_full_scale_V * c.amplifier.gain_A_per_V);
+  for (const double scale : {1.0, 0.05 / 2.1}) {
+    maglev::io::ActuatorCommand cmd{};
+    for (int j = 0; j < 8; ++j) {
+      const double target = now_A[static_cast<std::size_t>(j)] + scale * (to_A[j] - now_A[static_cast<std::size_t>(j)]);
+      cmd.dac_code[j] = static_cast<std::int16_t>(std::lround(target * codes_per_A));
+    }
+    cmd.amplifier_enable = true;
+    auto one_tick = [&](Method m, int substeps) {
+      Plant p = start;
+      p.set_integrator(m, substeps);
+      p.apply(cmd);
+      p.advance_tick();
+      return p.truth();
+    };
+    const auto ref = one_tick(Method::kClassic, 64);
+    const auto fast = one_tick(Method::kFast, 2);
+    const auto classic = one_tick(Method::kClassic, 2);
+    const auto classic1 = one_tick(Method::kClassic, 1);
+    double fast_worst = 0.0;
+    std::printf("\n  step x%.3f, one tick vs 64 sub-steps, fast / classic (2 sub-steps):", scale);
+    for (int a = 0; a < 6; ++a) {
+      // pm for positions, nrad for angles.
+      const double unit = a < 3 ? 1e-12 : 1e-9;
+      const double r = a < 3 ? ref.position_m[a] : ref.angles_rad[a - 3];
+      const double f = a < 3 ? fast.position_m[a] : fast.angles_rad[a - 3];
+      const double k = a < 3 ? classic.position_m[a] : classic.angles_rad[a - 3];
+      const double k1 = a < 3 ? classic1.position_m[a] : classic1.angles_rad[a - 3];
+      const double ef = std::fabs(f - r) / unit, ek = std::fabs(k - r) / unit, ek1 = std::fabs(k1 - r) / unit;
+      std::printf(" %.4g/%.4g/%.4g", ef, ek, ek1);
+      if (scale > 0.5 || a != 2) {
+        CHECK(ef < ek);
+        if (a != 2) fast_worst = std::max(fast_worst, ef);
+      }
+    }
+    if (scale < 0.1) CHECK(fast_worst < 1.0);
+    // The currents themselves stay the closed form's (the quadrature only
+    // changes what RK4 integrates).
+    for (int j = 0; j < 8; ++j) DOUBLES_EQUAL(ref.coil_current_A[j], fast.coil_current_A[j], 1e-15);
+  }
+}

@@ -50,9 +50,19 @@ class Amplifiers {
 
   // Piecewise closed-form integration. BeginSubstep fixes each coil's regime
   // (linear / saturated) from its current at the sub-step start.
-  void BeginSubstep(double h_s);
+  // exact_quadrature: also form RkCurrent (below).
+  void BeginSubstep(double h_s, bool exact_quadrature = false);
   // Current at stage 0 (t0), 1 (t0 + h/2), 2 (t0 + h) of the sub-step.
   double CurrentAt(int coil, int stage) const { return stage_current_[stage][coil]; }
+  // The currents RK4 should evaluate its stages with (stage 0: k1, 1: k2 and
+  // k3, 2: k4) so that, the pose held, the step's velocity and position
+  // increments are the exact integrals of the closed-form current
+  // (int i dt and int (h - t) i dt) instead of their Simpson samples: a
+  // 5 kHz current loop settles in ~100 us, so the samples at 0, h/2, h see
+  // the 400 us tick's transient as 2.1x longer than it is (docs/PERFORMANCE.md).
+  // Stage 0 is the physical i(t0); stages 1, 2 are not physical samples.
+  // Without exact_quadrature (or for a coil at the rail) = CurrentAt.
+  double RkCurrent(int coil, int stage) const { return rk_current_[stage][coil]; }
   void EndSubstep();
 
   double current_A(int coil) const { return current_[coil]; }
@@ -77,6 +87,7 @@ class Amplifiers {
   double commanded_[kCoils] = {};
   double target_[kCoils] = {};
   double stage_current_[3][kCoils] = {};
+  double rk_current_[3][kCoils] = {};
   bool enabled_ = false;
   // BeginSubstep's decay factors for the last step length (every sub-step of
   // a run has the same h): the same exp() calls, made once per h.
@@ -84,6 +95,11 @@ class Amplifiers {
   double lin_half_ = 1.0;
   double sat_half_ = 1.0;
   double coil_lin_half_[kCoils] = {};
+  // Exact-quadrature weights for the last step length: stage 1 / stage 2
+  // current = target + (i0 - target) * c (RkCurrent).
+  double quad_mid_ = 1.0, quad_end_ = 1.0;
+  double coil_quad_mid_[kCoils] = {};
+  double coil_quad_end_[kCoils] = {};
 };
 
 }  // namespace maglev::hil

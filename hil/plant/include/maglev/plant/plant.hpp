@@ -6,8 +6,9 @@
 //   1. io::SensorSample s = plant.sample();  // sensors at the tick start
 //   2. plant.apply(command);                 // DAC codes + enable, held (ZOH)
 //   3. plant.advance_tick();                 // = advance(1 / servo_rate_Hz)
-// advance(dt) integrates with fixed-step RK4 (substeps_per_tick sub-steps per
-// servo period); amplifier currents are integrated in closed form inside it.
+// advance(dt) integrates with fixed-step RK4 (IntegrationConfig: one sub-step
+// per servo period while levitated, substeps_per_tick near or on the landing
+// surface); amplifier currents are integrated in closed form inside it.
 // Given (config, seed, command sequence) a run is bit-for-bit deterministic.
 //
 // Frames (maglev/io/stage_parameters.hpp): world XYZ fixed to the magnets,
@@ -121,6 +122,12 @@ class Plant {
   // the fault campaign's push and payload change. Zero: none (the default
   // path is untouched, bit for bit).
   void set_external_force(const Eigen::Vector3d& force_world_N);
+  // Another integrator from the next advance() on (accuracy comparisons:
+  // plant-integrator-accuracy; the servo rate stays).
+  void set_integrator(IntegrationConfig::Method method, int substeps_per_tick) {
+    config_.integration.method = method;
+    config_.integration.substeps_per_tick = substeps_per_tick;
+  }
 
   double mass_kg() const { return mass_; }
   const Eigen::Vector3d& inertia_kgm2() const { return inertia_; }
@@ -176,6 +183,7 @@ class Plant {
   };
   void BuildSprings();
   void AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const;
+  bool ClearOfSurface(double dt_s) const;
   static Wrench ToWrench(const Kinematics& k, const Accum& acc);
   ContactResult ContactWrench(const BodyState& state) const;
   void UpdateTruth();
@@ -221,6 +229,14 @@ class Plant {
     int coil[4];
   };
   std::array<SideLanes, 4> side_lanes_{};
+  // kFast (advance): the reference sides' values at RK4 stage 1, from which
+  // stages 2-4 derive theirs (MagneticLanesBody). kLibrary everywhere else.
+  enum class LaneRefMode { kLibrary, kStore, kFromStore };
+  mutable LaneRefMode lane_ref_mode_ = LaneRefMode::kLibrary;
+  struct LaneRefStore {
+    double s[4], gap[4], sin[4], cos[4], exp[4];
+  };
+  mutable LaneRefStore lane_ref_store_{};
   std::array<Spring, 4> springs_{};
   int spring_count_ = 0;
   int lane_axis_[4] = {};      // array axis of forcer f (lane f)

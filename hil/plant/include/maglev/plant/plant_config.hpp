@@ -227,6 +227,17 @@ struct AsBuiltConfig {
 struct IntegrationConfig {
   double servo_rate_Hz = io::stage::kServoRate_Hz;
   int substeps_per_tick = 2;  // RK4 sub-steps inside each servo tick (200 us at 2.5 kHz)
+  // kFast (issue 16, docs/PERFORMANCE.md "Bench speed"): RK4 with the
+  // amplifier's closed-form current integrated exactly (Amplifiers::
+  // RkCurrent) and one sub-step per tick while the platen's corners are
+  // clear of the landing surface by more than they can close in two ticks;
+  // substeps_per_tick otherwise (the landed contact, 5 MN/m per corner, needs
+  // the 200 us step: its tilt mode is outside RK4's stability region at
+  // 400 us). kClassic: substeps_per_tick everywhere with the currents sampled
+  // at 0, h/2, h (the integrator before; with substeps_per_tick = 64 the
+  // accuracy reference).
+  enum class Method { kFast, kClassic };
+  Method method = Method::kFast;
 };
 
 // Initial state (world frame fixed to the magnets; z above landed rest).
