@@ -7,10 +7,11 @@ namespace maglev::hil {
 
 void ApplyServoRate(double servo_rate_Hz, PlantConfig* c) {
   c->integration.servo_rate_Hz = servo_rate_Hz;
-  // Issue 16 (2.5 to 20 kHz): RK4 sub-steps of at most kMaxSubstep_s (the
-  // 2.5 kHz bench's 2 x 200 us; one sub-step of 200, 100, 50 us at 5, 10,
-  // 20 kHz), and the current noise's band is the per-tick sampling's Nyquist
-  // band, so its density (the identified figure) holds at every rate.
+  // Issue 16 (2.5 to 20 kHz): substeps_per_tick keeps a sub-step at most
+  // kMaxSubstep_s (2 at 2.5 kHz as before, 1 at 5, 10, 20 kHz; kFast uses it
+  // near the landing surface, kClassic always), and the current noise's band
+  // is the per-tick sampling's Nyquist band, so its density (the identified
+  // figure) holds at every rate.
   const double tick_s = 1.0 / servo_rate_Hz;
   c->integration.substeps_per_tick = std::max(1, static_cast<int>(std::ceil(tick_s / kMaxSubstep_s - 1e-9)));
   c->amplifier.current_noise_bandwidth_Hz = 0.5 * servo_rate_Hz;
