@@ -15,6 +15,7 @@
 #include "maglev/can_link/bus_load.hpp"
 #include "maglev/can_link/catalog.hpp"
 #include "maglev/can_link/codec.hpp"
+#include "maglev/can_link/link_budget.hpp"
 #include "maglev/io/stage_parameters.hpp"
 
 namespace {
@@ -230,12 +231,14 @@ std::string budget_section() {
        "would take "
     << fixed(alt, 1) << " us per tick = " << fixed(100.0 * alt / period_us, 1) << " %.\n";
   // The servo rate this link can carry: every periodic frame's period is in
-  // ticks, so the load grows in proportion to the rate.
-  constexpr double kUsable = 0.8;  // 20 % left for commands, acks, error frames and retransmissions
+  // ticks, so the load grows in proportion to the rate (link_budget.hpp, the
+  // figure the two-process bench enforces).
   o << "**Highest servo rate over this link**: the periodic load scales with the rate, so the bus is full at "
-    << num(std::floor(fs / total)) << " Hz and " << num(kUsable * 100.0) << " % full at "
-    << num(std::floor(kUsable * fs / total)) << " Hz. Rates of 5 kHz and above (issue 16) run in process "
-       "(lockstep without the bus), or need a faster data phase.\n";
+    << num(std::floor(max_servo_rate_Hz(1.0))) << " Hz and " << num(kLinkUsableFraction * 100.0) << " % full at "
+    << num(std::floor(max_servo_rate_Hz())) << " Hz (`can::max_servo_rate_Hz()`). Of the offered servo rates "
+       "(register `servo.rate`) only 2500 Hz fits: the two-process bench (`maglev-hil plant` / `controller`) "
+       "refuses a rate above the 80 % figure; 5, 10 and 20 kHz run in process (`maglev-hil run --servo-rate`, "
+       "lockstep without the bus), or would need a faster data phase.\n";
   return o.str();
 }
 

@@ -474,3 +474,66 @@ TEST(KernelBinding, CouplingCalibrationCommandStatusAndPersistedCorrection) {
     LONGS_EQUAL(0, rebooted.config().coupling.enabled);
   }
 }
+
+// --- servo.rate (issue 16): the servo rate as persisted configuration --------
+
+TEST(KernelBinding, TheServoRateIsPersistedRedesignsTheLoopsAndIsRefusedOffRest) {
+  {
+    Stage st(flash);
+    LONGS_EQUAL(2500, read_u16(st.ctx, RegId::servo_rate));
+    // Engineer only.
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::servo_rate), 10000), 1);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+    // Outside the register's range, and inside it but not an offered rate:
+    // ILLEGAL_DATA_VALUE, nothing changed.
+    const kernel::KernelConfig before = st.config();
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::servo_rate), 40000), 3);
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::servo_rate), 1000), 3);
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::servo_rate), 3000), 3);
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::servo_rate), 7500), 3);
+    CHECK(same_config(before, st.config()));
+    LONGS_EQUAL(2500, read_u16(st.ctx, RegId::servo_rate));
+    // Landed: 10 kHz, the measurement with it, every loop re-designed from its
+    // continuous gains at the new rate; nothing else changed.
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::servo_rate), 10000));
+    const kernel::KernelConfig c = st.config();
+    DOUBLES_EQUAL(10000.0, static_cast<double>(c.servo_rate_Hz), 0.0);
+    DOUBLES_EQUAL(10000.0, static_cast<double>(c.measurement.servo_rate_Hz), 0.0);
+    kernel::KernelConfig others = c;
+    others.servo_rate_Hz = before.servo_rate_Hz;
+    others.measurement.servo_rate_Hz = before.measurement.servo_rate_Hz;
+    CHECK(same_config(before, others));
+    {
+      std::lock_guard<std::mutex> lock(st.m);
+      for (int a = 0; a < kernel::kAxisCount; ++a) {
+        kernel::Pid2DofCoefficients<float> want{};
+        CHECK(kernel::design_pid2dof(c.axis[a].pid, 10000.0, &want) == kernel::LoopDesignError::kOk);
+        const kernel::Pid2DofCoefficients<float>& got = st.controller->pid_coefficients(a);
+        CHECK(want.kp == got.kp && want.ki_half_T == got.ki_half_T && want.a_d == got.a_d && want.b_d == got.b_d &&
+              want.antiwindup == got.antiwindup && want.one_minus_b_kp == got.one_minus_b_kp && want.c == got.c);
+      }
+    }
+    LONGS_EQUAL(10000, read_u16(st.ctx, RegId::servo_rate));
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::config_save), 1));
+    // Off rest (homing: the kernel refuses to re-time a stage it is moving):
+    // SERVER_DEVICE_BUSY, nothing changed.
+    LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kAccepted),
+                run_command(st.ctx, maglev::can::HostCommandCode::kHome));
+    const kernel::KernelConfig homing = st.config();
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::servo_rate), 20000), 6);
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::servo_rate), 2500), 6);
+    CHECK(same_config(homing, st.config()));
+    LONGS_EQUAL(10000, read_u16(st.ctx, RegId::servo_rate));
+    // A save now stores what runs: the refused rates never reach the flash.
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::config_save), 1));
+  }
+  // Reboot: the saved 10 kHz, applied before the first tick.
+  Stage rebooted(flash);
+  const kernel::KernelConfig c = rebooted.config();
+  DOUBLES_EQUAL(10000.0, static_cast<double>(c.servo_rate_Hz), 0.0);
+  DOUBLES_EQUAL(10000.0, static_cast<double>(c.measurement.servo_rate_Hz), 0.0);
+  LONGS_EQUAL(10000, read_u16(rebooted.ctx, RegId::servo_rate));
+  std::uint16_t flags = 0;
+  LONGS_EQUAL(1, modbus_read_registers(rebooted.ctx, addr(RegId::persist_flags), 1, &flags));
+  CHECK((flags & kLoadedDefaults) == 0);  // the record, not the defaults
+}

@@ -136,3 +136,34 @@ TEST(MotionRule, SaveIsBusyDuringAMoveAndAllowedAfterIt) {
   st->tick();
   DOUBLES_EQUAL(0.0, st->read(RegId::status_moving), 0.0);
 }
+
+// Issue 16: servo.rate while levitated (Ready, holding: not moving, so the
+// save is allowed) is SERVER_DEVICE_BUSY and changes nothing: not the kernel,
+// not the register, not what a save then stores.
+TEST(MotionRule, TheServoRateIsRefusedWhileLevitatedAndChangesNothing) {
+  auto st = std::make_unique<LevitatedStage>();
+  LONGS_EQUAL(0, static_cast<int>(st->write_u16(RegId::access_key, kEngineerKey)));
+  LONGS_EQUAL(0, st->command(maglev::can::HostCommandCode::kLevitate, 0, 0.0f));
+  CHECK_TEXT(st->run_until(is_ready, 25000), "no Ready within 10 s");
+  for (int i = 0; i < 250; ++i) st->tick();
+  DOUBLES_EQUAL(0.0, st->read(RegId::status_moving), 0.0);
+  kernel::KernelConfig before;
+  std::memcpy(&before, &st->controller->config(), sizeof before);
+  for (std::uint16_t rate : {std::uint16_t{5000}, std::uint16_t{10000}, std::uint16_t{20000}, std::uint16_t{3000}}) {
+    LONGS_EQUAL(static_cast<int>(ExceptionCode::kServerDeviceBusy),
+                static_cast<int>(st->write_u16(RegId::servo_rate, rate)));
+  }
+  // Live tuning unlocks gains, never the rate.
+  LONGS_EQUAL(static_cast<int>(ExceptionCode::kNone), static_cast<int>(st->write_u16(RegId::tuning_live, 1)));
+  LONGS_EQUAL(static_cast<int>(ExceptionCode::kServerDeviceBusy),
+              static_cast<int>(st->write_u16(RegId::servo_rate, 10000)));
+  LONGS_EQUAL(static_cast<int>(ExceptionCode::kNone), static_cast<int>(st->write_u16(RegId::tuning_live, 0)));
+  MEMCMP_EQUAL(&before, &st->controller->config(), sizeof(kernel::KernelConfig));
+  DOUBLES_EQUAL(2500.0, st->read(RegId::servo_rate), 0.0);
+  for (int i = 0; i < 250; ++i) st->tick();
+  DOUBLES_EQUAL(6.0, st->read(RegId::status_state), 0.0);  // still Ready, still at 2.5 kHz
+  // What a save stores: the running 2.5 kHz.
+  LONGS_EQUAL(static_cast<int>(ExceptionCode::kNone), static_cast<int>(st->write_u16(RegId::config_save, 1)));
+  const persistence::LoadResult stored = st->store.load();
+  LONGS_EQUAL(2500, static_cast<int>(stored.config.get(RegId::servo_rate)));
+}

@@ -197,7 +197,7 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
     return r;
   };
   if (p.name[0] == '\0' || p.name[kNameLength - 1] != '\0') return fail(ProfileError::kBadName);
-  if (!(p.servo_rate_Hz >= 500.0 && p.servo_rate_Hz <= 20000.0)) return fail(ProfileError::kBadServoRate);
+  if (!io::stage::is_supported_servo_rate(p.servo_rate_Hz)) return fail(ProfileError::kBadServoRate);
   if (!(p.body.mass_kg > 0.0) || !(p.body.inertia_kgm2[0] > 0.0) || !(p.body.inertia_kgm2[1] > 0.0) ||
       !(p.body.inertia_kgm2[2] > 0.0)) {
     return fail(ProfileError::kBadBody);

@@ -119,6 +119,8 @@ CampaignPlan MakePlan(std::uint64_t seed, int index) {
     // a replay command in a report or a test stays the same run.
     e.kind = static_cast<CampaignFault>(pick(static_cast<int>(CampaignFault::kConfigWrite)));
     e.t_s = uni(kFaultWindow0_s, kFaultWindow1_s);
+    // The campaign's runs are at the default servo rate (their plans are
+    // replayable by run index; no --servo-rate), so its tick is that one's.
     const double tick = 1.0 / st::kServoRate_Hz;
     const double ticks_1_150 = tick * (1 + pick(150));  // the 1-150 ticks
     e.duration_s = ticks_1_150;

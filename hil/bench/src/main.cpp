@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "maglev/io/stage_parameters.hpp"
 #include "maglev/bench/campaign.hpp"
 #include "maglev/bench/overrides.hpp"
 #include "maglev/bench/pmlsm_bench.hpp"
@@ -64,6 +65,9 @@ void usage() {
       "                 [--can-log FILE]   the run's CAN traffic as a candump log (simulated time)\n"
       "                 [--plant default|ideal|nominal|as-built] [--error-seed N]   the plant model (docs/PLANT.md)\n"
       "                 [--seeds N]        as-built error seeds 1..N: per paper figure median, spread, ratio\n"
+      "                 [--servo-rate HZ]  2500 (default), 5000, 10000 or 20000: the controller's servo rate\n"
+      "                                    (re-discretized loops; the plant steps at it; in process only over\n"
+      "                                    CAN above the link's budget, docs/CAN.md)\n"
       "                 [--calibrate]      first a coupling calibration session on the same plant (levitate,\n"
       "                                    level, calibrate_coupling), then the scenario with its correction\n"
       "                                    loaded as from the persisted configuration (DIR/calibration/)\n"
@@ -135,6 +139,15 @@ Args parse_args(int argc, char** argv) {
         maglev::hil::PlantModel m{};
         if (!maglev::hil::parse_plant_model(v, &m)) a.error = "--plant: expected default, ideal, nominal or as-built, got '" + v + "'";
         a.run.plant = m;
+      }
+    } else if (s == "--servo-rate") {
+      if (value(&v)) {
+        char* end = nullptr;
+        const double r = std::strtod(v.c_str(), &end);
+        if (end == v.c_str() || *end != '\0' || !maglev::io::stage::is_supported_servo_rate(r)) {
+          a.error = "--servo-rate: " + maglev::bench::offered_servo_rates() + ", got '" + v + "'";
+        }
+        a.run.servo_rate_Hz = r;
       }
     } else if (s == "--seeds") {
       if (value(&v)) {
@@ -508,7 +521,8 @@ int main(int argc, char** argv) {
       if (!maglev::bench::in_suite(sc, suite_profile)) continue;
       maglev::bench::RunResult r;
       const int rc = run_one(sc, a, (fs::path(a.out) / sc.name()).string(), &r);
-      const double sim = static_cast<double>(r.ticks) / 2500.0;
+      const auto sim_it = r.metrics.find("simulated_time_s");  // ticks at the run's servo rate
+      const double sim = sim_it != r.metrics.end() ? sim_it->second : 0.0;
       rows.push_back({sc.name(), r.final_state, rc, r.real_time_factor, r.bus_load_percent, sim, r.wall_s});
       sim_total += sim;
       wall_total += r.wall_s;

@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <iterator>
 
 #include "maglev/bench/axes.hpp"
 #include "maglev/bench/metrics_registry.hpp"
 #include "maglev/bench/timeline.hpp"
 #include "maglev/bench/units.hpp"
+#include "maglev/io/stage_parameters.hpp"
 #include "maglev/plant/plant_profile.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/register_schema/register_map.hpp"
@@ -37,6 +39,16 @@ void apply_paper_controller(kernel::KernelConfig* c) {
     for (kernel::BiquadConfig& f : axis.filters) f = kernel::BiquadConfig{};
   }
   c->acceleration_feedforward = false;
+}
+
+std::string offered_servo_rates() {
+  std::string t;
+  const std::size_t n = std::size(io::stage::kSupportedServoRates_Hz);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i > 0) t += i + 1 < n ? ", " : " or ";
+    t += std::to_string(static_cast<long>(io::stage::kSupportedServoRates_Hz[i]));
+  }
+  return t + " Hz";
 }
 
 bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<ScenarioError>* errs) {
@@ -97,6 +109,9 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     case hil::PlantModel::kAsBuilt: o->plant = hil::NominalPlant(o->plant); break;
     default: break;
   }
+  // Whatever the model, the plant steps at the controller's servo rate (the
+  // ideal model starts from the defaults).
+  hil::ApplyServoRate(static_cast<double>(o->controller.servo_rate_Hz), &o->plant);
   // noise = component | fitted: the fitted density (docs/BENCH.md) stays a
   // named option; nominal and as-built default to the component figures.
   if (const auto it = sc.plant.find("noise"); it != sc.plant.end()) {
@@ -226,6 +241,15 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
   for (const auto& [k, v] : sc.controller) {
     auto& c = o->controller;
     if (k == "preset") continue;
+    if (k == "servo_rate_Hz") {
+      // Applied with the profile (apply_profile: the kernel configuration is
+      // made at this rate); checked here so that validate() reports it.
+      double r = 0;
+      if (num("controller", k, v, Dim::kFrequency, &r) && !io::stage::is_supported_servo_rate(r)) {
+        fail("[controller] servo_rate_Hz = " + v + ": the controller offers " + offered_servo_rates());
+      }
+      continue;
+    }
     if (k == "payload_kg") {
       double m = 0;
       if (num("controller", k, v, Dim::kMass, &m)) c.payload_mass_kg = static_cast<float>(m);
@@ -235,7 +259,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     Axis p{};
     if (dot == std::string::npos || !parse_axis(k.substr(0, dot), &p)) {
       fail("[controller] unknown key '" + k +
-           "' (preset, payload_kg, AXIS.kp|ki|kd|b|derivative_filter_Hz, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
+           "' (preset, payload_kg, servo_rate_Hz, AXIS.kp|ki|kd|b|derivative_filter_Hz, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
       continue;
     }
     const std::string field = k.substr(dot + 1);
@@ -324,11 +348,29 @@ std::string profile_of(const scenario::Scenario& sc) {
   return it == sc.scenario.end() ? kDefaultProfile : it->second;
 }
 
-bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<ScenarioError>* errs) {
-  const profile::ProfileParse parsed = profile::find_profile(name_or_path, profile_dir());
+std::optional<double> servo_rate_of(const scenario::Scenario& sc) {
+  const auto it = sc.controller.find("servo_rate_Hz");
+  if (it == sc.controller.end()) return std::nullopt;
+  std::string e;
+  const auto r = parse_quantity(it->second, Dim::kFrequency, &e);
+  if (!r) return std::nullopt;
+  return *r;
+}
+
+bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<ScenarioError>* errs,
+                   std::optional<double> servo_rate_Hz) {
+  profile::ProfileParse parsed = profile::find_profile(name_or_path, profile_dir());
   if (!parsed.ok()) {
     for (const auto& e : parsed.errors) errs->push_back({e});
     return false;
+  }
+  if (servo_rate_Hz) {
+    if (!io::stage::is_supported_servo_rate(*servo_rate_Hz)) {
+      errs->push_back({"servo rate " + std::to_string(*servo_rate_Hz) + " Hz: the controller offers " +
+                       offered_servo_rates()});
+      return false;
+    }
+    parsed.profile.servo_rate_Hz = *servo_rate_Hz;
   }
   kernel::KernelConfig kc{};
   const stage_profile::ProfileCheck check = stage_profile::MakeKernelConfig(parsed.profile, &kc);

@@ -12,7 +12,10 @@ bool resolve_overrides(const scenario::Scenario& sc, const RunOptions& opt, Over
   *ov = Overrides{};
   // The stage first (kernel configuration and plant from its profile), then
   // the scenario's own [plant]/[controller] keys on top.
-  if (errs.empty()) apply_profile(opt.profile ? *opt.profile : profile_of(sc), ov, &errs);
+  // The servo rate goes in with the profile: the kernel configuration is made
+  // (and checked) at it, the plant steps at it. The command line wins.
+  const std::optional<double> rate = opt.servo_rate_Hz ? opt.servo_rate_Hz : servo_rate_of(sc);
+  if (errs.empty()) apply_profile(opt.profile ? *opt.profile : profile_of(sc), ov, &errs, rate);
   ov->plant_model_override = opt.plant;
   ov->error_seed_override = opt.error_seed;
   if (errs.empty()) apply_overrides(sc, ov, &errs);
@@ -64,12 +67,10 @@ Link open_link(const std::string& name, bool need_controller) {
   return l;
 }
 
-std::uint64_t CanLogTap::tick_time_us(std::uint64_t n) {
-  // 2500 Hz: 400 us per tick, an integer, so no rounding enters the log.
-  constexpr auto kPeriod_us = static_cast<std::uint64_t>(1e6 / io::stage::kServoRate_Hz);
-  static_assert(kPeriod_us * static_cast<std::uint64_t>(io::stage::kServoRate_Hz) == 1000000u,
-                "the servo period must be a whole number of microseconds");
-  return n * kPeriod_us;
+std::uint64_t CanLogTap::tick_time_us(std::uint64_t n) const {
+  // Every offered rate's period is a whole number of microseconds (400, 200,
+  // 100, 50 us), so no rounding enters the log.
+  return n * period_us;
 }
 
 void CanLogTap::drain(std::uint64_t n) {

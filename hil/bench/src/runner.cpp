@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -76,7 +77,11 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     link.bus->set_fault_hook([hooks](const can::CanFrame& f, std::uint64_t seq) { return hooks->on_frame(f, seq); });
     hooks->attach(*link.bus);
   }
+  // The configured servo rate (profile, [controller] servo_rate_Hz or
+  // --servo-rate; the kernel refused anything but the offered rates).
+  const double rate_Hz = static_cast<double>(ov.controller.servo_rate_Hz);
   internal::CanLogTap tap;
+  tap.period_us = static_cast<std::uint64_t>(std::llround(1e6 / rate_Hz));
   if (!opt.can_log.empty()) {
     std::string err;
     if (!internal::open_can_log(link, opt.can, opt.can_log, &tap, &err)) {
@@ -88,7 +93,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   can::BusLoadMeter meter;
   hil::Plant plant(ov.plant, ov.seed);
   lockstep::PlantEndpoint endpoint(*link.plant_port, &meter);
-  hil::CanServoIo cio(*link.ctrl_port, &meter);
+  hil::CanServoIo cio(*link.ctrl_port, &meter, rate_Hz);
   hil::ControllerNode node(ov.kernel, cio);
   kernel::KernelConfig boot_config = ov.controller;
   if (opt.coupling) boot_config.coupling = *opt.coupling;
@@ -102,7 +107,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   }
   const DisturbanceInjector injector(ov.controller);
 
-  const double dt = 1.0 / io::stage::kServoRate_Hz;
+  const double dt = 1.0 / rate_Hz;
   const auto n_ticks = static_cast<std::uint64_t>(std::llround(sc.duration_s() / dt));
   Trace& tr = R.trace;
   internal::reserve(&tr, n_ticks);
@@ -227,6 +232,11 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   if (timer) internal::add_realtime_metrics(*timer, &R.metrics);
   // Coupling calibration (issue 15): only when one ran or a correction was
   // loaded, so other runs' metrics.json keep their keys.
+  // Only off the default rate, so the default runs' metrics.json keep their keys.
+  if (rate_Hz != io::stage::kServoRate_Hz) {
+    R.metrics["servo_rate_Hz"] = rate_Hz;
+    R.metrics["plant_substeps_per_tick"] = static_cast<double>(ov.plant.integration.substeps_per_tick);
+  }
   R.coupling = node.config().coupling;
   const kernel::ControllerStatus& fin = node.status();
   if (opt.coupling) R.metrics["coupling_correction_loaded"] = opt.coupling->enabled;
@@ -236,7 +246,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     R.metrics["calibration_coupling_after"] = static_cast<double>(fin.calibration_coupling_after);
     R.metrics["calibration_inconsistency"] = static_cast<double>(fin.calibration_inconsistency);
   }
-  compute_metrics(sc, MetricInputs{actions, tr, excitations, levitate_t, ready_t, sc.duration_s(), io::stage::kServoRate_Hz},
+  compute_metrics(sc, MetricInputs{actions, tr, excitations, levitate_t, ready_t, sc.duration_s(), rate_Hz},
                   &R.metrics, &R.warnings);
   return R;
 }

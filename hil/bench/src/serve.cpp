@@ -284,8 +284,16 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
     std::printf("maglev-hil serve: stage.profile %u (%s) from the flash: plant and kernel built from it\n",
                 static_cast<unsigned>(profile_index), profile.name);
   }
+  // The servo rate the flash's configuration selects (servo.rate): the
+  // plant steps at it and the loop is paced at it. A later servo.rate write
+  // (landed) re-designs the kernel; the bench then stops and asks for a
+  // restart, because its plant and pacing were built for the boot rate.
+  const double rate_Hz = static_cast<double>(controller->config().servo_rate_Hz);
+  hil::ApplyServoRate(rate_Hz, &stage_plant);
   hil::Plant plant(stage_plant, seed);
-  app::CanSensorSource sensors(*ctrl_port, app::CanSensorConfig{});
+  app::CanSensorConfig sensor_config{};
+  sensor_config.period_us = static_cast<std::uint32_t>(std::lround(1e6 / rate_Hz));
+  app::CanSensorSource sensors(*ctrl_port, sensor_config);
   app::CanActuatorSink actuators(*ctrl_port, sensors);
   // Lab tools (recorder, wave generator) as on the board: rec.* / wave.*
   // registers, the recorder armed in fault-watch mode from the start.
@@ -302,10 +310,11 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
   app::ServoLoop<Kernel> loop(sensors, actuators, *controller, app::ServoConfig{}, servo_hooks);
 
   std::printf("maglev-hil serve: Modbus TCP listening on %s:%d (unit 1), kernel %s, flash %s, %.0f Hz real time\n",
-              o.host.c_str(), modbus->port(), hil::to_string(o.kernel), o.flash.c_str(), io::stage::kServoRate_Hz);
+              o.host.c_str(), modbus->port(), hil::to_string(o.kernel), o.flash.c_str(), rate_Hz);
   std::fflush(stdout);
 
-  const double dt = 1.0 / io::stage::kServoRate_Hz;
+  const double dt = 1.0 / rate_Hz;
+  const auto ticks_per_second = static_cast<std::uint64_t>(std::llround(rate_Hz));
   const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 * dt));
   const std::uint64_t end_tick =
       o.duration_s > 0.0 ? static_cast<std::uint64_t>(std::llround(o.duration_s / dt)) : ~std::uint64_t{0};
@@ -375,7 +384,14 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
     }
     deadline += period_ns;
 
-    if ((n + 1) % 2500 == 0) {
+    if (static_cast<double>(controller->config().servo_rate_Hz) != rate_Hz) {
+      std::fprintf(stderr,
+                   "maglev-hil serve: servo.rate is now %.0f Hz (the bench runs its plant at the boot rate %.0f Hz): "
+                   "stopping; config.save and start maglev-hil serve again to run at the new rate\n",
+                   static_cast<double>(controller->config().servo_rate_Hz), rate_Hz);
+      break;
+    }
+    if ((n + 1) % ticks_per_second == 0) {
       const kernel::ControllerStatus& st = controller->status();
       std::fprintf(stderr,
                    "t=%8.1f s  state=%-9s fault=%u moving=%d  x=%+.9f y=%+.9f z=%+.9f m  "

@@ -2,6 +2,7 @@
 // the timeline as host_command frames) and the controller process (the
 // controller node executing them), over any CAN interface.
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include "maglev/bench/metrics_registry.hpp"
 #include "maglev/bench/runner.hpp"
 #include "maglev/bench/timeline.hpp"
+#include "maglev/can_link/link_budget.hpp"
 #include "maglev/plant/plant.hpp"
 #include "maglev/lockstep/actuator_watchdog.hpp"
 #include "maglev/lockstep/plant_endpoint.hpp"
@@ -74,6 +76,24 @@ bool read_record(const std::string& path, RecordHeader* h, std::vector<double>* 
 
 }  // namespace
 
+namespace {
+// The two-process bench runs over a real (or virtual) CAN FD bus: a servo rate
+// whose periodic frames would take more than can::kLinkUsableFraction of it is
+// refused (docs/CAN.md "Bus budget"), not run late.
+bool link_carries(double servo_rate_Hz, std::string* why) {
+  const double max_Hz = can::max_servo_rate_Hz();
+  if (servo_rate_Hz <= max_Hz) return true;
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "servo rate %.0f Hz: the CAN FD link (1 Mbit/s nominal, 5 Mbit/s data) carries the servo frames "
+                "of at most %.0f Hz at %.0f %% bus load (docs/CAN.md \"Bus budget\"); run %.0f Hz in process "
+                "(maglev-hil run --servo-rate)",
+                servo_rate_Hz, std::floor(max_Hz), 100.0 * can::kLinkUsableFraction, servo_rate_Hz);
+  *why = buf;
+  return false;
+}
+}  // namespace
+
 std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const RunOptions& opt,
                                            const PlantProcessOptions& po, std::vector<ScenarioError>* errors) {
   auto fail = [&](const std::string& m) -> std::optional<RunResult> {
@@ -91,6 +111,8 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
                   ": 'excite' is a bench disturbance computed from the controller's pose every tick: in-process only");
     }
   }
+  const double rate_Hz = static_cast<double>(ov.controller.servo_rate_Hz);
+  if (std::string why; !link_carries(rate_Hz, &why)) return fail(why);
   internal::Link link = internal::open_link(opt.can, false);
   if (!link.plant_port) return fail("cannot open CAN '" + opt.can + "': " + link.error);
 
@@ -98,9 +120,9 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
   hil::Plant plant(ov.plant, ov.seed);
   can::BusLoadMeter meter;  // every frame on the bus: sent here + received from the controller
   lockstep::PlantEndpoint endpoint(*link.plant_port, &meter, lockstep::PlantEndpoint::Config{true});
-  can::PeriodicTimer timer(400000);
+  const double dt = 1.0 / rate_Hz;
+  can::PeriodicTimer timer(static_cast<std::uint64_t>(std::llround(1e9 * dt)));
   const bool paced = opt.mode == Mode::kRealtime && timer.ok() && timer.start();
-  const double dt = 1.0 / io::stage::kServoRate_Hz;
   const auto n_ticks = static_cast<std::uint64_t>(std::llround(sc.duration_s() / dt));
   Trace& tr = R.trace;
   std::vector<double> current_A[8];
@@ -224,7 +246,7 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
                                                  static_cast<double>(rh.final_state), static_cast<double>(rh.fault)});
   M["host_commands_acked"] = static_cast<double>(R.commands.size() - pending.size());
   if (paced) internal::add_realtime_metrics(timer, &M);
-  compute_metrics(sc, MetricInputs{actions, tr, {}, levitate_t, ready_t, sc.duration_s(), io::stage::kServoRate_Hz},
+  compute_metrics(sc, MetricInputs{actions, tr, {}, levitate_t, ready_t, sc.duration_s(), rate_Hz},
                   &M, &R.warnings);
   if (!pending.empty()) R.warnings.push_back(std::to_string(pending.size()) + " host command(s) never acknowledged");
   return R;
@@ -234,7 +256,10 @@ bool controller_config_of(const scenario::Scenario& sc, kernel::KernelConfig* co
                           std::vector<ScenarioError>* errors) {
   std::vector<ScenarioError> errs;
   Overrides ov;
-  if (apply_profile(profile_of(sc), &ov, &errs)) apply_overrides(sc, &ov, &errs);
+  if (apply_profile(profile_of(sc), &ov, &errs, servo_rate_of(sc))) apply_overrides(sc, &ov, &errs);
+  if (std::string why; errs.empty() && !link_carries(static_cast<double>(ov.controller.servo_rate_Hz), &why)) {
+    errs.push_back({sc.source + ": " + why});
+  }
   if (!errs.empty()) {
     if (errors != nullptr) *errors = errs;
     return false;
@@ -251,7 +276,7 @@ int run_controller_process(const ControllerProcessOptions& o) {
     return 1;
   }
   can::BusLoadMeter meter;
-  hil::CanServoIo cio(*link.plant_port, &meter);
+  hil::CanServoIo cio(*link.plant_port, &meter, static_cast<double>(o.config.servo_rate_Hz));
   hil::ControllerNode node(o.kernel, cio);
   if (node.apply_config(o.config) != kernel::ConfigError::kOk) {
     std::fprintf(stderr, "controller: configuration refused by the kernel\n");

@@ -87,19 +87,30 @@ can::PortStatus NodePort::receive(can::CanFrame& f, std::uint32_t timeout_us) {
 
 // ---------------------------------------------------------------- CanServoIo
 namespace {
-app::CanSensorConfig node_sensor_config() {
+app::CanSensorConfig node_sensor_config(double servo_rate_Hz) {
   app::CanSensorConfig c{};
-  c.period_us = static_cast<std::uint32_t>(1e6 / io::stage::kServoRate_Hz);
+  c.period_us = static_cast<std::uint32_t>(std::lround(1e6 / servo_rate_Hz));
   c.now_us = nullptr;  // the tick clock: deterministic, what lockstep needs
   // The board bounds its ISR's drain at 16 frames; the host node drains all
   // that wait() queued (a backlog after a stall: newest sensor frame wins).
   c.max_frames_per_read = 255;
   return c;
 }
+// A catalog period (ticks at the default rate) at servo_rate_Hz: the same
+// frame rate in Hz, so telemetry does not grow with the servo rate.
+std::uint32_t period_ticks_at(std::uint32_t default_ticks, double servo_rate_Hz) {
+  const double n = static_cast<double>(default_ticks) * servo_rate_Hz / io::stage::kServoRate_Hz;
+  return std::max<std::uint32_t>(1u, static_cast<std::uint32_t>(std::lround(n)));
+}
 }  // namespace
 
-CanServoIo::CanServoIo(can::CanPort& port, can::BusLoadMeter* tx_meter)
-    : port_(port, tx_meter), sensors_(port_, node_sensor_config()), actuators_(port_, sensors_) {}
+CanServoIo::CanServoIo(can::CanPort& port, can::BusLoadMeter* tx_meter, double servo_rate_Hz)
+    : port_(port, tx_meter),
+      sensors_(port_, node_sensor_config(servo_rate_Hz)),
+      actuators_(port_, sensors_),
+      servo_rate_Hz_(servo_rate_Hz),
+      status_period_ticks_(period_ticks_at(can::kControllerStatusPeriodTicks, servo_rate_Hz)),
+      heartbeat_period_ticks_(period_ticks_at(can::kHeartbeatPeriodTicks, servo_rate_Hz)) {}
 
 void CanServoIo::announce() {
   can::HeartbeatFrame hb{can::NodeState::kInit, 0, 0, 0};
@@ -118,18 +129,18 @@ void CanServoIo::publish_status(const kernel::ControllerStatus& st) {
   // Catalog rates on the tick grid (10, 20, ...; 250, 500, ...): the bus
   // carries the same frames at the same ticks as every earlier bench run.
   ++ticks_;
-  if (ticks_ % can::kControllerStatusPeriodTicks == 0) {
+  if (ticks_ % status_period_ticks_ == 0) {
     can::CanFrame f{};
     can::encode_controller_status(app::to_status_frame(st), status_counter_++, f);
     send(f);
   }
-  if (ticks_ % can::kHeartbeatPeriodTicks == 0) {
+  if (ticks_ % heartbeat_period_ticks_ == 0) {
     // Same content as app::Application's heartbeat.
     can::HeartbeatFrame hb{};
     const bool fault = st.fault != kernel::FaultCode::kNone || st.state == kernel::SequencerState::kFault;
     hb.node_state = fault ? can::NodeState::kFault : can::NodeState::kOperational;
     hb.uptime_ms = static_cast<std::uint32_t>(static_cast<std::uint64_t>(ticks_) * 1000u /
-                                              static_cast<std::uint64_t>(io::stage::kServoRate_Hz));
+                                              static_cast<std::uint64_t>(servo_rate_Hz_));
     hb.rx_rejected = static_cast<std::uint16_t>(std::min<std::uint32_t>(rx_stats().rejected_total(), 65535u));
     hb.bus_errors = static_cast<std::uint16_t>(std::min<std::uint32_t>(port_.counters().error_frames, 65535u));
     can::CanFrame f{};

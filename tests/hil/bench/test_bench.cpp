@@ -148,3 +148,78 @@ seed = 3
     CHECK_TRUE(after_hi - after_lo < 1e-12);
   }
 }
+
+// --- issue 16: the servo rate as configuration ------------------------------
+
+namespace {
+const char* kStartupAt10kHz = R"(
+[scenario]
+name = t10k
+duration_s = 3.3
+seed = 11
+[controller]
+servo_rate_Hz = 10000
+[timeline]
+0.0 levitate
+3.0 step x 8um
+[metrics]
+levitation
+noise x 2.8 3.0 x_rest
+)";
+}  // namespace
+
+TEST(Bench, AtTenKilohertzTheStageLevitatesToReady) {
+  const auto sc = parse(kStartupAt10kHz);
+  const auto r = run_sc(sc, maglev::hil::KernelKind::kFloat32);
+  // 3.3 s at 100 us: four times the 2.5 kHz run's ticks.
+  CHECK_EQUAL(33000u, r.trace.size());
+  DOUBLES_EQUAL(1e-4, r.trace.t_s[1] - r.trace.t_s[0], 1e-15);
+  DOUBLES_EQUAL(10000.0, r.metrics.at("servo_rate_Hz"), 0.0);
+  DOUBLES_EQUAL(1.0, r.metrics.at("plant_substeps_per_tick"), 0.0);  // one 100 us RK4 step
+  DOUBLES_EQUAL(1.0, r.metrics.at("levitated"), 0.0);
+  STRCMP_EQUAL("Ready", r.final_state.c_str());
+  DOUBLES_EQUAL(30e-6, r.metrics.at("z_final_height_m"), 1e-6);
+  // The sequencer's timings are seconds: the lift takes as long as at 2.5 kHz.
+  CHECK_TRUE(r.metrics.at("levitation_time_s") > 0.5 && r.metrics.at("levitation_time_s") < 3.0);
+  DOUBLES_EQUAL(0.0, r.metrics.at("missed_actuator_frames"), 0.0);
+  CHECK_TRUE(r.metrics.at("x_rest_rms_noise_m") > 0.0 && r.metrics.at("x_rest_rms_noise_m") < 20e-9);
+}
+
+TEST(Bench, TheCommandLineRateWinsAndOnlyOfferedRatesRun) {
+  const auto sc = parse(kStartupAt10kHz);
+  maglev::bench::RunOptions o;
+  o.verbose = false;
+  o.servo_rate_Hz = 20000.0;
+  std::vector<maglev::bench::ScenarioError> errs;
+  const auto r = maglev::bench::run(sc, o, &errs);
+  CHECK_TRUE(errs.empty());
+  CHECK_TRUE(r.has_value());
+  CHECK_EQUAL(66000u, r->trace.size());
+  DOUBLES_EQUAL(20000.0, r->metrics.at("servo_rate_Hz"), 0.0);
+  STRCMP_EQUAL("Ready", r->final_state.c_str());
+  // 3 kHz is not an offered rate: refused with a message, nothing runs.
+  std::string text = kStartupAt10kHz;
+  text.replace(text.find("10000"), 5, "3000");
+  const auto bad = parse(text);
+  errs.clear();
+  CHECK_FALSE(maglev::bench::run(bad, maglev::bench::RunOptions{}, &errs).has_value());
+  CHECK_FALSE(errs.empty());
+  CHECK_TRUE(errs[0].message.find("2500, 5000, 10000 or 20000") != std::string::npos);
+  o.servo_rate_Hz = 3000.0;
+  errs.clear();
+  CHECK_FALSE(maglev::bench::run(sc, o, &errs).has_value());
+  CHECK_FALSE(errs.empty());
+}
+
+TEST(Bench, TheTwoProcessLinkRefusesRatesAboveItsBusBudget) {
+  // 10 kHz over CAN FD at 1/5 Mbit/s: the servo frames alone would take
+  // 187 % of the bus (docs/CAN.md): refused before any frame is sent.
+  const auto sc = parse(kStartupAt10kHz);
+  maglev::bench::RunOptions o;
+  o.verbose = false;
+  std::vector<maglev::bench::ScenarioError> errs;
+  CHECK_FALSE(maglev::bench::run_plant_process(sc, o, maglev::bench::PlantProcessOptions{}, &errs).has_value());
+  CHECK_EQUAL(1u, errs.size());
+  CHECK_TRUE(errs[0].message.find("servo rate 10000 Hz") != std::string::npos);
+  CHECK_TRUE(errs[0].message.find("at most 3578 Hz") != std::string::npos);
+}

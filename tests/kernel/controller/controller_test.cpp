@@ -144,6 +144,67 @@ TEST(Controller, LockedFieldsWhileLevitated) {
   DOUBLES_EQUAL(30000.0, r.c.config().axis[0].pid.kp, 0.0);
 }
 
+namespace {
+template <typename Scalar>
+bool same_pid(const Pid2DofCoefficients<Scalar>& a, const Pid2DofCoefficients<Scalar>& b) {
+  return a.kp == b.kp && a.one_minus_b_kp == b.one_minus_b_kp && a.c == b.c && a.ki_half_T == b.ki_half_T &&
+         a.antiwindup == b.antiwindup && a.a_d == b.a_d && a.b_d == b.b_d && a.effort_limit == b.effort_limit;
+}
+KernelConfig at_rate(float rate_Hz) {
+  KernelConfig k = default_kernel_config();
+  k.servo_rate_Hz = rate_Hz;
+  k.measurement.servo_rate_Hz = rate_Hz;
+  return k;
+}
+}  // namespace
+
+// Issue 16: the servo rate is configuration. A new rate re-designs every loop
+// from its continuous gains; only the offered rates are accepted.
+TEST(Controller, ARateChangeRediscretizesEveryLoopFromItsContinuousGains) {
+  Controller<float> c;
+  for (float rate : {10000.0f, 20000.0f, 5000.0f, 2500.0f}) {
+    const KernelConfig k = at_rate(rate);
+    CHECK(c.apply_config(k) == ConfigError::kOk);
+    for (int a = 0; a < kAxisCount; ++a) {
+      Pid2DofCoefficients<float> expected{};
+      CHECK(design_pid2dof(k.axis[a].pid, static_cast<double>(rate), &expected) == LoopDesignError::kOk);
+      CHECK_TEXT(same_pid(expected, c.pid_coefficients(a)), "axis coefficients != design_pid2dof at the rate");
+    }
+  }
+  // The integrator's ki T/2 at 10 kHz is a quarter of 2.5 kHz's: really re-designed.
+  Pid2DofCoefficients<float> at_2k5{};
+  CHECK(design_pid2dof(default_kernel_config().axis[0].pid, 2500.0, &at_2k5) == LoopDesignError::kOk);
+  CHECK(c.apply_config(at_rate(10000.0f)) == ConfigError::kOk);
+  DOUBLES_EQUAL(0.25 * static_cast<double>(at_2k5.ki_half_T), static_cast<double>(c.pid_coefficients(0).ki_half_T),
+                1e-6 * std::fabs(static_cast<double>(at_2k5.ki_half_T)));
+  // Not an offered rate (inside the old 500..20000 window): refused, nothing changed.
+  KernelConfig before;
+  std::memcpy(&before, &c.config(), sizeof before);
+  for (float rate : {3000.0f, 500.0f, 40000.0f}) {
+    CHECK(c.apply_config(at_rate(rate)) == ConfigError::kBadServoRate);
+    MEMCMP_EQUAL(&before, &c.config(), sizeof(KernelConfig));
+  }
+  // The measurement must run at the same rate.
+  KernelConfig split = at_rate(5000.0f);
+  split.measurement.servo_rate_Hz = 2500.0f;
+  CHECK(c.apply_config(split) == ConfigError::kMeasurement);
+}
+
+TEST(Controller, TheRateIsLockedOnceTheStageLeavesRest) {
+  static Rig<float> r;
+  CHECK(r.c.command(MotionCommand{MotionType::kLevitate}) == CommandResult::kAccepted);
+  CHECK(r.run_until(SequencerState::kLift, 5000));
+  KernelConfig before;
+  std::memcpy(&before, &r.c.config(), sizeof before);
+  KernelConfig k = r.c.config();
+  k.servo_rate_Hz = 10000.0f;
+  k.measurement.servo_rate_Hz = 10000.0f;
+  CHECK(r.c.apply_config(k) == ConfigError::kLockedWhileLevitated);
+  k.live_tuning = true;  // live tuning is for gains, never the rate
+  CHECK(r.c.apply_config(k) == ConfigError::kLockedWhileLevitated);
+  MEMCMP_EQUAL(&before, &r.c.config(), sizeof(KernelConfig));
+}
+
 TEST(Controller, TheLoopCheckWantsThreeTicksOfDelayMargin) {
   // Campaign seed 1, run 3013: theta_x kp and kd x20 have 52 deg of phase
   // margin, but at a 285 Hz crossover that is 1.27 ticks of delay; on the

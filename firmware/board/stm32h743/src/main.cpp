@@ -72,9 +72,18 @@ extern std::uint32_t __config_bank_b_start;
 
 namespace {
 
-constexpr std::uint32_t kServoRate_Hz = 2500;
-constexpr std::uint32_t kPeriodCycles = b::kCpu_Hz / kServoRate_Hz;  // 192000
-constexpr std::uint32_t kCycleBudget = kPeriodCycles / 2;            // 50 % of the period
+// The servo rate is the kernel's configured one (register servo.rate,
+// persisted; 2500, 5000, 10000 or 20000 Hz): the timers are programmed from it
+// at boot and again when it changes (landed: the kernel refuses it otherwise).
+// Every offered rate divides the 480 MHz CPU and 240 MHz timer clocks exactly.
+std::uint32_t g_servo_rate_Hz = 0;  // what the timers run at now
+static_assert(b::kCpu_Hz % 20000u == 0u && b::kApbTimer_Hz % 20000u == 0u);
+// Period and budget (50 % of the period) in CPU cycles: 192000 / 96000 at 2.5 kHz.
+maglev::app::ServoConfig servo_timing(std::uint32_t rate_Hz) {
+  const std::uint32_t period = b::kCpu_Hz / rate_Hz;
+  return maglev::app::ServoConfig{period / 2u, period, 3};
+}
+std::uint32_t configured_servo_rate_Hz();
 
 // --- fault log in backup SRAM (survives reset; read over Modbus after boot) ---
 struct FaultLog {
@@ -175,6 +184,11 @@ void record(const maglev::io::SensorSample& s, const maglev::io::ActuatorCommand
 std::uint32_t g_last_cycles = 0;
 std::uint32_t g_cycle_remainder = 0;
 std::uint32_t g_now_us = 0;
+std::uint32_t configured_servo_rate_Hz() {
+  // The kernel accepts only the offered rates (is_supported_servo_rate).
+  return static_cast<std::uint32_t>(g_kernel.config().servo_rate_Hz);
+}
+
 std::uint32_t now_us() {
   const std::uint32_t c = cycle_counter();
   const std::uint32_t elapsed = c - g_last_cycles + g_cycle_remainder;
@@ -272,7 +286,7 @@ void start_tick_timer() {
   const r::Addr t = r::tim::kTim2;
   g_bus.write32(t + r::tim::kCr1, 0u);
   g_bus.write32(t + r::tim::kPsc, 0u);
-  g_bus.write32(t + r::tim::kArr, b::kApbTimer_Hz / kServoRate_Hz - 1u);  // 95999
+  g_bus.write32(t + r::tim::kArr, b::kApbTimer_Hz / g_servo_rate_Hz - 1u);  // 95999 at 2.5 kHz
   g_bus.write32(t + r::tim::kEgr, 1u);  // UG: load PSC/ARR
   g_bus.write32(t + r::tim::kSr, 0u);   // drop the UIF the UG just set
   g_bus.write32(t + r::tim::kDier, 1u); // UIE
@@ -373,8 +387,13 @@ extern "C" void board_main() {
 
   static const maglev::app::ServoHooks hooks{&cycle_counter, &tick_irq_pending_again, &servo_ran, &record,
                                              &maglev::lab::LabTick<float>::before_step};
-  static maglev::app::ServoLoop<b::ServoKernel> servo(g_sensors, actuators, g_kernel,
-                                                      maglev::app::ServoConfig{kCycleBudget, kPeriodCycles, 3}, hooks);
+  // The rate the persisted configuration (applied by Application above) asks for.
+  g_servo_rate_Hz = configured_servo_rate_Hz();
+#if MAGLEV_BOARD_HIL
+  g_sensors.set_period_us(1000000u / g_servo_rate_Hz);  // the CAN sensor source's tick clock
+#endif
+  static maglev::app::ServoLoop<b::ServoKernel> servo(g_sensors, actuators, g_kernel, servo_timing(g_servo_rate_Hz),
+                                                      hooks);
   g_servo = &servo;
 
   g_bus.write32(r::scb::kBase + r::scb::kShpr3, 1u << 28);  // SysTick priority 1
@@ -389,7 +408,7 @@ extern "C" void board_main() {
   nvic_enable(r::irq::kExti15_10, 0);
   nvic_enable(r::irq::kTim3, 0);
   // The servo clock: TIM1 CH1 PWM on CONVST (APB2 timer clock 240 MHz).
-  d::start_convst_timer(g_bus, r::tim::kTim1, d::convst_timing(b::kApbTimer_Hz, kServoRate_Hz, 1000));
+  d::start_convst_timer(g_bus, r::tim::kTim1, d::convst_timing(b::kApbTimer_Hz, g_servo_rate_Hz, 1000));
 #endif
   (void)g_watchdog.start(kIwdgTimeout_ms);
 
@@ -403,10 +422,26 @@ extern "C" void board_main() {
     const std::uint32_t ticks = s.ticks;
     // Modbus reply, CAN telemetry, recorder drain, watchdog feed policy.
     application.service(now_us(), ticks);
-    if (ticks - last_diag_tick >= kServoRate_Hz / 100u) {
+    if (const std::uint32_t rate = configured_servo_rate_Hz(); rate != g_servo_rate_Hz) {
+      // servo.rate written (landed): the kernel already re-designed its loops
+      // for `rate`; stop the tick source, re-time the loop, restart it.
+#if MAGLEV_BOARD_HIL
+      g_bus.write32(r::tim::kTim2 + r::tim::kCr1, 0u);
+      g_servo_rate_Hz = rate;
+      servo.set_timing(servo_timing(rate));
+      g_sensors.set_period_us(1000000u / rate);
+      start_tick_timer();
+#else
+      g_bus.write32(r::tim::kTim1 + r::tim::kCr1, 0u);
+      g_servo_rate_Hz = rate;
+      servo.set_timing(servo_timing(rate));
+      d::start_convst_timer(g_bus, r::tim::kTim1, d::convst_timing(b::kApbTimer_Hz, rate, 1000));
+#endif
+    }
+    if (ticks - last_diag_tick >= g_servo_rate_Hz / 100u) {
       last_diag_tick = ticks;
       send_diagnostics(s);
-      g_led.write(((ticks / kServoRate_Hz) & 1u) != 0u);
+      g_led.write(((ticks / g_servo_rate_Hz) & 1u) != 0u);
     }
   }
 }

@@ -78,7 +78,9 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
   };
   // --- 1. validate the whole config into the scratch slot; nothing live changes.
   const double rate = static_cast<double>(c.servo_rate_Hz);
-  if (!(rate >= 500.0 && rate <= 20000.0)) return refuse(ConfigError::kBadServoRate);
+  // One of the offered rates (register servo.rate): the board's timers and
+  // the bench's budgets are worked out for those alone.
+  if (!stage::is_supported_servo_rate(rate)) return refuse(ConfigError::kBadServoRate);
   if (std::fabs(c.measurement.servo_rate_Hz - rate) > 1e-6 * rate) return refuse(ConfigError::kMeasurement);
   SensorsToPoseState s2p_scratch = s2p_;
   if (ApplySensorsToPoseConfig(c.measurement, &s2p_scratch) != SensorsToPoseError::kOk) {
@@ -237,6 +239,7 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
   sequencer_.configure(c.sequencer, c.servo_rate_Hz);
   supervisor_.configure(c.supervisor, c.servo_rate_Hz);
   homing_needed_ticks_ = static_cast<std::uint32_t>(c.sequencer.homing_time_s * c.servo_rate_Hz) + 1u;
+  coupling_ramp_ticks_ = static_cast<std::uint32_t>(std::lround(kCouplingRamp_s * c.servo_rate_Hz));
   status_.last_config_error = ConfigError::kOk;
   return ConfigError::kOk;
 }
@@ -475,7 +478,7 @@ void Controller<Scalar>::set_coupling(const CouplingCorrection& next) {
   for (int e = 0; e < kCouplingMatrixSize; ++e) {
     ramp_.from[e] = config_.coupling.enabled ? config_.coupling.matrix[e] : identity_entry(e);
   }
-  ramp_.left = kCouplingRampTicks;
+  ramp_.left = coupling_ramp_ticks_;
   config_.coupling = next;
 }
 
@@ -568,8 +571,8 @@ void Controller<Scalar>::calibration_accumulate() {
     set_coupling(next);
     // The verification's first settle also covers the ramp.
     cal_.tick = 0;
-    if (cal_.settle_ticks < kCouplingRampTicks) {
-      cal_.settle_ticks = kCouplingRampTicks + cal_.settle_ticks;
+    if (cal_.settle_ticks < coupling_ramp_ticks_) {
+      cal_.settle_ticks = coupling_ramp_ticks_ + cal_.settle_ticks;
     }
     return;
   }
@@ -857,7 +860,7 @@ void Controller<Scalar>::allocate_forces(Tick& t) {
     AllocateCurrents<Scalar>(t.effort, measured_.pico[0], measured_.pico[1], ap.allocation, &t.out);
   } else {
     float c[kCouplingMatrixSize];
-    const float w = static_cast<float>(ramp_.left) / static_cast<float>(kCouplingRampTicks);  // weight of `from`
+    const float w = static_cast<float>(ramp_.left) / static_cast<float>(coupling_ramp_ticks_);  // weight of `from`
     for (int e = 0; e < kCouplingMatrixSize; ++e) {
       const float to = config_.coupling.enabled ? config_.coupling.matrix[e] : identity_entry(e);
       c[e] = to + w * (ramp_.from[e] - to);

@@ -1,5 +1,7 @@
 #include "maglev/supervisor/supervisor.hpp"
 
+#include "maglev/io/stage_parameters.hpp"
+
 #include <cmath>
 
 namespace maglev::kernel {
@@ -65,6 +67,15 @@ SupervisorConfigError validate(const SupervisorConfig& c, float servo_rate_Hz) {
 
 void Supervisor::configure(const SupervisorConfig& c, float servo_rate_Hz) {
   config_ = c;
+  // The two durations counted in ticks of the default 2.5 kHz rate (50 ms of
+  // saturation, 4 ms of current mismatch) keep their time at any servo rate.
+  const double per_default_tick = static_cast<double>(servo_rate_Hz) / io::stage::kServoRate_Hz;
+  auto held = [per_default_tick](std::uint16_t ticks) {
+    const double n = std::round(static_cast<double>(ticks) * per_default_tick);
+    return static_cast<std::uint16_t>(n < 1.0 ? 1.0 : (n > 65535.0 ? 65535.0 : n));
+  };
+  config_.max_saturated_ticks = held(c.max_saturated_ticks);
+  config_.current_mismatch_ticks = held(c.current_mismatch_ticks);
   thermal_alpha_ = 1.0f / (c.thermal_time_constant_s * servo_rate_Hz);
   max_count_step_ = static_cast<std::int32_t>(c.max_interferometer_speed_m_per_s / servo_rate_Hz /
                                               c.interferometer_lsb_m);

@@ -99,6 +99,9 @@ void image_to_kernel(const ConfigImage& image, kernel::KernelConfig& config) {
     const RegisterDef& d = persisted_def(s);
     (void)set_config_field(config, d.id, decode(d.type, image.raw[s]));
   }
+  // The measurement runs at the servo rate by construction: servo.rate is
+  // one register, not two that could disagree.
+  config.measurement.servo_rate_Hz = config.servo_rate_Hz;
 }
 
 ConfigImage image_from_kernel(const kernel::KernelConfig& config) {

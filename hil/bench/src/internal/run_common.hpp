@@ -37,8 +37,9 @@ Link open_link(const std::string& name, bool need_controller);
 struct CanLogTap {
   std::unique_ptr<can::OwnedCanPort> port;
   CandumpLogWriter log;
+  std::uint64_t period_us = 400;  // the servo period (set by the run from its rate)
   // Simulated time of tick n in microseconds, exact (n x the servo period).
-  static std::uint64_t tick_time_us(std::uint64_t n);
+  std::uint64_t tick_time_us(std::uint64_t n) const;
   // Logs every frame the tap has received, stamped with tick n's time.
   void drain(std::uint64_t n);
 };

@@ -87,6 +87,9 @@ class CanSensorSource final : public SensorSource {
   const can::LinkReceiver& receiver() const { return receiver_; }
   const can::SensorFrameWatchdog& watchdog() const { return watchdog_; }
   const CanSensorStats& stats() const { return stats_; }
+  // A new servo period (register servo.rate, applied landed; the HIL board
+  // with its tick timer stopped): the tick clock's step when now_us is null.
+  void set_period_us(std::uint32_t period_us) { config_.period_us = period_us; }
 
  private:
   std::uint32_t now();

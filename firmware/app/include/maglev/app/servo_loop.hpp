@@ -118,6 +118,11 @@ class ServoLoop {
 
   const ServoState& state() const { return state_; }
   bool overrun_pending() const { return overrun_pending_; }
+  // A new servo rate (register servo.rate, applied landed): the budget and
+  // period in CPU cycles. Only with the tick source stopped (the board
+  // re-programs its timer around it).
+  void set_timing(const ServoConfig& config) { config_ = config; }
+  const ServoConfig& timing() const { return config_; }
 
  private:
   std::uint32_t cycles() const { return hooks_.cycle_counter != nullptr ? hooks_.cycle_counter() : 0u; }

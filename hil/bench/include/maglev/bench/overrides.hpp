@@ -44,7 +44,17 @@ struct Overrides {
 // Loads the profile NAME|FILE and builds the kernel configuration and the
 // plant from it (both from the one record). false: *errs says why, field by
 // field for a malformed profile.
-bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<ScenarioError>* errs);
+// servo_rate_Hz: the servo rate the stage runs at instead of its profile's
+// (one of io::stage::kSupportedServoRates_Hz): the kernel configuration is
+// made and checked at that rate (the kernel discretizes every loop, filter and
+// timing from its continuous definition) and the plant steps at it.
+bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<ScenarioError>* errs,
+                   std::optional<double> servo_rate_Hz = std::nullopt);
+// The scenario's `[controller] servo_rate_Hz`, if it has one (a number; not
+// checked here: apply_overrides reports a bad one).
+std::optional<double> servo_rate_of(const scenario::Scenario& sc);
+// "2500, 5000, 10000 or 20000 Hz": io::stage::kSupportedServoRates_Hz for messages.
+std::string offered_servo_rates();
 // The profile a scenario names ([scenario] profile), else the default.
 std::string profile_of(const scenario::Scenario& sc);
 

@@ -37,6 +37,7 @@
 #include "maglev/controller/controller.hpp"
 #include "maglev/io/actuator_command.hpp"
 #include "maglev/io/sensor_sample.hpp"
+#include "maglev/io/stage_parameters.hpp"
 
 namespace maglev::hil {
 
@@ -94,7 +95,10 @@ class NodePort final : public can::CanPort {
 // telemetry and host-command acknowledgements.
 class CanServoIo {
  public:
-  explicit CanServoIo(can::CanPort& port, can::BusLoadMeter* tx_meter = nullptr);
+  // servo_rate_Hz: the kernel's configured rate (KernelConfig::servo_rate_Hz):
+  // the sensor source's tick clock, and the telemetry periods (kept in Hz).
+  explicit CanServoIo(can::CanPort& port, can::BusLoadMeter* tx_meter = nullptr,
+                      double servo_rate_Hz = io::stage::kServoRate_Hz);
   CanServoIo(const CanServoIo&) = delete;
   CanServoIo& operator=(const CanServoIo&) = delete;
 
@@ -109,7 +113,8 @@ class CanServoIo {
   void announce();
   // After each servo tick: controller_status every kControllerStatusPeriodTicks
   // ticks (app::to_status_frame), heartbeat_controller every
-  // kHeartbeatPeriodTicks -- on ticks 10, 20, ... and 250, 500, ...
+  // kHeartbeatPeriodTicks -- on ticks 10, 20, ... and 250, 500, ... at the
+  // default 2.5 kHz; at a higher rate the same 250 Hz / 10 Hz (more ticks).
   void publish_status(const kernel::ControllerStatus& status);
   void acknowledge(const can::HostCommandAckFrame& ack);
   bool next_host_command(can::HostCommandFrame& out) { return port_.next_host_command(out); }
@@ -127,6 +132,9 @@ class CanServoIo {
   NodePort port_;
   app::CanSensorSource sensors_;
   app::CanActuatorSink actuators_;
+  double servo_rate_Hz_;
+  std::uint32_t status_period_ticks_;
+  std::uint32_t heartbeat_period_ticks_;
   std::uint32_t ticks_ = 0;
   std::uint8_t status_counter_ = 0;
   std::uint8_t heartbeat_counter_ = 0;

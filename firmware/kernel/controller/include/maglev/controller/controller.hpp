@@ -292,6 +292,9 @@ class Controller {
 
   const ControllerStatus& status() const { return status_; }
   const KernelConfig& config() const { return config_; }
+  // The discrete 2-DOF PID axis a runs with (designed at apply_config from
+  // the continuous gains at config().servo_rate_Hz).
+  const Pid2DofCoefficients<Scalar>& pid_coefficients(int a) const { return applied_[active_].pid[a]; }
   // Live value of ControllerStatus::motion_active (also right between a
   // command() that started a profile and the next step()).
   bool motion_active() const;
@@ -347,7 +350,8 @@ class Controller {
   };
   // Correction ramp: the applied matrix moves from `from` to config_.coupling
   // over kCouplingRampTicks, so switching it while levitated is no effort step.
-  static constexpr std::uint32_t kCouplingRampTicks = 1250;  // 0.5 s at 2.5 kHz
+  static constexpr float kCouplingRamp_s = 0.5f;
+  std::uint32_t coupling_ramp_ticks_ = 1250;  // kCouplingRamp_s at the configured rate (apply_config)
   struct CouplingRamp {
     std::uint32_t left = 0;
     float from[kCouplingMatrixSize] = {};

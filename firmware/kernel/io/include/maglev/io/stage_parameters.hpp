@@ -65,7 +65,20 @@ inline constexpr double kBasePointY8_m = 0.0;
 // (ours) 2.5 kHz: theta_z crosses over at 81.3 Hz (fs/fc = 31) and the
 // sensor + actuator CAN FD frames take <= 48% of a 1/5 Mbit/s bus.
 // docs/CAN.md holds the arithmetic.
+// The DEFAULT servo rate: the rate a stage boots at with no stored
+// configuration (register servo.rate, issue 16). Everything that runs at the
+// servo rate reads the configured KernelConfig::servo_rate_Hz, never this.
 inline constexpr double kServoRate_Hz = 2500.0;
+// The servo rates the controller offers (register servo.rate; the bench's
+// --servo-rate): 400, 200, 100 and 50 us, each a whole number of
+// microseconds and of 480 MHz CPU / 240 MHz timer cycles.
+inline constexpr double kSupportedServoRates_Hz[] = {2500.0, 5000.0, 10000.0, 20000.0};
+constexpr bool is_supported_servo_rate(double rate_Hz) {
+  for (double r : kSupportedServoRates_Hz) {
+    if (rate_Hz == r) return true;
+  }
+  return false;
+}
 
 // --- Interferometers (ours: HP 5517D + 10706B plane-mirror optics) ----------
 inline constexpr double kWavelength_m = 632.991e-9;

@@ -106,7 +106,8 @@ struct SupervisorConfig {
   std::uint16_t max_identical_samples = 10;
   std::uint16_t max_consecutive_overruns = 2;
   // The whole-vector current limit acting without pause for this many ticks
-  // is a fault: the coils cannot give what the loops ask (50 ms at 2.5 kHz).
+  // is a fault: the coils cannot give what the loops ask (50 ms; ticks of the
+  // default 2.5 kHz rate, configure() holds the time at other rates).
   // A stiff-gain attack once sagged z by 22 um for 8 s with the status Ready.
   std::uint16_t max_saturated_ticks = 125;
   // A coil whose monitored current stays further than this from its command
@@ -116,7 +117,7 @@ struct SupervisorConfig {
   // ticks) and the amplifier's step response; a shorted amplifier at 4 A was
   // left on for 38 ms and threw the platen 18 mm sideways (campaign).
   float current_mismatch_A = 1.5f;
-  std::uint16_t current_mismatch_ticks = 10;
+  std::uint16_t current_mismatch_ticks = 10;  // 2.5 kHz ticks (4 ms at any rate, see configure())
 };
 
 SupervisorConfigError validate(const SupervisorConfig& config, float servo_rate_Hz);
