@@ -219,7 +219,11 @@ std::uint64_t range_checked_signals(const Message& m) {
   return range_check_masks().needs_check[static_cast<std::size_t>(&m - kCatalog.data())];
 }
 
-RxStatus check_frame_all_signals(const CanFrame& frame, const Message* expected, const Message** found) {
+namespace {
+// Everything check_frame decides before the signals' ranges: format, id,
+// length, CRC. *message: the catalog entry when the status is kOk.
+RxStatus check_frame_envelope(const CanFrame& frame, const Message* expected, const Message** found,
+                              const Message** message) {
   if (found != nullptr) *found = nullptr;
   if ((frame.flags & (kFlagExtendedId | kFlagErrorFrame)) != 0) return RxStatus::kWrongFormat;
   const Message* m = find_message(frame.id);
@@ -228,29 +232,34 @@ RxStatus check_frame_all_signals(const CanFrame& frame, const Message* expected,
   if ((frame.flags & kFlagFd) == 0) return RxStatus::kWrongFormat;
   if (frame.len != m->length) return RxStatus::kWrongLength;
   if (!e2e_crc_ok(frame.data, m->length, m->data_id)) return RxStatus::kBadCrc;
-  for (std::size_t i = 0; i < m->signal_count; ++i) {
-    const Signal& s = m->signals[i];
+  *message = m;
+  return RxStatus::kOk;
+}
+
+// The range check of the signals in `mask` (bit i: signal i).
+RxStatus check_signal_ranges(const CanFrame& frame, const Message& m, std::uint64_t mask) {
+  for (std::uint64_t left = mask; left != 0; left &= left - 1u) {
+    const Signal& s = m.signals[static_cast<std::size_t>(std::countr_zero(left))];
     if (!raw_in_range(s, read_frame_signal(s, frame.data))) return RxStatus::kOutOfRange;
   }
   return RxStatus::kOk;
 }
+}  // namespace
+
+RxStatus check_frame_all_signals(const CanFrame& frame, const Message* expected, const Message** found) {
+  const Message* m = nullptr;
+  const RxStatus st = check_frame_envelope(frame, expected, found, &m);
+  if (st != RxStatus::kOk) return st;
+  const std::uint64_t all = m->signal_count >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << m->signal_count) - 1u;
+  return check_signal_ranges(frame, *m, all);
+}
 
 RxStatus check_frame(const CanFrame& frame, const Message* expected, const Message** found) {
-  if (found != nullptr) *found = nullptr;
-  if ((frame.flags & (kFlagExtendedId | kFlagErrorFrame)) != 0) return RxStatus::kWrongFormat;
-  const Message* m = find_message(frame.id);
-  if (m == nullptr || (expected != nullptr && m != expected)) return RxStatus::kUnknownId;
-  if (found != nullptr) *found = m;
-  if ((frame.flags & kFlagFd) == 0) return RxStatus::kWrongFormat;
-  if (frame.len != m->length) return RxStatus::kWrongLength;
-  if (!e2e_crc_ok(frame.data, m->length, m->data_id)) return RxStatus::kBadCrc;
+  const Message* m = nullptr;
+  const RxStatus st = check_frame_envelope(frame, expected, found, &m);
+  if (st != RxStatus::kOk) return st;
   // Only the signals whose width can hold an out-of-range value (above).
-  for (std::uint64_t left = range_checked_signals(*m); left != 0; left &= left - 1u) {
-    const auto i = static_cast<std::size_t>(std::countr_zero(left));
-    const Signal& s = m->signals[i];
-    if (!raw_in_range(s, read_frame_signal(s, frame.data))) return RxStatus::kOutOfRange;
-  }
-  return RxStatus::kOk;
+  return check_signal_ranges(frame, *m, range_checked_signals(*m));
 }
 
 // ---- typed -----------------------------------------------------------------------
