@@ -249,20 +249,18 @@ std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm, doub
 
 void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
                   std::uint32_t first_coil_phase_turn[kForcers]) {
-  // Turns of each coordinate (Q32, NOT reduced: for a direction cosine h that
-  // is not an integer, h * (x mod L) != h * x mod L), projected on each
-  // forcer's axis as (turns * h_q30) >> 30 taken mod 2^32. The product is
-  // formed in wrapping uint64, whose bits 30..61 are exact for any sign, so
-  // the projection is exact mod one turn up to the Q30 rounding of h (for
-  // h = +-1, 0 it is exactly the identity / zero).
-  const std::uint64_t tx =
-      static_cast<std::uint64_t>(PositionToTurnsQ32(x_pm + t.base_x_pm, t.pitch_pm, t.inv_pitch_pm));
-  const std::uint64_t ty =
-      static_cast<std::uint64_t>(PositionToTurnsQ32(y_pm + t.base_y_pm, t.pitch_pm, t.inv_pitch_pm));
+  // Turns of each coordinate, NOT reduced: for a direction cosine h that is
+  // not an integer, h * (x mod L) != h * x mod L.
+  const double tx = numeric::Int64ToDouble(x_pm + t.base_x_pm) * t.inv_pitch_pm;
+  const double ty = numeric::Int64ToDouble(y_pm + t.base_y_pm) * t.inv_pitch_pm;
+#pragma GCC unroll 4
   for (int k = 0; k < kForcers; ++k) {
-    const std::uint64_t px = tx * static_cast<std::uint64_t>(t.h_q30[k][0]);
-    const std::uint64_t py = ty * static_cast<std::uint64_t>(t.h_q30[k][1]);
-    const std::uint32_t psi = static_cast<std::uint32_t>((px + py) >> 30);
+    const double turns = t.h_dir[k][0] * tx + t.h_dir[k][1] * ty;
+    // Exact: turns and floor(turns) share turns' binade or the result is
+    // below one ulp of it, so the difference is representable; < 1, so the
+    // scaled fraction is < 2^32 and its conversion truncates (= floor).
+    const double frac = turns - std::floor(turns);
+    const auto psi = static_cast<std::uint32_t>(frac * 4294967296.0);
     first_coil_phase_turn[k] = psi + t.coil_offset_turn[2 * k];
   }
 }
@@ -289,6 +287,8 @@ MAGLEV_CONFIG_CODE ForceAllocationError FillCommon(const ForceAllocationConfig& 
   for (int k = 0; k < kForcers; ++k) {
     ct->h_q30[k][0] = RoundToInt64(t.h_dir[k][0] * 1073741824.0);
     ct->h_q30[k][1] = RoundToInt64(t.h_dir[k][1] * 1073741824.0);
+    ct->h_dir[k][0] = t.h_dir[k][0];
+    ct->h_dir[k][1] = t.h_dir[k][1];
   }
   // Coil 2k+1 exactly a quarter turn from coil 2k (ComputeForceAllocationTables
   // checked quadrature to 1e-9 rad for every forcer in use; an unused

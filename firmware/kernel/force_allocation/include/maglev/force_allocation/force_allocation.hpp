@@ -99,6 +99,7 @@ struct CommutationTables {
   std::int64_t base_x_pm;
   std::int64_t base_y_pm;
   std::int64_t h_q30[kForcers][2];  // direction cosines, Q2.30 (exactly +-2^30 for X/Y axes)
+  double h_dir[kForcers][2];        // the same direction cosines in double (the tick's form)
   // Coil 2k's offset; coil 2k+1's is coil 2k's + or - exactly a quarter turn
   // (second_coil_leads[k]): the configuration requires quadrature to 1e-9 rad
   // and the offsets are snapped to it (< 2^-32 turn = 1.5 nrad). So one table
@@ -114,6 +115,14 @@ void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTa
                        std::uint32_t coil_phase_turn[io::kCoils]);
 // The tick's form: the phase of each forcer's first coil (coil 2k); the
 // second's is a quarter turn off (CommutationTables::second_coil_leads).
+// In double, not exact integers: turns = (pos + base) / pitch, projected on
+// the forcer's axis, its fraction scaled to 2^32. The fraction and the
+// scaling are exact; the one product pos * (1/pitch) is within 2^-53
+// relative, so within 2^-46 turn (2^-14 of a phase LSB) anywhere within a
+// metre of the base point: the phase is floor(exact) or, when the exact value
+// lies within that distance of an integer, one LSB (1.5 nrad) off it. IEEE
+// double throughout: host and M7 give the same bits. (The exact integer form,
+// PositionToTurnsQ32, took three floor divisions per coordinate.)
 void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& tables,
                   std::uint32_t first_coil_phase_turn[kForcers]);
 
