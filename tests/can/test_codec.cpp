@@ -39,6 +39,26 @@ TEST(E2e, Crc16CcittFalseCheckValue) {
   LONGS_EQUAL(0x29B1, crc16_ccitt(msg, sizeof msg));
 }
 
+// The slicing-by-8 CRC equals the byte-wise definition for every length
+// 0-80 (every tail length after 0-10 eight-byte blocks), random data and
+// random chained init values, and 0x00 / 0xFF runs.
+TEST(E2e, SlicingBy8EqualsTheBytewiseCrc) {
+  std::mt19937 rng(16);
+  std::uint8_t buf[80];
+  for (int trial = 0; trial < 200; ++trial) {
+    for (auto& b : buf) b = static_cast<std::uint8_t>(rng());
+    if (trial == 0) std::memset(buf, 0x00, sizeof buf);
+    if (trial == 1) std::memset(buf, 0xFF, sizeof buf);
+    const auto init = trial < 100 ? kCrc16Init : static_cast<std::uint16_t>(rng());
+    for (std::size_t n = 0; n <= sizeof buf; ++n) {
+      LONGS_EQUAL(detail::crc16_ccitt_bytewise(buf, n, init), crc16_ccitt(buf, n, init));
+    }
+  }
+  // Compile-time evaluation gives the same check value.
+  static constexpr std::uint8_t kMsg[] = {'1', '2', '3', '4', '5', '6', '7', '8', '9'};
+  static_assert(crc16_ccitt(kMsg, sizeof kMsg) == 0x29B1);
+}
+
 TEST(E2e, DataIdChangesCrc) {
   std::mt19937 rng(1);
   CanFrame f{};
