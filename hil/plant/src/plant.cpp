@@ -620,9 +620,12 @@ __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinema
   const V4 gap0 = Splat4(config_.field.rest_gap_m + k.p[2]);
   const V4 force_per_A = Splat4(side_force_per_A_);
   V4 ref_s{}, ref_gap{}, ref_sin{}, ref_cos{}, ref_exp{};
-  // Per side (index 4 f + q) force and torque, platen frame.
-  double side_f[3][16];
-  double side_t[3][16];
+  // Per side (index 4 f + q) force and torque, platen frame, transposed so
+  // that the sums below run four (f0, f1, f2, t0) and two (t1, t2) chains
+  // per vector add: side_a[q][f] = {f0, f1, f2, t0} of side 4 f + q,
+  // side_b[q][f] = {t1, t2, -, -} (lanes 2-3 unused).
+  V4 side_a[4][4];
+  V4 side_b[4][4];
   for (int q = 0; q < 4; ++q) {
     const SideLanes& c = side_lanes_[static_cast<std::size_t>(q)];
     const V4 rb0 = Load4(c.rb0), rb1 = Load4(c.rb1), rb2 = Load4(c.rb2);
@@ -723,27 +726,34 @@ __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinema
     const V4 t0 = rb1 * f2 - rb2 * f1;
     const V4 t1 = rb2 * f0 - rb0 * f2;
     const V4 t2 = rb0 * f1 - rb1 * f0;
-    for (int f = 0; f < 4; ++f) {
-      side_f[0][4 * f + q] = f0[f];
-      side_f[1][4 * f + q] = f1[f];
-      side_f[2][4 * f + q] = f2[f];
-      side_t[0][4 * f + q] = t0[f];
-      side_t[1][4 * f + q] = t1[f];
-      side_t[2][4 * f + q] = t2[f];
+    // 4 x 4 transpose of the rows (f0, f1, f2, t0) over the lanes f.
+    const V4 lo01 = __builtin_shuffle(f0, f1, M4{0, 4, 2, 6});
+    const V4 hi01 = __builtin_shuffle(f0, f1, M4{1, 5, 3, 7});
+    const V4 lo23 = __builtin_shuffle(f2, t0, M4{0, 4, 2, 6});
+    const V4 hi23 = __builtin_shuffle(f2, t0, M4{1, 5, 3, 7});
+    side_a[q][0] = __builtin_shuffle(lo01, lo23, M4{0, 1, 4, 5});
+    side_a[q][1] = __builtin_shuffle(hi01, hi23, M4{0, 1, 4, 5});
+    side_a[q][2] = __builtin_shuffle(lo01, lo23, M4{2, 3, 6, 7});
+    side_a[q][3] = __builtin_shuffle(hi01, hi23, M4{2, 3, 6, 7});
+    const V4 lo45 = __builtin_shuffle(t1, t2, M4{0, 4, 2, 6});
+    const V4 hi45 = __builtin_shuffle(t1, t2, M4{1, 5, 3, 7});
+    side_b[q][0] = lo45;
+    side_b[q][1] = hi45;
+    side_b[q][2] = __builtin_shuffle(lo45, M4{2, 3, 2, 3});
+    side_b[q][3] = __builtin_shuffle(hi45, M4{2, 3, 2, 3});
+  }
+  // The sums in the scalar loop's side order 0..15 (idx = 4 f + q), each of
+  // the six chains in its own lane: IEEE adds are lane-wise, so every chain
+  // rounds as the scalar loop's.
+  V4 sum_a = Splat4(0.0), sum_b = Splat4(0.0);
+  for (int f = 0; f < 4; ++f) {
+    for (int q = 0; q < 4; ++q) {
+      sum_a += side_a[q][f];
+      sum_b += side_b[q][f];
     }
   }
-  // The sums in the scalar loop's side order (six chains in registers).
-  double fb0 = 0.0, fb1 = 0.0, fb2 = 0.0, tb0 = 0.0, tb1 = 0.0, tb2 = 0.0;
-  for (int idx = 0; idx < 16; ++idx) {
-    fb0 += side_f[0][idx];
-    fb1 += side_f[1][idx];
-    fb2 += side_f[2][idx];
-    tb0 += side_t[0][idx];
-    tb1 += side_t[1][idx];
-    tb2 += side_t[2][idx];
-  }
-  const double fb[3] = {fb0, fb1, fb2};
-  const double tb[3] = {tb0, tb1, tb2};
+  const double fb[3] = {sum_a[0], sum_a[1], sum_a[2]};
+  const double tb[3] = {sum_a[3], sum_b[0], sum_b[1]};
   for (int a = 0; a < 3; ++a) {
     acc->f[a] += r[a][0] * fb[0] + r[a][1] * fb[1] + r[a][2] * fb[2];
     acc->t[a] += r[a][0] * tb[0] + r[a][1] * tb[1] + r[a][2] * tb[2];
@@ -917,18 +927,30 @@ void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
     return;
   }
   const double h0 = config_.suspension.neutral_height_m;
+  // The three sums in locals: stores through acc may alias k (both double),
+  // which made the compiler reload k's entries for every spring. Same
+  // operations in the same order.
+  double f2 = acc->f[2], t0 = acc->t[0], t1 = acc->t[1];
+  const double r00 = k.r[0][0], r01 = k.r[0][1], r02 = k.r[0][2];
+  const double r10 = k.r[1][0], r11 = k.r[1][1], r12 = k.r[1][2];
+  const double r20 = k.r[2][0], r21 = k.r[2][1], r22 = k.r[2][2];
+  const double pz = k.p[2], vz = k.v[2], wx = k.omega_w[0], wy = k.omega_w[1];
   for (int i = 0; i < spring_count_; ++i) {
     const Spring& s = springs_[static_cast<std::size_t>(i)];
     const double* rb = s.rb;
-    double rw[3];
-    for (int a = 0; a < 3; ++a) rw[a] = k.r[a][0] * rb[0] + k.r[a][1] * rb[1] + k.r[a][2] * rb[2];
-    const double h = k.p[2] + rw[2] - rb[2];
-    const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
+    const double rw0 = r00 * rb[0] + r01 * rb[1] + r02 * rb[2];
+    const double rw1 = r10 * rb[0] + r11 * rb[1] + r12 * rb[2];
+    const double rw2 = r20 * rb[0] + r21 * rb[1] + r22 * rb[2];
+    const double h = pz + rw2 - rb[2];
+    const double hdot = vz + wx * rw1 - wy * rw0;
     const double fz = -s.k_N_per_m * (h - h0) - s.c_Ns_per_m * hdot;
-    acc->f[2] += fz;
-    acc->t[0] += rw[1] * fz;
-    acc->t[1] -= rw[0] * fz;
+    f2 += fz;
+    t0 += rw1 * fz;
+    t1 -= rw0 * fz;
   }
+  acc->f[2] = f2;
+  acc->t[0] = t0;
+  acc->t[1] = t1;
 }
 
 void Plant::AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const {
