@@ -1343,7 +1343,8 @@ io::SensorSample Plant::sample() {
   const auto& ac = config_.amplifier;
   for (int j = 0; j < kCoils; ++j) {
     const double noise =
-        noisy ? MonitorNoiseStd_A(ac, std::fabs(amplifiers_.commanded_A(j))) * rng_.Normal() : 0.0;
+        noisy ? MonitorNoiseStd_A(ac, std::fabs(amplifiers_.commanded_A(j)), amplifiers_.force_noise_std_A()) * rng_.Normal()
+              : 0.0;
     out.coil_current_adc[j] =
         QuantizeAdc(ac.monitor_gain_V_per_A * (amplifiers_.current_A(j) + noise), config_.adc.full_scale_V);
   }
