@@ -918,6 +918,12 @@ void Plant::BuildSprings() {
     const Eigen::Vector2d fc = ForcerCentre(f, config_.body.lever_arm_m, config_.body.layout);
     add(fc.x(), fc.y(), k4, c4);
   }
+  for (int i = 0; i < spring_count_; ++i) {
+    const Spring& sp = springs_[static_cast<std::size_t>(i)];
+    for (int a = 0; a < 3; ++a) spring_lanes_[a][i] = sp.rb[a];
+    spring_lanes_[3][i] = sp.k_N_per_m;
+    spring_lanes_[4][i] = sp.c_Ns_per_m;
+  }
 }
 
 // The suspension spring-dampers under the forcers (at the coils' plane):
@@ -935,6 +941,29 @@ void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
   const double r10 = k.r[1][0], r11 = k.r[1][1], r12 = k.r[1][2];
   const double r20 = k.r[2][0], r21 = k.r[2][1], r22 = k.r[2][2];
   const double pz = k.p[2], vz = k.v[2], wx = k.omega_w[0], wy = k.omega_w[1];
+  if (spring_count_ == 4) {
+    // Four springs, one per lane: the scalar loop's expressions with the
+    // same parentheses (IEEE ops are lane-wise), then its three sums in
+    // spring order.
+    const V4 rb0 = Load4(spring_lanes_[0]), rb1 = Load4(spring_lanes_[1]), rb2 = Load4(spring_lanes_[2]);
+    const V4 kk = Load4(spring_lanes_[3]), cc = Load4(spring_lanes_[4]);
+    const V4 rw0 = Splat4(r00) * rb0 + Splat4(r01) * rb1 + Splat4(r02) * rb2;
+    const V4 rw1 = Splat4(r10) * rb0 + Splat4(r11) * rb1 + Splat4(r12) * rb2;
+    const V4 rw2 = Splat4(r20) * rb0 + Splat4(r21) * rb1 + Splat4(r22) * rb2;
+    const V4 h = Splat4(pz) + rw2 - rb2;
+    const V4 hdot = Splat4(vz) + Splat4(wx) * rw1 - Splat4(wy) * rw0;
+    const V4 fz = -kk * (h - h0) - cc * hdot;
+    const V4 m0 = rw1 * fz, m1 = rw0 * fz;
+    for (int i = 0; i < 4; ++i) {
+      f2 += fz[i];
+      t0 += m0[i];
+      t1 -= m1[i];
+    }
+    acc->f[2] = f2;
+    acc->t[0] = t0;
+    acc->t[1] = t1;
+    return;
+  }
   for (int i = 0; i < spring_count_; ++i) {
     const Spring& s = springs_[static_cast<std::size_t>(i)];
     const double* rb = s.rb;
