@@ -996,28 +996,35 @@ void Plant::AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* 
   if (lowest > 1e-12) {
     return;
   }
-  const double corners[4][2] = {{c, c}, {-c, c}, {-c, -c}, {c, -c}};
-  for (const auto& corner : corners) {
-    const Eigen::Vector3d rb(corner[0], corner[1], -com_arm_m_);
-    double rw[3];
-    Rotate(k.r, rb, rw);
-    const double h = k.p[2] + rw[2] - rb.z();
-    if (h >= 0.0) {
-      continue;
-    }
-    double wxr[3];
-    Cross(k.omega_w, rw, wxr);
-    const double vel[3] = {k.v[0] + wxr[0], k.v[1] + wxr[1], k.v[2] + wxr[2]};
-    // One-sided: the surface pushes, never pulls.
-    const double fn = std::max(0.0, -config_.contact.stiffness_N_per_m * h - config_.contact.damping_Ns_per_m * vel[2]);
+  // The four corners (+c, +c), (-c, +c), (-c, -c), (+c, -c) one per vector
+  // lane: per corner rw = R rb, its height h, its velocity v + omega x rw, the
+  // one-sided normal force (the surface pushes, never pulls) and a regularized
+  // Coulomb friction. IEEE ops are lane-wise, so each lane rounds as the
+  // former per-corner loop did; a corner that does not touch computes values
+  // nobody reads. The sums then run in corner order over the corners that
+  // touch and push: the same additions as that loop.
+  const V4 rbx = V4{c, -c, -c, c}, rby = V4{c, c, -c, -c};
+  const V4 rbz = Splat4(-com_arm_m_);
+  const double(&r)[3][3] = k.r;
+  const V4 rw0 = Splat4(r[0][0]) * rbx + Splat4(r[0][1]) * rby + Splat4(r[0][2]) * rbz;
+  const V4 rw1 = Splat4(r[1][0]) * rbx + Splat4(r[1][1]) * rby + Splat4(r[1][2]) * rbz;
+  const V4 rw2 = Splat4(r[2][0]) * rbx + Splat4(r[2][1]) * rby + Splat4(r[2][2]) * rbz;
+  const V4 h = Splat4(k.p[2]) + rw2 - rbz;
+  const V4 w0 = Splat4(k.omega_w[0]), w1 = Splat4(k.omega_w[1]), w2 = Splat4(k.omega_w[2]);
+  const V4 vel0 = Splat4(k.v[0]) + (w1 * rw2 - w2 * rw1);
+  const V4 vel1 = Splat4(k.v[1]) + (w2 * rw0 - w0 * rw2);
+  const V4 vel2 = Splat4(k.v[2]) + (w0 * rw1 - w1 * rw0);
+  const V4 push = Splat4(-config_.contact.stiffness_N_per_m) * h - Splat4(config_.contact.damping_Ns_per_m) * vel2;
+  const double vs = config_.contact.friction_velocity_m_per_s;
+  const V4 speed2 = vel0 * vel0 + vel1 * vel1 + Splat4(vs * vs);
+  for (int i = 0; i < 4; ++i) {
+    if (h[i] >= 0.0) continue;
+    const double fn = std::max(0.0, push[i]);
     *touching = true;
-    if (fn <= 0.0) {
-      continue;
-    }
-    const double vs = config_.contact.friction_velocity_m_per_s;
-    const double scale =
-        config_.contact.friction_coefficient * fn / std::sqrt(vel[0] * vel[0] + vel[1] * vel[1] + vs * vs);
-    const double f[3] = {-scale * vel[0], -scale * vel[1], fn};
+    if (fn <= 0.0) continue;
+    const double scale = config_.contact.friction_coefficient * fn / std::sqrt(speed2[i]);
+    const double f[3] = {-scale * vel0[i], -scale * vel1[i], fn};
+    const double rw[3] = {rw0[i], rw1[i], rw2[i]};
     double tq[3];
     Cross(rw, f, tq);
     for (int a = 0; a < 3; ++a) {
