@@ -9,7 +9,9 @@
 // Exit status 0 only if the stage reached Ready and every command was accepted
 // (so the recorded run really exercises the levitated kernel).
 //
-// usage: kernel-vector-recorder <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home]
+// usage: kernel-vector-recorder <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home] [--q7.24]
+// --q7.24: the kernel is Controller<Q7_24> (the fixed-point build) instead of
+// Controller<float>; the replay image must then be run with --q7.24 too.
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -109,11 +111,21 @@ double reference_si(const kernel::ControllerStatus& st, Axis axis) {
 
 }  // namespace
 
+template <typename Scalar>
+int record(int argc, char** argv, bool near_home);
+
 int main(int argc, char** argv) {
+  const bool q7_24 = argc > 3 && std::string(argv[argc - 1]) == "--q7.24";
+  if (q7_24) --argc;
   const bool near_home = argc > 3 && std::string(argv[argc - 1]) == "--near-home";
   if (near_home) --argc;
+  return q7_24 ? record<maglev::numeric::Q7_24>(argc, argv, near_home) : record<float>(argc, argv, near_home);
+}
+
+template <typename Scalar>
+int record(int argc, char** argv, bool near_home) {
   if (argc != 3 && !(argc == 5 && std::string(argv[3]) == "--profile")) {
-    std::fprintf(stderr, "usage: %s <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home] [--q7.24]\n", argv[0]);
     return 2;
   }
   // With --profile: the stage's kernel configuration and plant both from the
@@ -141,7 +153,7 @@ int main(int argc, char** argv) {
     std::printf("recorder: stage profile %s\n", parsed.profile.name);
   }
   maglev::hil::Plant plant(plant_config, kSeed);
-  auto controller = std::make_unique<kernel::Controller<float>>();
+  auto controller = std::make_unique<kernel::Controller<Scalar>>();
   if (controller->apply_config(config) != kernel::ConfigError::kOk) {
     std::fprintf(stderr, "recorder: the kernel configuration was refused\n");
     return 1;

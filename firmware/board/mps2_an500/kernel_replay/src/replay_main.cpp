@@ -7,6 +7,8 @@
 //   qemu-system-arm -M mps2-an500 -nographic -semihosting-config enable=on,target=native
 //                   -kernel maglev-qemu-kernel-replay.elf -append "<vectors.bin> <outputs.bin>"
 //   instructions per step(): add `-icount shift=6` and `--icount` after the paths.
+//   The fixed-point kernel (Controller<Q7_24>): add `--q7.24` (the vectors
+//   must come from `kernel-vector-recorder ... --q7.24`).
 //
 // Exit status: 0 replayed all ticks; 2 bad command line; 3 cannot open/read the
 // vectors; 4 bad header; 5 cannot write the outputs; 6 apply_config refused.
@@ -86,7 +88,7 @@ void print_stats(const char* label, const Stats& s, const Calibration& cal) {
 
 // --- command line ------------------------------------------------------------------
 char g_command_line[1024];
-constexpr int kMaxWords = 4;
+constexpr int kMaxWords = 5;
 const char* g_words[kMaxWords] = {};
 
 // --- buffers and the controller: all static (no heap) -------------------------
@@ -94,6 +96,7 @@ constexpr std::size_t kChunkTicks = 64;
 std::uint8_t g_input[kChunkTicks * kr::kInputRecordBytes];
 std::uint8_t g_output[kChunkTicks * kr::kOutputRecordBytes];
 kernel::Controller<float> g_controller;
+kernel::Controller<maglev::numeric::Q7_24> g_controller_q7_24;
 stage_profile::StageProfile g_profile{};  // static: ~2 kB, not on the stack
 
 int fail(const char* message, int code) {
@@ -105,19 +108,8 @@ int fail(const char* message, int code) {
 
 }  // namespace
 
-int main() {
-  if (!hw::semihost_command_line(g_command_line, sizeof(g_command_line))) {
-    return fail("no semihosting command line", kBadCommandLine);
-  }
-  // "<kernel path> <vectors> <outputs>"
-  if (kr::split_words(g_command_line, g_words, kMaxWords) < 3) {
-    return fail("usage: -append \"<vectors.bin> <outputs.bin> [--icount]\"", kBadCommandLine);
-  }
-  // SysTick counts are instructions only if QEMU runs with -icount; the caller says so.
-  const bool icount = g_words[3] != nullptr && std::strcmp(g_words[3], "--icount") == 0;
-  const char* vectors_path = g_words[1];
-  const char* outputs_path = g_words[2];
-
+template <typename Controller>
+int replay(Controller& controller, const char* vectors_path, const char* outputs_path, bool icount) {
   const int in = kr::semihost_open(vectors_path, kr::OpenMode::kReadBinary);
   if (in < 0) return fail("cannot open the vectors file", kCannotRead);
   const long length = kr::semihost_file_length(in);
@@ -157,7 +149,7 @@ int main() {
 
   // The recorder applies the same configuration; apply it explicitly so a
   // refused config is visible here as well.
-  if (g_controller.apply_config(config) != kernel::ConfigError::kOk) {
+  if (controller.apply_config(config) != kernel::ConfigError::kOk) {
     return fail("apply_config refused", kConfigRefused);
   }
 
@@ -183,14 +175,14 @@ int main() {
       kr::OutputRecord o;
       o.tick = tick;
       if (r.has_command) {
-        o.command_result = static_cast<std::uint8_t>(g_controller.command(r.command));
+        o.command_result = static_cast<std::uint8_t>(controller.command(r.command));
       }
-      const auto state_before = static_cast<int>(g_controller.status().state);
+      const auto state_before = static_cast<int>(controller.status().state);
       const std::uint32_t t0 = systick_now();
-      o.actuator = g_controller.step(r.sample, r.tick_overrun);
+      o.actuator = controller.step(r.sample, r.tick_overrun);
       const std::uint32_t t1 = systick_now();
       const std::uint32_t counts = systick_elapsed(t0, t1);
-      o.status = &g_controller.status();
+      o.status = &controller.status();
       all.add(counts, tick);
       if (state_before >= 0 && state_before < kStates) per_state[state_before].add(counts, tick);
       kr::encode_output(o, &g_output[i * kr::kOutputRecordBytes]);
@@ -221,4 +213,33 @@ int main() {
     if (per_state[i].count > 0U) print_stats(kernel::to_string(static_cast<kernel::SequencerState>(i)), per_state[i], cal);
   }
   return kOk;
+}
+
+int main() {
+  if (!hw::semihost_command_line(g_command_line, sizeof(g_command_line))) {
+    return fail("no semihosting command line", kBadCommandLine);
+  }
+  // "<kernel path> <vectors> <outputs>"
+  const int words = kr::split_words(g_command_line, g_words, kMaxWords);
+  if (words < 3) {
+    return fail("usage: -append \"<vectors.bin> <outputs.bin> [--icount] [--q7.24]\"", kBadCommandLine);
+  }
+  // SysTick counts are instructions only if QEMU runs with -icount; the caller says so.
+  bool icount = false;
+  bool q7_24 = false;
+  for (int w = 3; w < words && w < kMaxWords; ++w) {
+    if (std::strcmp(g_words[w], "--icount") == 0) {
+      icount = true;
+    } else if (std::strcmp(g_words[w], "--q7.24") == 0) {
+      q7_24 = true;
+    } else {
+      return fail("unknown option (expected --icount or --q7.24)", kBadCommandLine);
+    }
+  }
+  const char* vectors_path = g_words[1];
+  const char* outputs_path = g_words[2];
+
+  if (q7_24) hw::semihost_write("kernel-replay: Controller<Q7_24>\n");
+  return q7_24 ? replay(g_controller_q7_24, vectors_path, outputs_path, icount)
+               : replay(g_controller, vectors_path, outputs_path, icount);
 }
