@@ -39,6 +39,26 @@ TEST(E2e, Crc16CcittFalseCheckValue) {
   LONGS_EQUAL(0x29B1, crc16_ccitt(msg, sizeof msg));
 }
 
+// The slicing-by-8 CRC equals the byte-wise definition for every length
+// 0-80 (every tail length after 0-10 eight-byte blocks), random data and
+// random chained init values, and 0x00 / 0xFF runs.
+TEST(E2e, SlicingBy8EqualsTheBytewiseCrc) {
+  std::mt19937 rng(16);
+  std::uint8_t buf[80];
+  for (int trial = 0; trial < 200; ++trial) {
+    for (auto& b : buf) b = static_cast<std::uint8_t>(rng());
+    if (trial == 0) std::memset(buf, 0x00, sizeof buf);
+    if (trial == 1) std::memset(buf, 0xFF, sizeof buf);
+    const auto init = trial < 100 ? kCrc16Init : static_cast<std::uint16_t>(rng());
+    for (std::size_t n = 0; n <= sizeof buf; ++n) {
+      LONGS_EQUAL(detail::crc16_ccitt_bytewise(buf, n, init), crc16_ccitt(buf, n, init));
+    }
+  }
+  // Compile-time evaluation gives the same check value.
+  static constexpr std::uint8_t kMsg[] = {'1', '2', '3', '4', '5', '6', '7', '8', '9'};
+  static_assert(crc16_ccitt(kMsg, sizeof kMsg) == 0x29B1);
+}
+
 TEST(E2e, DataIdChangesCrc) {
   std::mt19937 rng(1);
   CanFrame f{};
@@ -448,4 +468,75 @@ TEST(SignalLayout, SkippedRangeChecksDecideAsCheckingEverySignal) {
   std::printf("\n  %d frames (%d out of range), %d signals' range checks skipped", frames, out_of_range, skipped);
   CHECK(skipped > 0);
   CHECK(out_of_range > 0);
+}
+
+// The servo path's typed encoders and decoders (sensor, actuator, current
+// monitor: compile-time layouts, codec.cpp encode_fixed / decode_fixed) give
+// the bytes of the table-driven definition -- pack_raw of the struct's raw
+// values on a cleared frame, then e2e_protect -- and decode any frame's bytes
+// (random, every bit set somewhere) to unpack_raw's values.
+TEST(SignalLayout, TypedServoFramesEqualTheTableDrivenCodec) {
+  std::mt19937 rng(5);
+  auto expect_frame = [](MessageKind kind, const std::int64_t* raw, std::uint8_t counter, const CanFrame& f) {
+    const Message& m = message(kind);
+    std::uint8_t want[kMaxCanFdPayload] = {};
+    pack_raw(m, raw, want);
+    e2e_protect(want, m.length, m.data_id, counter);
+    LONGS_EQUAL(m.can_id, f.id);
+    LONGS_EQUAL(m.length, f.len);
+    MEMCMP_EQUAL(want, f.data, kMaxCanFdPayload);
+  };
+  for (int i = 0; i < 2000; ++i) {
+    const auto counter = static_cast<std::uint8_t>(rng());
+    CanFrame f{};
+    // Encoders.
+    const io::SensorSample s = random_sample(rng);
+    encode_sensor(s, counter, f);
+    {
+      std::int64_t raw[kSensorSignals.size()] = {0, counter};
+      std::size_t k = 2;
+      for (auto c : s.interferometer_counts) raw[k++] = c;
+      for (auto c : s.displacement_adc) raw[k++] = c;
+      for (auto c : s.hall_adc) raw[k++] = c;
+      raw[k++] = s.status_flags;
+      expect_frame(MessageKind::kSensor, raw, counter, f);
+    }
+    const io::ActuatorCommand a = random_command(rng);
+    encode_actuator(a, counter, f);
+    {
+      std::int64_t raw[kActuatorSignals.size()] = {0, counter};
+      for (std::size_t j = 0; j < io::kCoils; ++j) raw[2 + j] = a.dac_code[j];
+      raw[2 + io::kCoils] = a.amplifier_enable ? 1 : 0;
+      expect_frame(MessageKind::kActuator, raw, counter, f);
+    }
+    CurrentMonitorFrame cm{};
+    for (auto& c : cm.coil_current_adc) c = static_cast<std::int16_t>(rng());
+    encode_current_monitor(cm, counter, f);
+    {
+      std::int64_t raw[kCurrentMonitorSignals.size()] = {0, counter};
+      for (std::size_t j = 0; j < io::kCoils; ++j) raw[2 + j] = cm.coil_current_adc[j];
+      expect_frame(MessageKind::kCurrentMonitor, raw, counter, f);
+    }
+    // Decoders, on random bytes.
+    CanFrame r{};
+    for (auto& b : r.data) b = static_cast<std::uint8_t>(rng());
+    std::int64_t raw[kMaxSignals];
+    io::SensorSample ds{};
+    decode_sensor(r, ds);
+    unpack_raw(message(MessageKind::kSensor), r.data, raw);
+    std::size_t k = 2;
+    for (auto c : ds.interferometer_counts) LONGS_EQUAL(static_cast<std::uint32_t>(raw[k++]), c);
+    for (auto c : ds.displacement_adc) LONGS_EQUAL(static_cast<std::int16_t>(raw[k++]), c);
+    for (auto c : ds.hall_adc) LONGS_EQUAL(static_cast<std::int16_t>(raw[k++]), c);
+    LONGS_EQUAL(static_cast<std::uint16_t>(raw[k++]), ds.status_flags);
+    io::ActuatorCommand da{};
+    decode_actuator(r, da);
+    unpack_raw(message(MessageKind::kActuator), r.data, raw);
+    for (std::size_t j = 0; j < io::kCoils; ++j) LONGS_EQUAL(static_cast<std::int16_t>(raw[2 + j]), da.dac_code[j]);
+    CHECK_EQUAL(raw[2 + io::kCoils] != 0, da.amplifier_enable);
+    CurrentMonitorFrame dcm{};
+    decode_current_monitor(r, dcm);
+    unpack_raw(message(MessageKind::kCurrentMonitor), r.data, raw);
+    for (std::size_t j = 0; j < io::kCoils; ++j) LONGS_EQUAL(static_cast<std::int16_t>(raw[2 + j]), dcm.coil_current_adc[j]);
+  }
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <type_traits>
+#include <utility>
 
 #include "maglev/can_link/e2e.hpp"
 
@@ -49,7 +50,7 @@ inline std::uint64_t field_mask(const Signal& s) {
 // unaligned 8-byte load when the 8 bytes from its first byte are inside the
 // frame (every signal of the catalog's frames up to byte 56), else
 // read_signal. Same value as read_signal, bit for bit.
-inline std::int64_t read_frame_signal(const Signal& s, const std::uint8_t* data) {
+__attribute__((always_inline)) inline std::int64_t read_frame_signal(const Signal& s, const std::uint8_t* data) {
   const std::uint32_t first = s.start_bit / 8u;
   const std::uint32_t off = s.start_bit % 8u;
   if (std::endian::native == std::endian::little && first + 8u <= kMaxCanFdPayload && off + s.length_bits <= 64u) {
@@ -131,7 +132,7 @@ namespace {
 // write_signal on a whole frame: one 8-byte read-modify-write when the 8
 // bytes from the signal's first byte are inside the frame, else
 // write_signal. Same bytes as write_signal.
-void write_frame_signal(const Signal& s, std::int64_t raw, std::uint8_t* data) {
+__attribute__((always_inline)) inline void write_frame_signal(const Signal& s, std::int64_t raw, std::uint8_t* data) {
   const std::uint32_t first = s.start_bit / 8u;
   const std::uint32_t off = s.start_bit % 8u;
   if (std::endian::native == std::endian::little && first + 8u <= kMaxCanFdPayload && off + s.length_bits <= 64u) {
@@ -157,6 +158,34 @@ void encode_raw(const Message& m, const std::int64_t* raw, std::uint8_t counter,
 }
 
 namespace {
+// encode_raw / unpack_frame for a catalog layout known at compile time (the
+// servo path's sensor, actuator and current-monitor frames, ~4 per tick on
+// each end): the same write_frame_signal / read_frame_signal per signal,
+// unrolled with each signal's start bit, length and sign as constants, so
+// the per-signal table walk and branches fold away. Same bytes and values
+// as encode_raw / unpack_frame (can_codec_test compares them).
+template <const auto& kSignals, std::size_t... I>
+inline void pack_fixed(const std::int64_t* raw, std::uint8_t* data, std::index_sequence<I...>) {
+  (write_frame_signal(kSignals[I], raw[I], data), ...);
+}
+template <const auto& kSignals, std::size_t... I>
+inline void unpack_fixed(const std::uint8_t* data, std::int64_t* raw, std::index_sequence<I...>) {
+  ((raw[I] = read_frame_signal(kSignals[I], data)), ...);
+}
+template <const auto& kSignals>
+inline void encode_fixed(const Message& m, const std::int64_t* raw, std::uint8_t counter, CanFrame& frame) {
+  frame.id = m.can_id;
+  frame.len = m.length;
+  frame.flags = static_cast<std::uint8_t>(kFlagFd | kFlagBrs);
+  for (auto& b : frame.data) b = 0;
+  pack_fixed<kSignals>(raw, frame.data, std::make_index_sequence<kSignals.size()>{});
+  e2e_protect(frame.data, m.length, m.data_id, counter);
+}
+template <const auto& kSignals>
+inline void decode_fixed(const CanFrame& f, std::int64_t* raw) {
+  unpack_fixed<kSignals>(f.data, raw, std::make_index_sequence<kSignals.size()>{});
+}
+
 // Raw bounds from the physical [min, max]; compared in raw units so no
 // floating point is needed at run time on the target for full-range signals.
 bool raw_in_range(const Signal& s, std::int64_t raw) {
@@ -282,11 +311,11 @@ void encode_actuator(const io::ActuatorCommand& v, std::uint8_t counter, CanFram
   std::int64_t raw[kActuatorSignals.size()] = {0, counter};
   for (std::size_t j = 0; j < io::kCoils; ++j) raw[kHdr + j] = v.dac_code[j];
   raw[kHdr + io::kCoils] = v.amplifier_enable ? 1 : 0;
-  encode_raw(message(MessageKind::kActuator), raw, counter, f);
+  encode_fixed<kActuatorSignals>(message(MessageKind::kActuator), raw, counter, f);
 }
 void decode_actuator(const CanFrame& f, io::ActuatorCommand& out) {
   std::int64_t raw[kActuatorSignals.size()];
-  unpack_frame(message(MessageKind::kActuator), f, raw);
+  decode_fixed<kActuatorSignals>(f, raw);
   for (std::size_t j = 0; j < io::kCoils; ++j) out.dac_code[j] = static_cast<std::int16_t>(raw[kHdr + j]);
   out.amplifier_enable = raw[kHdr + io::kCoils] != 0;
 }
@@ -298,11 +327,11 @@ void encode_sensor(const io::SensorSample& v, std::uint8_t counter, CanFrame& f)
   for (auto c : v.displacement_adc) raw[k++] = c;
   for (auto c : v.hall_adc) raw[k++] = c;
   raw[k++] = v.status_flags;
-  encode_raw(message(MessageKind::kSensor), raw, counter, f);
+  encode_fixed<kSensorSignals>(message(MessageKind::kSensor), raw, counter, f);
 }
 void decode_sensor(const CanFrame& f, io::SensorSample& out) {
   std::int64_t raw[kSensorSignals.size()];
-  unpack_frame(message(MessageKind::kSensor), f, raw);
+  decode_fixed<kSensorSignals>(f, raw);
   std::size_t k = kHdr;
   for (auto& c : out.interferometer_counts) c = static_cast<std::uint32_t>(raw[k++]);
   for (auto& c : out.displacement_adc) c = static_cast<std::int16_t>(raw[k++]);
@@ -313,11 +342,11 @@ void decode_sensor(const CanFrame& f, io::SensorSample& out) {
 void encode_current_monitor(const CurrentMonitorFrame& v, std::uint8_t counter, CanFrame& f) {
   std::int64_t raw[kCurrentMonitorSignals.size()] = {0, counter};
   for (std::size_t j = 0; j < io::kCoils; ++j) raw[kHdr + j] = v.coil_current_adc[j];
-  encode_raw(message(MessageKind::kCurrentMonitor), raw, counter, f);
+  encode_fixed<kCurrentMonitorSignals>(message(MessageKind::kCurrentMonitor), raw, counter, f);
 }
 void decode_current_monitor(const CanFrame& f, CurrentMonitorFrame& out) {
   std::int64_t raw[kCurrentMonitorSignals.size()];
-  unpack_frame(message(MessageKind::kCurrentMonitor), f, raw);
+  decode_fixed<kCurrentMonitorSignals>(f, raw);
   for (std::size_t j = 0; j < io::kCoils; ++j) {
     out.coil_current_adc[j] = static_cast<std::int16_t>(raw[kHdr + j]);
   }

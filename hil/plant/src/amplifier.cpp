@@ -56,10 +56,14 @@ double ForceNoiseStd_A(const AmplifierConfig& config) {
 }
 
 double MonitorNoiseStd_A(const AmplifierConfig& config, double commanded_abs_A) {
+  return MonitorNoiseStd_A(config, commanded_abs_A, ForceNoiseStd_A(config));
+}
+
+double MonitorNoiseStd_A(const AmplifierConfig& config, double commanded_abs_A, double force_noise_std_A) {
   double var = config.monitor_noise_A * config.monitor_noise_A;
   if (config.monitor_reproduces_table1) {
     const double total = Table1CurrentNoiseStd_A(commanded_abs_A);
-    const double force = ForceNoiseStd_A(config);
+    const double force = force_noise_std_A;
     var += std::max(0.0, total * total - force * force);
   }
   return std::sqrt(var);

@@ -620,9 +620,12 @@ __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinema
   const V4 gap0 = Splat4(config_.field.rest_gap_m + k.p[2]);
   const V4 force_per_A = Splat4(side_force_per_A_);
   V4 ref_s{}, ref_gap{}, ref_sin{}, ref_cos{}, ref_exp{};
-  // Per side (index 4 f + q) force and torque, platen frame.
-  double side_f[3][16];
-  double side_t[3][16];
+  // Per side (index 4 f + q) force and torque, platen frame, transposed so
+  // that the sums below run four (f0, f1, f2, t0) and two (t1, t2) chains
+  // per vector add: side_a[q][f] = {f0, f1, f2, t0} of side 4 f + q,
+  // side_b[q][f] = {t1, t2, -, -} (lanes 2-3 unused).
+  V4 side_a[4][4];
+  V4 side_b[4][4];
   for (int q = 0; q < 4; ++q) {
     const SideLanes& c = side_lanes_[static_cast<std::size_t>(q)];
     const V4 rb0 = Load4(c.rb0), rb1 = Load4(c.rb1), rb2 = Load4(c.rb2);
@@ -723,27 +726,34 @@ __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinema
     const V4 t0 = rb1 * f2 - rb2 * f1;
     const V4 t1 = rb2 * f0 - rb0 * f2;
     const V4 t2 = rb0 * f1 - rb1 * f0;
-    for (int f = 0; f < 4; ++f) {
-      side_f[0][4 * f + q] = f0[f];
-      side_f[1][4 * f + q] = f1[f];
-      side_f[2][4 * f + q] = f2[f];
-      side_t[0][4 * f + q] = t0[f];
-      side_t[1][4 * f + q] = t1[f];
-      side_t[2][4 * f + q] = t2[f];
+    // 4 x 4 transpose of the rows (f0, f1, f2, t0) over the lanes f.
+    const V4 lo01 = __builtin_shuffle(f0, f1, M4{0, 4, 2, 6});
+    const V4 hi01 = __builtin_shuffle(f0, f1, M4{1, 5, 3, 7});
+    const V4 lo23 = __builtin_shuffle(f2, t0, M4{0, 4, 2, 6});
+    const V4 hi23 = __builtin_shuffle(f2, t0, M4{1, 5, 3, 7});
+    side_a[q][0] = __builtin_shuffle(lo01, lo23, M4{0, 1, 4, 5});
+    side_a[q][1] = __builtin_shuffle(hi01, hi23, M4{0, 1, 4, 5});
+    side_a[q][2] = __builtin_shuffle(lo01, lo23, M4{2, 3, 6, 7});
+    side_a[q][3] = __builtin_shuffle(hi01, hi23, M4{2, 3, 6, 7});
+    const V4 lo45 = __builtin_shuffle(t1, t2, M4{0, 4, 2, 6});
+    const V4 hi45 = __builtin_shuffle(t1, t2, M4{1, 5, 3, 7});
+    side_b[q][0] = lo45;
+    side_b[q][1] = hi45;
+    side_b[q][2] = __builtin_shuffle(lo45, M4{2, 3, 2, 3});
+    side_b[q][3] = __builtin_shuffle(hi45, M4{2, 3, 2, 3});
+  }
+  // The sums in the scalar loop's side order 0..15 (idx = 4 f + q), each of
+  // the six chains in its own lane: IEEE adds are lane-wise, so every chain
+  // rounds as the scalar loop's.
+  V4 sum_a = Splat4(0.0), sum_b = Splat4(0.0);
+  for (int f = 0; f < 4; ++f) {
+    for (int q = 0; q < 4; ++q) {
+      sum_a += side_a[q][f];
+      sum_b += side_b[q][f];
     }
   }
-  // The sums in the scalar loop's side order (six chains in registers).
-  double fb0 = 0.0, fb1 = 0.0, fb2 = 0.0, tb0 = 0.0, tb1 = 0.0, tb2 = 0.0;
-  for (int idx = 0; idx < 16; ++idx) {
-    fb0 += side_f[0][idx];
-    fb1 += side_f[1][idx];
-    fb2 += side_f[2][idx];
-    tb0 += side_t[0][idx];
-    tb1 += side_t[1][idx];
-    tb2 += side_t[2][idx];
-  }
-  const double fb[3] = {fb0, fb1, fb2};
-  const double tb[3] = {tb0, tb1, tb2};
+  const double fb[3] = {sum_a[0], sum_a[1], sum_a[2]};
+  const double tb[3] = {sum_a[3], sum_b[0], sum_b[1]};
   for (int a = 0; a < 3; ++a) {
     acc->f[a] += r[a][0] * fb[0] + r[a][1] * fb[1] + r[a][2] * fb[2];
     acc->t[a] += r[a][0] * tb[0] + r[a][1] * tb[1] + r[a][2] * tb[2];
@@ -908,6 +918,12 @@ void Plant::BuildSprings() {
     const Eigen::Vector2d fc = ForcerCentre(f, config_.body.lever_arm_m, config_.body.layout);
     add(fc.x(), fc.y(), k4, c4);
   }
+  for (int i = 0; i < spring_count_; ++i) {
+    const Spring& sp = springs_[static_cast<std::size_t>(i)];
+    for (int a = 0; a < 3; ++a) spring_lanes_[a][i] = sp.rb[a];
+    spring_lanes_[3][i] = sp.k_N_per_m;
+    spring_lanes_[4][i] = sp.c_Ns_per_m;
+  }
 }
 
 // The suspension spring-dampers under the forcers (at the coils' plane):
@@ -917,18 +933,53 @@ void Plant::AddSuspension(const Kinematics& k, Accum* acc) const {
     return;
   }
   const double h0 = config_.suspension.neutral_height_m;
+  // The three sums in locals: stores through acc may alias k (both double),
+  // which made the compiler reload k's entries for every spring. Same
+  // operations in the same order.
+  double f2 = acc->f[2], t0 = acc->t[0], t1 = acc->t[1];
+  const double r00 = k.r[0][0], r01 = k.r[0][1], r02 = k.r[0][2];
+  const double r10 = k.r[1][0], r11 = k.r[1][1], r12 = k.r[1][2];
+  const double r20 = k.r[2][0], r21 = k.r[2][1], r22 = k.r[2][2];
+  const double pz = k.p[2], vz = k.v[2], wx = k.omega_w[0], wy = k.omega_w[1];
+  if (spring_count_ == 4) {
+    // Four springs, one per lane: the scalar loop's expressions with the
+    // same parentheses (IEEE ops are lane-wise), then its three sums in
+    // spring order.
+    const V4 rb0 = Load4(spring_lanes_[0]), rb1 = Load4(spring_lanes_[1]), rb2 = Load4(spring_lanes_[2]);
+    const V4 kk = Load4(spring_lanes_[3]), cc = Load4(spring_lanes_[4]);
+    const V4 rw0 = Splat4(r00) * rb0 + Splat4(r01) * rb1 + Splat4(r02) * rb2;
+    const V4 rw1 = Splat4(r10) * rb0 + Splat4(r11) * rb1 + Splat4(r12) * rb2;
+    const V4 rw2 = Splat4(r20) * rb0 + Splat4(r21) * rb1 + Splat4(r22) * rb2;
+    const V4 h = Splat4(pz) + rw2 - rb2;
+    const V4 hdot = Splat4(vz) + Splat4(wx) * rw1 - Splat4(wy) * rw0;
+    const V4 fz = -kk * (h - h0) - cc * hdot;
+    const V4 m0 = rw1 * fz, m1 = rw0 * fz;
+    for (int i = 0; i < 4; ++i) {
+      f2 += fz[i];
+      t0 += m0[i];
+      t1 -= m1[i];
+    }
+    acc->f[2] = f2;
+    acc->t[0] = t0;
+    acc->t[1] = t1;
+    return;
+  }
   for (int i = 0; i < spring_count_; ++i) {
     const Spring& s = springs_[static_cast<std::size_t>(i)];
     const double* rb = s.rb;
-    double rw[3];
-    for (int a = 0; a < 3; ++a) rw[a] = k.r[a][0] * rb[0] + k.r[a][1] * rb[1] + k.r[a][2] * rb[2];
-    const double h = k.p[2] + rw[2] - rb[2];
-    const double hdot = k.v[2] + k.omega_w[0] * rw[1] - k.omega_w[1] * rw[0];
+    const double rw0 = r00 * rb[0] + r01 * rb[1] + r02 * rb[2];
+    const double rw1 = r10 * rb[0] + r11 * rb[1] + r12 * rb[2];
+    const double rw2 = r20 * rb[0] + r21 * rb[1] + r22 * rb[2];
+    const double h = pz + rw2 - rb[2];
+    const double hdot = vz + wx * rw1 - wy * rw0;
     const double fz = -s.k_N_per_m * (h - h0) - s.c_Ns_per_m * hdot;
-    acc->f[2] += fz;
-    acc->t[0] += rw[1] * fz;
-    acc->t[1] -= rw[0] * fz;
+    f2 += fz;
+    t0 += rw1 * fz;
+    t1 -= rw0 * fz;
   }
+  acc->f[2] = f2;
+  acc->t[0] = t0;
+  acc->t[1] = t1;
 }
 
 void Plant::AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* touching) const {
@@ -945,28 +996,35 @@ void Plant::AddContact(const Kinematics& k, Accum* acc, double* normal_N, bool* 
   if (lowest > 1e-12) {
     return;
   }
-  const double corners[4][2] = {{c, c}, {-c, c}, {-c, -c}, {c, -c}};
-  for (const auto& corner : corners) {
-    const Eigen::Vector3d rb(corner[0], corner[1], -com_arm_m_);
-    double rw[3];
-    Rotate(k.r, rb, rw);
-    const double h = k.p[2] + rw[2] - rb.z();
-    if (h >= 0.0) {
-      continue;
-    }
-    double wxr[3];
-    Cross(k.omega_w, rw, wxr);
-    const double vel[3] = {k.v[0] + wxr[0], k.v[1] + wxr[1], k.v[2] + wxr[2]};
-    // One-sided: the surface pushes, never pulls.
-    const double fn = std::max(0.0, -config_.contact.stiffness_N_per_m * h - config_.contact.damping_Ns_per_m * vel[2]);
+  // The four corners (+c, +c), (-c, +c), (-c, -c), (+c, -c) one per vector
+  // lane: per corner rw = R rb, its height h, its velocity v + omega x rw, the
+  // one-sided normal force (the surface pushes, never pulls) and a regularized
+  // Coulomb friction. IEEE ops are lane-wise, so each lane rounds as the
+  // former per-corner loop did; a corner that does not touch computes values
+  // nobody reads. The sums then run in corner order over the corners that
+  // touch and push: the same additions as that loop.
+  const V4 rbx = V4{c, -c, -c, c}, rby = V4{c, c, -c, -c};
+  const V4 rbz = Splat4(-com_arm_m_);
+  const double(&r)[3][3] = k.r;
+  const V4 rw0 = Splat4(r[0][0]) * rbx + Splat4(r[0][1]) * rby + Splat4(r[0][2]) * rbz;
+  const V4 rw1 = Splat4(r[1][0]) * rbx + Splat4(r[1][1]) * rby + Splat4(r[1][2]) * rbz;
+  const V4 rw2 = Splat4(r[2][0]) * rbx + Splat4(r[2][1]) * rby + Splat4(r[2][2]) * rbz;
+  const V4 h = Splat4(k.p[2]) + rw2 - rbz;
+  const V4 w0 = Splat4(k.omega_w[0]), w1 = Splat4(k.omega_w[1]), w2 = Splat4(k.omega_w[2]);
+  const V4 vel0 = Splat4(k.v[0]) + (w1 * rw2 - w2 * rw1);
+  const V4 vel1 = Splat4(k.v[1]) + (w2 * rw0 - w0 * rw2);
+  const V4 vel2 = Splat4(k.v[2]) + (w0 * rw1 - w1 * rw0);
+  const V4 push = Splat4(-config_.contact.stiffness_N_per_m) * h - Splat4(config_.contact.damping_Ns_per_m) * vel2;
+  const double vs = config_.contact.friction_velocity_m_per_s;
+  const V4 speed2 = vel0 * vel0 + vel1 * vel1 + Splat4(vs * vs);
+  for (int i = 0; i < 4; ++i) {
+    if (h[i] >= 0.0) continue;
+    const double fn = std::max(0.0, push[i]);
     *touching = true;
-    if (fn <= 0.0) {
-      continue;
-    }
-    const double vs = config_.contact.friction_velocity_m_per_s;
-    const double scale =
-        config_.contact.friction_coefficient * fn / std::sqrt(vel[0] * vel[0] + vel[1] * vel[1] + vs * vs);
-    const double f[3] = {-scale * vel[0], -scale * vel[1], fn};
+    if (fn <= 0.0) continue;
+    const double scale = config_.contact.friction_coefficient * fn / std::sqrt(speed2[i]);
+    const double f[3] = {-scale * vel0[i], -scale * vel1[i], fn};
+    const double rw[3] = {rw0[i], rw1[i], rw2[i]};
     double tq[3];
     Cross(rw, f, tq);
     for (int a = 0; a < 3; ++a) {
@@ -1321,7 +1379,8 @@ io::SensorSample Plant::sample() {
   const auto& ac = config_.amplifier;
   for (int j = 0; j < kCoils; ++j) {
     const double noise =
-        noisy ? MonitorNoiseStd_A(ac, std::fabs(amplifiers_.commanded_A(j))) * rng_.Normal() : 0.0;
+        noisy ? MonitorNoiseStd_A(ac, std::fabs(amplifiers_.commanded_A(j)), amplifiers_.force_noise_std_A()) * rng_.Normal()
+              : 0.0;
     out.coil_current_adc[j] =
         QuantizeAdc(ac.monitor_gain_V_per_A * (amplifiers_.current_A(j) + noise), config_.adc.full_scale_V);
   }

@@ -36,6 +36,9 @@ double ForceNoiseStd_A(const AmplifierConfig& config);
 // monitored current's total std equals Table 1 (when enabled), plus
 // monitor_noise_A in quadrature.
 double MonitorNoiseStd_A(const AmplifierConfig& config, double commanded_abs_A);
+// The same with ForceNoiseStd_A(config) given (Amplifiers::force_noise_std_A,
+// computed once): the servo path's 8 monitor draws per tick.
+double MonitorNoiseStd_A(const AmplifierConfig& config, double commanded_abs_A, double force_noise_std_A);
 
 // AD5764: code -> volts (two's complement, -32768 -> -FS, 32767 -> FS*(1-2^-15)).
 double DacCodeToVolts(std::int16_t code, double full_scale_V);

@@ -239,6 +239,9 @@ class Plant {
   mutable LaneRefStore lane_ref_store_{};
   std::array<Spring, 4> springs_{};
   int spring_count_ = 0;
+  // The four springs (cross / square) by field, one lane per spring:
+  // rb[0], rb[1], rb[2], k, c (AddSuspension's vector form).
+  double spring_lanes_[5][4] = {};
   int lane_axis_[4] = {};      // array axis of forcer f (lane f)
   bool lanes_ok_ = false;      // four sides per forcer on one array axis, 4 harmonics
   bool lanes_avx_ = false;     // the CPU has AVX: 4 lanes per instruction (else 2 x SSE2)
