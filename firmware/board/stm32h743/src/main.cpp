@@ -395,6 +395,7 @@ extern "C" void board_main() {
   static maglev::app::ServoLoop<b::ServoKernel> servo(g_sensors, actuators, g_kernel, servo_timing(g_servo_rate_Hz),
                                                       hooks);
   g_servo = &servo;
+  application.attach_servo_state(&servo.state());  // servo.max_cycles / last_cycles / overruns over Modbus
 
   g_bus.write32(r::scb::kBase + r::scb::kShpr3, 1u << 28);  // SysTick priority 1
   g_bus.write32(r::systick::kRvr, b::kCpu_Hz / 1000u - 1u);
