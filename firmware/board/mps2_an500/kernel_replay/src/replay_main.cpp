@@ -15,10 +15,12 @@
 #include <cstring>
 
 #include "maglev/board/mps2_an500/instruction_counter.hpp"
+#include "maglev/board/mps2_an500/instruction_stats.hpp"
 #include "maglev/board/mps2_an500/semihosting.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/kernel_replay/replay_format.hpp"
 #include "maglev/kernel_replay/semihost_file.hpp"
+#include "maglev/kernel_replay/vectors_file.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 
 namespace {
@@ -40,48 +42,9 @@ enum ExitCode : int {
 // SysTick as an instruction counter: maglev/board/mps2_an500/instruction_counter.hpp.
 using namespace hw::icount;
 
-struct Stats {
-  std::uint64_t count = 0;
-  std::uint64_t sum = 0;
-  std::uint64_t min = ~std::uint64_t{0};
-  std::uint64_t max = 0;
-  std::uint32_t max_tick = 0;
-  void add(std::uint64_t v, std::uint32_t tick) {
-    ++count;
-    sum += v;
-    if (v < min) min = v;
-    if (v > max) {
-      max = v;
-      max_tick = tick;
-    }
-  }
-};
-
-
+using Stats = TickStats;
 void print_stats(const char* label, const Stats& s, const Calibration& cal) {
-  hw::semihost_write("step_instructions ");
-  hw::semihost_write(label);
-  hw::semihost_write(": ticks=");
-  hw::semihost_write_unsigned(s.count);
-  if (s.count == 0U) {
-    hw::semihost_write("\n");
-    return;
-  }
-  hw::semihost_write(" min=");
-  hw::semihost_write_unsigned(cal.instructions(s.min));
-  hw::semihost_write(" mean=");
-  // mean with one decimal: instructions(sum) over count, computed in tenths.
-  const std::uint64_t span = cal.nop_counts - cal.empty_counts;
-  const std::uint64_t net = s.sum - s.count * cal.empty_counts;
-  const std::uint64_t tenths = cal.valid() ? (net * kCalibrationNops * 10U + span * s.count / 2U) / (span * s.count) : 0U;
-  hw::semihost_write_unsigned(tenths / 10U);
-  hw::semihost_write_char('.');
-  hw::semihost_write_unsigned(tenths % 10U);
-  hw::semihost_write(" max=");
-  hw::semihost_write_unsigned(cal.instructions(s.max));
-  hw::semihost_write(" (tick ");
-  hw::semihost_write_unsigned(s.max_tick);
-  hw::semihost_write(")\n");
+  print_tick_stats("step_instructions", label, s, cal);
 }
 
 // --- command line ------------------------------------------------------------------
@@ -118,21 +81,15 @@ int main() {
   const char* vectors_path = g_words[1];
   const char* outputs_path = g_words[2];
 
-  const int in = kr::semihost_open(vectors_path, kr::OpenMode::kReadBinary);
-  if (in < 0) return fail("cannot open the vectors file", kCannotRead);
-  const long length = kr::semihost_file_length(in);
-  std::uint8_t header_bytes[kr::kHeaderBytes];
+  int in = -1;
   kr::InputHeader header{};
-  if (!kr::semihost_read(in, header_bytes, sizeof(header_bytes))) return fail("cannot read the header", kCannotRead);
-  if (!kr::decode_header(header_bytes, &header)) {
-    return fail("bad header (magic, version or record sizes differ from this image)", kBadHeader);
+  if (const kr::VectorsOpen e = kr::open_vectors(vectors_path, &in, &header); e != kr::VectorsOpen::kOk) {
+    const bool unreadable = e == kr::VectorsOpen::kCannotOpen || e == kr::VectorsOpen::kCannotReadHeader;
+    return fail(kr::to_string(e), unreadable ? kCannotRead : kBadHeader);
   }
   if (header.profile_bytes != 0U && header.profile_bytes != sizeof(g_profile)) {
     return fail("the stage profile's size differs from this image's StageProfile", kBadHeader);
   }
-  const auto expected_length = static_cast<long>(kr::kHeaderBytes + header.profile_bytes +
-                                                 static_cast<std::size_t>(header.tick_count) * kr::kInputRecordBytes);
-  if (length != expected_length) return fail("vectors file length does not match its header", kBadHeader);
   // The kernel configuration: the firmware's own profile path (check +
   // MakeKernelConfig) on the recorded profile, or the default.
   kernel::KernelConfig config = kernel::default_kernel_config();
@@ -161,12 +118,7 @@ int main() {
     return fail("apply_config refused", kConfigRefused);
   }
 
-  systick_start();
-  Calibration cal;
-  for (int i = 0; i < 4; ++i) {  // first runs warm QEMU's translation cache
-    cal.empty_counts = measure_empty();
-    cal.nop_counts = measure_nops();
-  }
+  const Calibration cal = start_and_calibrate();
 
   // Per sequencer state the tick STARTED in (homing's last tick, with its
   // one-off Hall solve, counts as Homing).

@@ -43,7 +43,9 @@
 #include "maglev/app/recorder.hpp"
 #include "maglev/app/servo_loop.hpp"
 #include "maglev/board/mps2_an500/instruction_counter.hpp"
+#include "maglev/board/mps2_an500/instruction_stats.hpp"
 #include "maglev/board/mps2_an500/semihosting.hpp"
+#include "maglev/board/stm32h743/amplifier_board_drivers.hpp"
 #include "maglev/board/stm32h743/amplifier_board_io.hpp"
 #include "maglev/board/stm32h743/pinmap.hpp"
 #include "maglev/board/stm32h743/servo_kernel.hpp"
@@ -56,6 +58,7 @@
 #include "maglev/drivers/stm32h7_spi.hpp"
 #include "maglev/kernel_replay/replay_format.hpp"
 #include "maglev/kernel_replay/semihost_file.hpp"
+#include "maglev/kernel_replay/vectors_file.hpp"
 #include "maglev/lab_tools/lab_tick.hpp"
 #include "maglev/lab_tools/recorder.hpp"
 #include "maglev/lab_tools/wave_generator.hpp"
@@ -86,48 +89,13 @@ enum ExitCode : int {
 };
 constexpr float kServoRate_Hz = 20000.0f;  // servo.rate: what this measurement is about
 
-struct Stats {
-  std::uint64_t count = 0, sum = 0, min = ~std::uint64_t{0}, max = 0;
-  std::uint32_t max_tick = 0;
-  void add(std::uint64_t v, std::uint32_t tick) {
-    ++count;
-    sum += v;
-    if (v < min) min = v;
-    if (v > max) {
-      max = v;
-      max_tick = tick;
-    }
-  }
-};
+using Stats = TickStats;
 constexpr int kStates = static_cast<int>(kernel::SequencerState::kFault) + 1;
 struct StateStats {
   Stats s[kStates];
 };
-
 void print_stats(const char* what, const char* label, const Stats& s, const Calibration& cal) {
-  hw::semihost_write(what);
-  hw::semihost_write(" ");
-  hw::semihost_write(label);
-  hw::semihost_write(": ticks=");
-  hw::semihost_write_unsigned(s.count);
-  if (s.count == 0U) {
-    hw::semihost_write("\n");
-    return;
-  }
-  hw::semihost_write(" min=");
-  hw::semihost_write_unsigned(cal.instructions(s.min));
-  hw::semihost_write(" mean=");
-  const std::uint64_t span = cal.nop_counts - cal.empty_counts;
-  const std::uint64_t net = s.sum - s.count * cal.empty_counts;
-  const std::uint64_t tenths = cal.valid() ? (net * kCalibrationNops * 10U + span * s.count / 2U) / (span * s.count) : 0U;
-  hw::semihost_write_unsigned(tenths / 10U);
-  hw::semihost_write_char('.');
-  hw::semihost_write_unsigned(tenths % 10U);
-  hw::semihost_write(" max=");
-  hw::semihost_write_unsigned(cal.instructions(s.max));
-  hw::semihost_write(" (tick ");
-  hw::semihost_write_unsigned(s.max_tick);
-  hw::semihost_write(")\n");
+  print_tick_stats(what, label, s, cal);
 }
 void print_all(const char* what, const StateStats& st, const Calibration& cal) {
   for (int i = 0; i < kStates; ++i) {
@@ -202,28 +170,10 @@ struct Board {
   Bus bus;
   std::uint32_t adc_dma_rx[2][4]{};
   d::Stm32OutputPin<Bus> amp_enable_pin{bus, pins::kAmpEnable};
-  d::Stm32OutputPin<Bus> dac_sync{bus, pins::kDacSync};
-  d::Stm32OutputPin<Bus> dac_ldac{bus, pins::kDacLdac};
-  d::Stm32OutputPin<Bus> adc0_cs{bus, pins::kAdc0Cs};
-  d::Stm32OutputPin<Bus> adc1_cs{bus, pins::kAdc1Cs};
-  d::Stm32InputPin<Bus> adc_busy{bus, pins::kAdcBusy};
-  d::Stm32InputPin<Bus> loss0{bus, pins::kLoss0};
-  d::Stm32InputPin<Bus> loss1{bus, pins::kLoss1};
-  d::Stm32InputPin<Bus> loss2{bus, pins::kLoss2};
-  const d::SpiDeviceSettings dac_spi_devices[1] = {{&dac_sync, 1, false, true}};
-  const d::SpiDeviceSettings adc_spi_devices[2] = {{&adc0_cs, 2, true, false}, {&adc1_cs, 2, true, false}};
-  d::Stm32SpiMaster<Bus, 1> spi_dac{bus, r::spi::kSpi1, dac_spi_devices};
-  d::Stm32SpiMaster<Bus, 2> spi_adc{bus, r::spi::kSpi3, adc_spi_devices};
-  d::ad5764::Chain<2> dac{spi_dac, 0, dac_ldac};
-  const std::uint8_t adc_cs[2] = {0, 1};
-  d::ad7606::Adc adc{spi_adc, adc_cs, adc_busy, adc_dma_rx};
-  using Encoder = d::QuadratureEncoder<Bus>;
-  Encoder enc0{bus, {r::tim::kTim2, true, 1, false}, loss0};
-  Encoder enc1{bus, {r::tim::kTim5, true, 1, false}, loss1};
-  Encoder enc2{bus, {r::tim::kTim3, false, 1, false}, loss2};
-  b::AmplifierBoardSensors<Encoder> board_sensors{adc, enc0, enc1, enc2};
+  b::AmplifierBoardDrivers<Bus> parts{bus, adc_dma_rx};  // main.cpp's g_board
+  b::AmplifierBoardSensors<typename b::AmplifierBoardDrivers<Bus>::Encoder>& board_sensors = parts.sensors;
   d::AmplifierEnable amp{amp_enable_pin};
-  b::AmplifierBoardActuators board_actuators{dac, amp};
+  b::AmplifierBoardActuators board_actuators{parts.dac, amp};
   b::ServoKernel controller;
   TimedSensors timed_sensors{board_sensors};
   TimedActuators timed_actuators{board_actuators};
@@ -270,21 +220,8 @@ struct Board {
   void boot() {
     self = this;
     amp_enable_pin.configure(false);
-    dac_sync.configure(true);
-    dac_ldac.configure(true);
-    adc0_cs.configure(true);
-    adc1_cs.configure(true);
-    adc_busy.configure();
-    loss0.configure(1);
-    loss1.configure(1);
-    loss2.configure(1);
-    spi_dac.init();
-    spi_adc.init();
-    dac.init();
-    (void)dac.write_zero();
-    enc0.init();
-    enc1.init();
-    enc2.init();
+    parts.configure_pins();
+    parts.init();
   }
 
   // The recorded counts start anywhere in 32 bits (the plant's wrapping
@@ -299,7 +236,7 @@ struct Board {
       if (left < 0x4000 && left > -0x4000) break;
       at += left > 0 ? 0x4000u : static_cast<std::uint32_t>(-0x4000);
       bus.set_count(2, at);
-      enc2.on_timer_irq();
+      parts.enc2.on_timer_irq();
     }
   }
 };
@@ -384,17 +321,13 @@ PassResult g_result[3];
 
 template <bool kTimed, bool kCount>
 int run_pass(Board<kTimed, kCount>& board, const char* vectors_path, const char* outputs_path, PassResult& res) {
-  const int in = kr::semihost_open(vectors_path, kr::OpenMode::kReadBinary);
-  if (in < 0) return fail("cannot open the vectors file", kCannotRead);
-  const long length = kr::semihost_file_length(in);
-  std::uint8_t header_bytes[kr::kHeaderBytes];
+  int in = -1;
   kr::InputHeader header{};
-  if (!kr::semihost_read(in, header_bytes, sizeof(header_bytes))) return fail("cannot read the header", kCannotRead);
-  if (!kr::decode_header(header_bytes, &header)) return fail("bad header", kBadHeader);
+  if (const kr::VectorsOpen e = kr::open_vectors(vectors_path, &in, &header); e != kr::VectorsOpen::kOk) {
+    const bool unreadable = e == kr::VectorsOpen::kCannotOpen || e == kr::VectorsOpen::kCannotReadHeader;
+    return fail(kr::to_string(e), unreadable ? kCannotRead : kBadHeader);
+  }
   if (header.profile_bytes != 0U) return fail("vectors with a stage profile: this image runs the default stage", kBadHeader);
-  const auto expected_length =
-      static_cast<long>(kr::kHeaderBytes + static_cast<std::size_t>(header.tick_count) * kr::kInputRecordBytes);
-  if (length != expected_length) return fail("vectors file length does not match its header", kBadHeader);
   const int out = outputs_path != nullptr ? kr::semihost_open(outputs_path, kr::OpenMode::kWriteBinary) : -1;
   if (outputs_path != nullptr && out < 0) return fail("cannot open an outputs file", kCannotWrite);
 
@@ -492,12 +425,7 @@ int main() {
   }
   const bool icount = g_words[4] != nullptr && std::strcmp(g_words[4], "--icount") == 0;
 
-  systick_start();
-  Calibration cal;
-  for (int i = 0; i < 4; ++i) {  // first runs warm QEMU's translation cache
-    cal.empty_counts = measure_empty();
-    cal.nop_counts = measure_nops();
-  }
+  const Calibration cal = start_and_calibrate();
   if (const int rc = run_pass(g_board_a, g_words[1], g_words[2], g_result[0]); rc != kOk) return rc;
   if (const int rc = run_pass(g_board_b, g_words[1], g_words[3], g_result[1]); rc != kOk) return rc;
   if (const int rc = run_pass(g_board_c, g_words[1], nullptr, g_result[2]); rc != kOk) return rc;
