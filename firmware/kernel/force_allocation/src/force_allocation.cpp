@@ -246,8 +246,8 @@ std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm, doub
   return static_cast<std::int64_t>(static_cast<std::uint64_t>(q) << 32) + (f1 << 6) + f2;
 }
 
-void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
-                       std::uint32_t coil_phase_turn[io::kCoils]) {
+void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
+                  std::uint32_t first_coil_phase_turn[kForcers]) {
   // Turns of each coordinate (Q32, NOT reduced: for a direction cosine h that
   // is not an integer, h * (x mod L) != h * x mod L), projected on each
   // forcer's axis as (turns * h_q30) >> 30 taken mod 2^32. The product is
@@ -262,8 +262,17 @@ void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTa
     const std::uint64_t px = tx * static_cast<std::uint64_t>(t.h_q30[k][0]);
     const std::uint64_t py = ty * static_cast<std::uint64_t>(t.h_q30[k][1]);
     const std::uint32_t psi = static_cast<std::uint32_t>((px + py) >> 30);
-    coil_phase_turn[2 * k] = psi + t.coil_offset_turn[2 * k];
-    coil_phase_turn[2 * k + 1] = psi + t.coil_offset_turn[2 * k + 1];
+    first_coil_phase_turn[k] = psi + t.coil_offset_turn[2 * k];
+  }
+}
+
+void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
+                       std::uint32_t coil_phase_turn[io::kCoils]) {
+  std::uint32_t first[kForcers];
+  ForcerPhases(x_pm, y_pm, t, first);
+  for (int k = 0; k < kForcers; ++k) {
+    coil_phase_turn[2 * k] = first[k];
+    coil_phase_turn[2 * k + 1] = first[k] + (t.coil_offset_turn[2 * k + 1] - t.coil_offset_turn[2 * k]);
   }
 }
 
@@ -280,7 +289,16 @@ ForceAllocationError FillCommon(const ForceAllocationConfig& c, const ForceAlloc
     ct->h_q30[k][0] = RoundToInt64(t.h_dir[k][0] * 1073741824.0);
     ct->h_q30[k][1] = RoundToInt64(t.h_dir[k][1] * 1073741824.0);
   }
-  for (int j = 0; j < io::kCoils; ++j) ct->coil_offset_turn[j] = RadToTurn(c.coil_phase_rad[j]);
+  // Coil 2k+1 exactly a quarter turn from coil 2k (ComputeForceAllocationTables
+  // checked quadrature to 1e-9 rad for every forcer in use; an unused
+  // forcer's coils carry no current whatever their phase).
+  for (int k = 0; k < kForcers; ++k) {
+    const std::uint32_t first = RadToTurn(c.coil_phase_rad[2 * k]);
+    const bool leads = numeric::dsin(c.coil_phase_rad[2 * k + 1] - c.coil_phase_rad[2 * k]) >= 0.0;
+    ct->coil_offset_turn[2 * k] = first;
+    ct->coil_offset_turn[2 * k + 1] = first + (leads ? 0x40000000u : 0xC0000000u);
+    ct->second_coil_leads[k] = leads;
+  }
   if (!(c.peak_current_A > 0.0 && c.peak_current_A < 100.0) || !(c.mass_kg > 0.0) || !(c.payload_kg >= 0.0) ||
       !(c.amplifier_gain_A_per_V > 0.0) || !(c.dac_full_scale_V > 0.0) ||
       !(c.current_monitor_gain_V_per_A > 0.0) || !(c.adc_full_scale_V > 0.0)) {

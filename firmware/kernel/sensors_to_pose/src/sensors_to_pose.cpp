@@ -298,12 +298,15 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
     // truncated toward zero. In double: an int64 division is a library call
     // on the M7. Exact: |moved| < 2^31 n, and a non-integer moved/n lies at
     // least 1/n from an integer, far beyond double's rounding.
+    // Only after a stale gap (n > 1): every other tick's step is `moved` itself.
     const std::int64_t moved = s.counts[b] - before;
-    const double mean_step = Int64ToDouble(moved) / static_cast<double>(n);
-    const std::int64_t nearest = numeric::RoundToInt64(mean_step);
-    const double back = Int64ToDouble(nearest);
-    const std::int64_t truncated =
-        nearest - (mean_step >= 0.0 ? (back > mean_step ? 1 : 0) : (back < mean_step ? -1 : 0));
+    std::int64_t truncated = moved;
+    if (n != 1) {
+      const double mean_step = Int64ToDouble(moved) / static_cast<double>(n);
+      const std::int64_t nearest = numeric::RoundToInt64(mean_step);
+      const double back = Int64ToDouble(nearest);
+      truncated = nearest - (mean_step >= 0.0 ? (back > mean_step ? 1 : 0) : (back < mean_step ? -1 : 0));
+    }
     s.last_step[b] = stale ? s.last_step[b] : truncated;
     out.beam_glitch = static_cast<std::uint8_t>(out.beam_glitch | (glitch ? (1u << b) : 0u));
     out.glitch_counts[b] = Select(glitch, change, 0);
@@ -326,16 +329,24 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   // adds < 1e-3 pm; the result is rounded to whole pm / prad once, at the
   // end (docs/PERFORMANCE.md, "Servo tick": the bound against the exact
   // solve).
+  // Pass 0 is the linear inverse of the measurement itself (no correction:
+  // theta = 0 makes the subtracted term exactly zero).
   const double correct = s.abbe_cosine_correction ? 1.0 : 0.0;
-  double est[3] = {0.0, 0.0, 0.0};
-  for (int pass = 0; pass < 5; ++pass) {
-    const double theta_rad = est[2] * 1e-12 * (pass > 0 ? correct : 0.0);
+  double est[3];
+#pragma GCC unroll 3
+  for (int r = 0; r < 3; ++r) {
+    est[r] = s.inv_beam[r][0] * meas_pm[0] + s.inv_beam[r][1] * meas_pm[1] + s.inv_beam[r][2] * meas_pm[2];
+  }
+  for (int pass = 1; pass < 5; ++pass) {
+    const double theta_rad = est[2] * 1e-12 * correct;
     const double half_theta2 = 0.5 * theta_rad * theta_rad;
     double lin[3];
+#pragma GCC unroll 3
     for (int b = 0; b < 3; ++b) {
       const double other = s.beam_is_y[b] ? -est[0] : est[1];
       lin[b] = meas_pm[b] - (other * theta_rad + s.beam_mirror_pm[b] * half_theta2);
     }
+#pragma GCC unroll 3
     for (int r = 0; r < 3; ++r) {
       est[r] = s.inv_beam[r][0] * lin[0] + s.inv_beam[r][1] * lin[1] + s.inv_beam[r][2] * lin[2];
     }

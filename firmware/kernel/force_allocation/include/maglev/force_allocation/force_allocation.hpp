@@ -99,13 +99,23 @@ struct CommutationTables {
   std::int64_t base_x_pm;
   std::int64_t base_y_pm;
   std::int64_t h_q30[kForcers][2];  // direction cosines, Q2.30 (exactly +-2^30 for X/Y axes)
+  // Coil 2k's offset; coil 2k+1's is coil 2k's + or - exactly a quarter turn
+  // (second_coil_leads[k]): the configuration requires quadrature to 1e-9 rad
+  // and the offsets are snapped to it (< 2^-32 turn = 1.5 nrad). So one table
+  // sine/cosine per forcer serves both of its coils, bit for bit:
+  // sin(p + 2^30) = cos(p), cos(p + 2^30) = -sin(p) with the same table entries.
   std::uint32_t coil_offset_turn[io::kCoils];
+  bool second_coil_leads[kForcers];
 };
 
 // x, y (pm, magnet frame) -> per-coil phase psi_j (uint32, 2^32 = one turn):
 // exact integer modulo of the pitch, floor rounding (< 2^-32 turn).
 void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& tables,
                        std::uint32_t coil_phase_turn[io::kCoils]);
+// The tick's form: the phase of each forcer's first coil (coil 2k); the
+// second's is a quarter turn off (CommutationTables::second_coil_leads).
+void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& tables,
+                  std::uint32_t first_coil_phase_turn[kForcers]);
 
 // Fraction of a pitch, Q32: floor(FloorMod(pos, pitch) * 2^32 / pitch), exact.
 std::uint32_t PositionToTurn(std::int64_t pos_pm, std::int64_t pitch_pm);

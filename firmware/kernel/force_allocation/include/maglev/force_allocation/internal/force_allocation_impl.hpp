@@ -70,25 +70,35 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
   using Traits = numeric::ScalarTraits<Scalar>;
   // G = B U  (eq (21) without its 2 b*: G is the forcer force in units of 2 b*).
   Scalar g[kForcerForces];
+#pragma GCC unroll 8
   for (int r = 0; r < kForcerForces; ++r) {
     Scalar acc = Traits::zero();
+#pragma GCC unroll 6
     for (int c = 0; c < kEfforts; ++c) acc += state.b[r][c] * effort_A[c];
     g[r] = acc;
   }
   // i = 2 S_xy G, eq (24). Row j of S_xy (eq 23) is (sin psi_j, cos psi_j) on
-  // its forcer's (F_h, F_z): the transpose of column j of eq (19).
-  std::uint32_t phase[io::kCoils];
-  CommutationPhases(x_pm, y_pm, state.commutation, phase);
+  // its forcer's (F_h, F_z): the transpose of column j of eq (19). One table
+  // lookup per forcer: its second coil is a quarter turn off the first
+  // (CommutationTables::second_coil_leads), sin(p +- 1/4) = +-cos p,
+  // cos(p +- 1/4) = -+sin p, exactly the values the table gives there.
+  std::uint32_t phase[kForcers];
+  ForcerPhases(x_pm, y_pm, state.commutation, phase);
   // Work with half-currents h = i / 2 until the limit is applied: doubles
   // the Q7.24 headroom (|h| < 128 A), so efforts up to ~20 A per axis never
   // saturate an intermediate (which would bend the wrench direction).
   Scalar half_i[io::kCoils];
   Scalar max_abs = Traits::zero();
-  for (int j = 0; j < io::kCoils; ++j) {
-    const auto sc = Traits::sin_cos(phase[j]);
-    const int k = j / 2;
-    half_i[j] = sc.sin * g[2 * k] + sc.cos * g[2 * k + 1];
-    max_abs = detail_fa::MaxScalar(max_abs, detail_fa::AbsScalar(half_i[j]));
+#pragma GCC unroll 4
+  for (int k = 0; k < kForcers; ++k) {
+    const auto sc = Traits::sin_cos(phase[k]);
+    const bool leads = state.commutation.second_coil_leads[k];
+    const Scalar s2 = leads ? sc.cos : -sc.cos;
+    const Scalar c2 = leads ? -sc.sin : sc.sin;
+    half_i[2 * k] = sc.sin * g[2 * k] + sc.cos * g[2 * k + 1];
+    half_i[2 * k + 1] = s2 * g[2 * k] + c2 * g[2 * k + 1];
+    max_abs = detail_fa::MaxScalar(max_abs, detail_fa::AbsScalar(half_i[2 * k]));
+    max_abs = detail_fa::MaxScalar(max_abs, detail_fa::AbsScalar(half_i[2 * k + 1]));
   }
   // One common factor k <= 1 keeps the wrench direction: saturation never
   // becomes a cross-axis force. k = (peak/2) / max(max|h|, peak/2) is exactly
