@@ -9,13 +9,15 @@
 // Exit status 0 only if the stage reached Ready and every command was accepted
 // (so the recorded run really exercises the levitated kernel).
 //
-// usage: kernel-vector-recorder <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home] [--rate HZ]
-//   --rate HZ: servo rate (2500, 5000, 10000 or 20000; default: the
-//   configuration's, 2500): the kernel is configured at HZ, the plant steps
-//   at HZ (hil::ApplyServoRate) and the schedule's tick offsets, the start-up
-//   limit and the ticks after Ready scale with it, so the session covers the
-//   same seconds (the whole-servo-interrupt measurement at 20 kHz:
-//   firmware/board/mps2_an500/servo_tick).
+// usage: kernel-vector-recorder <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home] [--q7.24] [--rate HZ]
+// --q7.24: the kernel is Controller<Q7_24> (the fixed-point build) instead of
+// Controller<float>; the replay image must then be run with --q7.24 too.
+// --rate HZ: servo rate (2500, 5000, 10000 or 20000; default: the
+// configuration's, 2500): the kernel is configured at HZ, the plant steps
+// at HZ (hil::ApplyServoRate) and the schedule's tick offsets, the start-up
+// limit and the ticks after Ready scale with it, so the session covers the
+// same seconds (the whole-servo-interrupt measurement at 20 kHz:
+// firmware/board/mps2_an500/servo_tick).
 #include <cstdint>
 #include <cstdlib>
 #include <cstdio>
@@ -117,6 +119,9 @@ double reference_si(const kernel::ControllerStatus& st, Axis axis) {
 
 }  // namespace
 
+template <typename Scalar>
+int record(int argc, char** argv, bool near_home, double rate_Hz);
+
 int main(int argc, char** argv) {
   // --rate HZ (anywhere after the two paths): taken out before the positional parsing below.
   double rate_Hz = 0.0;
@@ -132,10 +137,18 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "recorder: --rate %g: not an offered servo rate (2500, 5000, 10000, 20000)\n", rate_Hz);
     return 2;
   }
+  const bool q7_24 = argc > 3 && std::string(argv[argc - 1]) == "--q7.24";
+  if (q7_24) --argc;
   const bool near_home = argc > 3 && std::string(argv[argc - 1]) == "--near-home";
   if (near_home) --argc;
+  return q7_24 ? record<maglev::numeric::Q7_24>(argc, argv, near_home, rate_Hz)
+               : record<float>(argc, argv, near_home, rate_Hz);
+}
+
+template <typename Scalar>
+int record(int argc, char** argv, bool near_home, double rate_Hz) {
   if (argc != 3 && !(argc == 5 && std::string(argv[3]) == "--profile")) {
-    std::fprintf(stderr, "usage: %s <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home] [--rate HZ]\n",
+    std::fprintf(stderr, "usage: %s <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home] [--q7.24] [--rate HZ]\n",
                  argv[0]);
     return 2;
   }
@@ -177,7 +190,7 @@ int main(int argc, char** argv) {
   const std::uint32_t max_startup_ticks = scaled(kMaxStartupTicks);
   if (rate_Hz != 0.0) std::printf("recorder: servo rate %g Hz\n", tick_rate_Hz);
   maglev::hil::Plant plant(plant_config, kSeed);
-  auto controller = std::make_unique<kernel::Controller<float>>();
+  auto controller = std::make_unique<kernel::Controller<Scalar>>();
   if (controller->apply_config(config) != kernel::ConfigError::kOk) {
     std::fprintf(stderr, "recorder: the kernel configuration was refused\n");
     return 1;

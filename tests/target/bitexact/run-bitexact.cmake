@@ -1,6 +1,7 @@
 # cmake -DRECORDER=<kernel-vector-recorder> -DCOMPARE=<kernel-bitexact-compare>
 #       -DQEMU=<qemu-system-arm> -DELF=<maglev-qemu-kernel-replay.elf>
 #       -DWORKDIR=<dir> -DTIMEOUT=<s> [-DICOUNT_SHIFT=<n>] [-DPROFILE=<file.profile>] [-DNEAR_HOME=ON]
+#       [-DQ7_24=ON]  (the fixed-point kernel, Controller<Q7_24>, on both sides)
 #       -P run-bitexact.cmake
 #
 # 1. record: plant + host Controller<float> -> vectors.bin, host_outputs.bin
@@ -34,6 +35,11 @@ endif()
 if(NEAR_HOME)
   list(APPEND _profile_args --near-home)
 endif()
+set(_image_scalar "")
+if(Q7_24)
+  list(APPEND _profile_args --q7.24)
+  set(_image_scalar " --q7.24")
+endif()
 execute_process(COMMAND ${RECORDER} ${_vectors} ${_host} ${_profile_args} RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _out)
 message("${_out}")
 if(NOT _rc EQUAL 0)
@@ -46,9 +52,9 @@ if(DEFINED ICOUNT_SHIFT)
   list(APPEND _cmd -icount shift=${ICOUNT_SHIFT})
 endif()
 if(DEFINED ICOUNT_SHIFT)
-  list(APPEND _cmd -kernel ${ELF} -append "${_vectors} ${_target} --icount")
+  list(APPEND _cmd -kernel ${ELF} -append "${_vectors} ${_target} --icount${_image_scalar}")
 else()
-  list(APPEND _cmd -kernel ${ELF} -append "${_vectors} ${_target}")
+  list(APPEND _cmd -kernel ${ELF} -append "${_vectors} ${_target}${_image_scalar}")
 endif()
 string(REPLACE ";" " " _shown "${_cmd}")
 message("kernel-bitexact: ${_shown}")

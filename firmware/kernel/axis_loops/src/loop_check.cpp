@@ -1,3 +1,4 @@
+#include "maglev/io/code_placement.hpp"
 #include "maglev/axis_loops/loop_check.hpp"
 
 #include <cmath>
@@ -5,7 +6,7 @@
 
 namespace maglev::kernel {
 
-LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant, double servo_rate_Hz,
+MAGLEV_CONFIG_CODE LoopMargins Pid2DofLoopMargins(const Pid2DofConfig& pid, const LoopPlant& plant, double servo_rate_Hz,
                                const BiquadConfig* filters, int filter_count) {
   constexpr double kPi = 3.14159265358979323846;
   LoopMargins m;

@@ -1,3 +1,4 @@
+#include "maglev/io/code_placement.hpp"
 #include "maglev/controller/controller.hpp"
 
 #include "maglev/axis_loops/loop_check.hpp"
@@ -29,7 +30,7 @@ MAGLEV_ENUM_TO_STRING(CommandResult, MAGLEV_COMMAND_RESULTS)
 
 MAGLEV_ENUM_TO_STRING(ConfigError, MAGLEV_CONFIG_ERRORS)
 
-KernelConfig default_kernel_config() {
+MAGLEV_CONFIG_CODE KernelConfig default_kernel_config() {
   KernelConfig c{};
   c.servo_rate_Hz = static_cast<float>(stage::kServoRate_Hz);
   c.measurement = DefaultSensorsToPoseConfig();

@@ -1,3 +1,4 @@
+#include "maglev/io/code_placement.hpp"
 #include "maglev/force_allocation/force_allocation.hpp"
 
 #include <cmath>
@@ -23,7 +24,7 @@ struct ForcerGeometry {
 // reproduces eq (18) of paper 000 entry by entry, the triangle eq (8) of
 // paper 003 (tests/kernel/force_allocation checks both against the printed
 // matrices).
-void LayoutGeometry(const ForceAllocationConfig& c, ForcerGeometry g[kForcers]) {
+MAGLEV_CONFIG_CODE void LayoutGeometry(const ForceAllocationConfig& c, ForcerGeometry g[kForcers]) {
   const double l = c.lever_arm_m;
   switch (c.layout) {
     case ForceLayout::kCross:
@@ -55,7 +56,7 @@ void LayoutGeometry(const ForceAllocationConfig& c, ForcerGeometry g[kForcers]) 
   }
 }
 
-void BuildA(const ForcerGeometry g[kForcers], double a[kEfforts][kForcerForces]) {
+MAGLEV_CONFIG_CODE void BuildA(const ForcerGeometry g[kForcers], double a[kEfforts][kForcerForces]) {
   for (int r = 0; r < kEfforts; ++r)
     for (int c = 0; c < kForcerForces; ++c) a[r][c] = 0.0;
   for (int k = 0; k < kForcers; ++k) {
@@ -76,7 +77,7 @@ void BuildA(const ForcerGeometry g[kForcers], double a[kEfforts][kForcerForces])
 }
 
 // Solve M X = R for 6x6 M (Gauss-Jordan, partial pivoting), R 6 x 8 in place.
-bool Solve6(double m[6][6], double rhs[6][kForcerForces]) {
+MAGLEV_CONFIG_CODE bool Solve6(double m[6][6], double rhs[6][kForcerForces]) {
   double scale = 0.0;
   for (int r = 0; r < 6; ++r)
     for (int c = 0; c < 6; ++c) scale = std::fmax(scale, std::fabs(m[r][c]));
@@ -111,9 +112,9 @@ bool Solve6(double m[6][6], double rhs[6][kForcerForces]) {
   return true;
 }
 
-std::int64_t RoundToInt64(double v) { return static_cast<std::int64_t>(std::llround(v)); }
+MAGLEV_CONFIG_CODE std::int64_t RoundToInt64(double v) { return static_cast<std::int64_t>(std::llround(v)); }
 
-std::uint32_t RadToTurn(double rad) {
+MAGLEV_CONFIG_CODE std::uint32_t RadToTurn(double rad) {
   double t = rad / (2.0 * stage::kPi);
   t -= std::floor(t);
   const double scaled = std::floor(t * 4294967296.0 + 0.5);
@@ -122,7 +123,7 @@ std::uint32_t RadToTurn(double rad) {
 
 }  // namespace
 
-ForceAllocationConfig DefaultForceAllocationConfig() {
+MAGLEV_CONFIG_CODE ForceAllocationConfig DefaultForceAllocationConfig() {
   ForceAllocationConfig c{};
   c.layout = ForceLayout::kCross;
   c.lever_arm_m = stage::kLeverArm_m;
@@ -150,7 +151,7 @@ ForceAllocationConfig DefaultForceAllocationConfig() {
   return c;
 }
 
-double BStarFromGeometry(const ForceAllocationConfig& c) {
+MAGLEV_CONFIG_CODE double BStarFromGeometry(const ForceAllocationConfig& c) {
   // eq (3), n = 1:  c_1(z) = 2 sqrt(2) mu0 M0 / pi (1 - e^{-g Delta}) e^{-g z}
   // eq (20):        b*(z)  = p c_1(z) 4N / (d a g^2) sin(g a / 2) (1 - e^{-g d})
   const double g = 2.0 * stage::kPi / c.pitch_m;
@@ -161,7 +162,7 @@ double BStarFromGeometry(const ForceAllocationConfig& c) {
          (1.0 - numeric::dexp(-g * c.coil_thickness_m));
 }
 
-ForceAllocationError ComputeForceAllocationTables(const ForceAllocationConfig& c,
+MAGLEV_CONFIG_CODE ForceAllocationError ComputeForceAllocationTables(const ForceAllocationConfig& c,
                                                   ForceAllocationTablesDouble* out) {
   ForceAllocationTablesDouble t{};
   if (!(c.lever_arm_m >= 0.0 && c.lever_arm_m < 10.0) || !(c.pitch_m > 1e-4 && c.pitch_m < 1.0)) {
@@ -214,11 +215,11 @@ ForceAllocationError ComputeForceAllocationTables(const ForceAllocationConfig& c
   return ForceAllocationError::kOk;
 }
 
-std::uint32_t PositionToTurn(std::int64_t pos_pm, std::int64_t pitch_pm) {
+MAGLEV_CONFIG_CODE std::uint32_t PositionToTurn(std::int64_t pos_pm, std::int64_t pitch_pm) {
   return static_cast<std::uint32_t>(static_cast<std::uint64_t>(PositionToTurnsQ32(pos_pm, pitch_pm)) & 0xffffffffu);
 }
 
-std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm) {
+MAGLEV_CONFIG_CODE std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm) {
   // pos = q * pitch + r, r in [0, pitch), pitch < 2^36. floor(r * 2^32 / pitch)
   // in two exact steps so that no intermediate exceeds 2^63:
   //   r * 2^26 < 2^62;  remainder * 2^6 < 2^42.
@@ -266,7 +267,7 @@ void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables&
   }
 }
 
-void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
+MAGLEV_CONFIG_CODE void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
                        std::uint32_t coil_phase_turn[io::kCoils]) {
   std::uint32_t first[kForcers];
   ForcerPhases(x_pm, y_pm, t, first);
@@ -278,7 +279,7 @@ void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTa
 
 namespace detail_fa {
 
-ForceAllocationError FillCommon(const ForceAllocationConfig& c, const ForceAllocationTablesDouble& t,
+MAGLEV_CONFIG_CODE ForceAllocationError FillCommon(const ForceAllocationConfig& c, const ForceAllocationTablesDouble& t,
                                 CommutationTables* ct) {
   ct->pitch_pm = RoundToInt64(c.pitch_m * 1e12);
   if (ct->pitch_pm >= (std::int64_t{1} << 36)) return ForceAllocationError::kBadGeometry;

@@ -1,3 +1,4 @@
+#include "maglev/io/code_placement.hpp"
 #include "maglev/numeric/elementary.hpp"
 
 #include <cmath>  // std::ldexp, std::frexp (exact), std::isnan / isinf (classification)
@@ -127,7 +128,7 @@ double dcos(double x) {
   }
 }
 
-double dtan(double x) {
+MAGLEV_CONFIG_CODE double dtan(double x) {
   if (std::isnan(x) || std::isinf(x)) return kNaN;
   int q = 0;
   const double r = reduce(x, &q);
@@ -170,7 +171,7 @@ double datan2(double y, double x) {
   return y < 0.0 || (y == 0.0 && std::signbit(y)) ? -a : a;
 }
 
-double dexp(double x) {
+MAGLEV_CONFIG_CODE double dexp(double x) {
   if (std::isnan(x)) return kNaN;
   if (x > 709.78) return kInf;
   if (x < -745.2) return 0.0;
@@ -182,7 +183,7 @@ double dexp(double x) {
   return std::ldexp(e, static_cast<int>(k));
 }
 
-double dlog(double x) {
+MAGLEV_CONFIG_CODE double dlog(double x) {
   if (std::isnan(x) || x < 0.0) return kNaN;
   if (x == 0.0) return -kInf;
   if (std::isinf(x)) return kInf;
@@ -201,7 +202,7 @@ double dlog(double x) {
   return (e * kLn2Hi + ln_m) + e * kLn2Lo;
 }
 
-double dpow(double a, double b) {
+MAGLEV_CONFIG_CODE double dpow(double a, double b) {
   if (std::isnan(a) || std::isnan(b) || a < 0.0) return kNaN;
   if (b == 0.0) return 1.0;
   if (a == 0.0) return b > 0.0 ? 0.0 : kNaN;

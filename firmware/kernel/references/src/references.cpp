@@ -1,4 +1,5 @@
 // Reference generators; see references.hpp for the contract.
+#include "maglev/io/code_placement.hpp"
 #include "maglev/references/references.hpp"
 
 #include <cmath>
@@ -22,14 +23,14 @@ bool finite_all(std::initializer_list<double> values) {
 
 bool inside(std::int64_t p, const AxisReferenceLimits& l) { return p >= l.travel_min_pico && p <= l.travel_max_pico; }
 
-bool limits_valid(const AxisReferenceLimits& l) {
+MAGLEV_CONFIG_CODE bool limits_valid(const AxisReferenceLimits& l) {
   return finite_all({l.max_velocity, l.max_acceleration}) && l.max_velocity > 0.0 && l.max_acceleration > 0.0 &&
          l.travel_min_pico <= l.travel_max_pico;
 }
 
 // Ticks needed to cover duration_s (ceil), with a guard for rounding: a
 // duration of exactly N periods gives N.
-std::int64_t ticks_for(double duration_s, double servo_rate_Hz) {
+MAGLEV_CONFIG_CODE std::int64_t ticks_for(double duration_s, double servo_rate_Hz) {
   const double n = duration_s * servo_rate_Hz;
   const double c = std::ceil(n - 1e-9);
   return static_cast<std::int64_t>(c < 0.0 ? 0.0 : c);
@@ -39,7 +40,7 @@ std::int64_t ticks_for(double duration_s, double servo_rate_Hz) {
 
 // --- Step -----------------------------------------------------------------
 
-ReferenceError StepReference::plan(std::int64_t start_pico, std::int64_t step_pico, const AxisReferenceLimits& limits) {
+MAGLEV_CONFIG_CODE ReferenceError StepReference::plan(std::int64_t start_pico, std::int64_t step_pico, const AxisReferenceLimits& limits) {
   if (limits.travel_min_pico > limits.travel_max_pico) return ReferenceError::kBadParameter;
   if (step_pico == INT64_MIN) return ReferenceError::kStepTooLarge;  // -x would overflow
   const std::int64_t mag = step_pico < 0 ? -step_pico : step_pico;
@@ -79,7 +80,7 @@ void MoveReference::evaluate(double t, double* s, double* v, double* a) const {
   *a = g.a0 + g.jerk * tau;
 }
 
-ReferenceError MoveReference::finish_plan(std::int64_t start_pico, std::int64_t target_pico, double servo_rate_Hz,
+MAGLEV_CONFIG_CODE ReferenceError MoveReference::finish_plan(std::int64_t start_pico, std::int64_t target_pico, double servo_rate_Hz,
                                           const AxisReferenceLimits& limits) {
   if (!inside(start_pico, limits) || !inside(target_pico, limits)) return ReferenceError::kOutsideTravel;
   // Integrate the segment start states (s, v continuous; a as given).
@@ -106,7 +107,7 @@ ReferenceError MoveReference::finish_plan(std::int64_t start_pico, std::int64_t 
   return ReferenceError::kOk;
 }
 
-ReferenceError MoveReference::plan_trapezoid(std::int64_t start_pico, std::int64_t target_pico, double vmax,
+MAGLEV_CONFIG_CODE ReferenceError MoveReference::plan_trapezoid(std::int64_t start_pico, std::int64_t target_pico, double vmax,
                                              double amax, double servo_rate_Hz, const AxisReferenceLimits& limits) {
   if (!finite_all({vmax, amax, servo_rate_Hz})) return ReferenceError::kNonFinite;
   if (!limits_valid(limits) || vmax <= 0.0 || amax <= 0.0 || servo_rate_Hz <= 0.0) {
@@ -141,7 +142,7 @@ ReferenceError MoveReference::plan_trapezoid(std::int64_t start_pico, std::int64
 
 namespace {
 // Acceleration phase of an S-curve from rest to v: jerk time Tj, total Ta.
-void accel_phase(double v, double a, double j, double* tj, double* ta, double* a_peak) {
+MAGLEV_CONFIG_CODE void accel_phase(double v, double a, double j, double* tj, double* ta, double* a_peak) {
   if (v * j >= a * a) {
     *tj = a / j;
     *ta = v / a + a / j;
@@ -154,7 +155,7 @@ void accel_phase(double v, double a, double j, double* tj, double* ta, double* a
 }
 }  // namespace
 
-ReferenceError MoveReference::plan_scurve(std::int64_t start_pico, std::int64_t target_pico, double vmax,
+MAGLEV_CONFIG_CODE ReferenceError MoveReference::plan_scurve(std::int64_t start_pico, std::int64_t target_pico, double vmax,
                                           double amax, double jmax, double servo_rate_Hz,
                                           const AxisReferenceLimits& limits) {
   if (!finite_all({vmax, amax, jmax, servo_rate_Hz, limits.max_jerk})) return ReferenceError::kNonFinite;
@@ -229,7 +230,7 @@ AxisReference MoveReference::sample(std::int64_t tick) const {
 
 // --- Circle ------------------------------------------------------------------
 
-ReferenceError CircleReference::plan(std::int64_t x0_pico, std::int64_t y0_pico, double diameter_m,
+MAGLEV_CONFIG_CODE ReferenceError CircleReference::plan(std::int64_t x0_pico, std::int64_t y0_pico, double diameter_m,
                                      double speed, double revolutions, double at, double jerk,
                                      double servo_rate_Hz, const AxisReferenceLimits& lx, const AxisReferenceLimits& ly) {
   if (!finite_all({diameter_m, speed, revolutions, at, jerk, servo_rate_Hz})) return ReferenceError::kNonFinite;
@@ -288,7 +289,7 @@ void CircleReference::sample(std::int64_t tick, AxisReference* x, AxisReference*
 
 // --- Sinusoid ----------------------------------------------------------------
 
-ReferenceError SinusoidReference::plan(std::int64_t start_pico, double amplitude_m, double frequency_Hz,
+MAGLEV_CONFIG_CODE ReferenceError SinusoidReference::plan(std::int64_t start_pico, double amplitude_m, double frequency_Hz,
                                        double cycles, double servo_rate_Hz, const AxisReferenceLimits& limits,
                                        double phase_rad) {
   if (!finite_all({amplitude_m, frequency_Hz, cycles, servo_rate_Hz, phase_rad})) return ReferenceError::kNonFinite;

@@ -1,3 +1,4 @@
+#include "maglev/io/code_placement.hpp"
 #include "maglev/sensors_to_pose/sensors_to_pose.hpp"
 
 #include <cmath>
@@ -23,11 +24,11 @@ constexpr std::int64_t Gcd(std::int64_t a, std::int64_t b) {
   return a;
 }
 
-std::int64_t RoundToInt64(double v) { return static_cast<std::int64_t>(std::llround(v)); }
+MAGLEV_CONFIG_CODE std::int64_t RoundToInt64(double v) { return static_cast<std::int64_t>(std::llround(v)); }
 
 // Inverse of a 3x3 matrix in double (configuration time). Returns false if
 // the matrix is singular relative to its scale.
-bool Invert3(const double m[3][3], double inv[3][3]) {
+MAGLEV_CONFIG_CODE bool Invert3(const double m[3][3], double inv[3][3]) {
   const double c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];
   const double c01 = m[1][2] * m[2][0] - m[1][0] * m[2][2];
   const double c02 = m[1][0] * m[2][1] - m[1][1] * m[2][0];
@@ -62,14 +63,14 @@ using numeric::Int64ToDouble;
 
 }  // namespace
 
-double HalbachHarmonicRatio(int n, double z_m, double delta_m, double pitch_m) {
+MAGLEV_CONFIG_CODE double HalbachHarmonicRatio(int n, double z_m, double delta_m, double pitch_m) {
   const double g1 = 2.0 * stage::kPi / pitch_m;
   const double gn = g1 * n;
   return (1.0 / n) * (1.0 - numeric::dexp(-gn * delta_m)) / (1.0 - numeric::dexp(-g1 * delta_m)) *
          numeric::dexp(-(gn - g1) * z_m);
 }
 
-SensorsToPoseConfig DefaultSensorsToPoseConfig() {
+MAGLEV_CONFIG_CODE SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   SensorsToPoseConfig c{};
   c.wavelength_m = stage::kWavelength_m;
   c.fold = stage::kInterferometerFold;
@@ -111,7 +112,7 @@ SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   return c;
 }
 
-SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
+MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
                                             SensorsToPoseState* state) {
   SensorsToPoseState s{};
   // --- interferometer LSB as an exact reduced fraction of pm ---------------
@@ -479,7 +480,7 @@ HallPhase HallSolveFinish(HallSolve* solve) {
   return out;
 }
 
-HallPhase HallToPhase(const io::SensorSample& sample, const SensorsToPoseState& state) {
+MAGLEV_CONFIG_CODE HallPhase HallToPhase(const io::SensorSample& sample, const SensorsToPoseState& state) {
   HallSolve h;
   HallSolveBegin(sample, state, &h);
   return HallSolveFinish(&h);

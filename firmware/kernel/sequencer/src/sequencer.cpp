@@ -1,3 +1,4 @@
+#include "maglev/io/code_placement.hpp"
 #include "maglev/sequencer/sequencer.hpp"
 
 namespace maglev::kernel {
@@ -22,7 +23,7 @@ float approach(float value, float target, float step) {
 
 }  // namespace
 
-SequencerConfigError validate(const SequencerConfig& c, float servo_rate_Hz) {
+MAGLEV_CONFIG_CODE SequencerConfigError validate(const SequencerConfig& c, float servo_rate_Hz) {
   if (!(servo_rate_Hz >= 100.0f && servo_rate_Hz <= 100000.0f)) return SequencerConfigError::kBadServoRate;
   const float timeouts[] = {c.homing_time_s, c.homing_timeout_s, c.inplane_settle_time_s,
                             c.inplane_timeout_s, c.lift_capture_time_s, c.lift_timeout_s,
@@ -59,7 +60,7 @@ SequencerConfigError validate(const SequencerConfig& c, float servo_rate_Hz) {
   return SequencerConfigError::kOk;
 }
 
-void Sequencer::configure(const SequencerConfig& c, float servo_rate_Hz) {
+MAGLEV_CONFIG_CODE void Sequencer::configure(const SequencerConfig& c, float servo_rate_Hz) {
   config_ = c;
   dt_s_ = 1.0f / servo_rate_Hz;
   ticks_.homing_timeout = to_ticks(c.homing_timeout_s, servo_rate_Hz);
@@ -75,7 +76,7 @@ void Sequencer::configure(const SequencerConfig& c, float servo_rate_Hz) {
   ticks_.landing_timeout = to_ticks(c.landing_timeout_s, servo_rate_Hz);
 }
 
-void Sequencer::reset() {
+MAGLEV_CONFIG_CODE void Sequencer::reset() {
   out_ = SequencerOutput{};
   levitate_pending_ = false;
   fault_latched_ = false;
@@ -106,7 +107,7 @@ void Sequencer::begin_landing(TransitionReason r) {
   enter(SequencerState::kLanding, r);
 }
 
-SequencerCommandResult Sequencer::command(SequencerCommand cmd, bool fault_cause_present) {
+MAGLEV_CONFIG_CODE SequencerCommandResult Sequencer::command(SequencerCommand cmd, bool fault_cause_present) {
   using S = SequencerState;
   using R = SequencerCommandResult;
   const S s = out_.state;

@@ -1,3 +1,4 @@
+#include "maglev/io/code_placement.hpp"
 #include "maglev/supervisor/supervisor.hpp"
 
 #include "maglev/io/stage_parameters.hpp"
@@ -32,7 +33,7 @@ bool same_sample(const io::SensorSample& a, const io::SensorSample& b) {
 
 }  // namespace
 
-SupervisorConfigError validate(const SupervisorConfig& c, float servo_rate_Hz) {
+MAGLEV_CONFIG_CODE SupervisorConfigError validate(const SupervisorConfig& c, float servo_rate_Hz) {
   if (!(c.x_min_m < c.x_max_m) || !(c.y_min_m < c.y_max_m) || c.x_min_m < -0.1f ||
       c.x_max_m > 0.1f || c.y_min_m < -0.1f || c.y_max_m > 0.1f ||
       !positive(c.theta_z_limit_rad) || c.theta_z_limit_rad > 0.1f) {
@@ -65,7 +66,7 @@ SupervisorConfigError validate(const SupervisorConfig& c, float servo_rate_Hz) {
   return SupervisorConfigError::kOk;
 }
 
-void Supervisor::configure(const SupervisorConfig& c, float servo_rate_Hz) {
+MAGLEV_CONFIG_CODE void Supervisor::configure(const SupervisorConfig& c, float servo_rate_Hz) {
   config_ = c;
   // The two durations counted in ticks of the default 2.5 kHz rate (50 ms of
   // saturation, 4 ms of current mismatch) keep their time at any servo rate.
@@ -81,7 +82,7 @@ void Supervisor::configure(const SupervisorConfig& c, float servo_rate_Hz) {
                                               c.interferometer_lsb_m);
 }
 
-void Supervisor::reset() {
+MAGLEV_CONFIG_CODE void Supervisor::reset() {
   status_ = SupervisorStatus{};
   have_previous_ = false;
   stale_run_ = 0;
@@ -277,7 +278,7 @@ Supervisor::Trip Supervisor::attribute(const SupervisorInputs& in, const Checks&
   return t;
 }
 
-bool Supervisor::clear_fault() {
+MAGLEV_CONFIG_CODE bool Supervisor::clear_fault() {
   if (status_.active != FaultCode::kNone) return false;
   status_.first_fault = FaultRecord{};
   status_.reaction = FaultReaction::kNone;

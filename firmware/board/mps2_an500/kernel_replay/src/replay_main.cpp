@@ -7,6 +7,8 @@
 //   qemu-system-arm -M mps2-an500 -nographic -semihosting-config enable=on,target=native
 //                   -kernel maglev-qemu-kernel-replay.elf -append "<vectors.bin> <outputs.bin>"
 //   instructions per step(): add `-icount shift=6` and `--icount` after the paths.
+//   The fixed-point kernel (Controller<Q7_24>): add `--q7.24` (the vectors
+//   must come from `kernel-vector-recorder ... --q7.24`).
 //
 // Exit status: 0 replayed all ticks; 2 bad command line; 3 cannot open/read the
 // vectors; 4 bad header; 5 cannot write the outputs; 6 apply_config refused.
@@ -15,12 +17,10 @@
 #include <cstring>
 
 #include "maglev/board/mps2_an500/instruction_counter.hpp"
-#include "maglev/board/mps2_an500/instruction_stats.hpp"
 #include "maglev/board/mps2_an500/semihosting.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/kernel_replay/replay_format.hpp"
 #include "maglev/kernel_replay/semihost_file.hpp"
-#include "maglev/kernel_replay/vectors_file.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 
 namespace {
@@ -42,14 +42,53 @@ enum ExitCode : int {
 // SysTick as an instruction counter: maglev/board/mps2_an500/instruction_counter.hpp.
 using namespace hw::icount;
 
-using Stats = TickStats;
+struct Stats {
+  std::uint64_t count = 0;
+  std::uint64_t sum = 0;
+  std::uint64_t min = ~std::uint64_t{0};
+  std::uint64_t max = 0;
+  std::uint32_t max_tick = 0;
+  void add(std::uint64_t v, std::uint32_t tick) {
+    ++count;
+    sum += v;
+    if (v < min) min = v;
+    if (v > max) {
+      max = v;
+      max_tick = tick;
+    }
+  }
+};
+
+
 void print_stats(const char* label, const Stats& s, const Calibration& cal) {
-  print_tick_stats("step_instructions", label, s, cal);
+  hw::semihost_write("step_instructions ");
+  hw::semihost_write(label);
+  hw::semihost_write(": ticks=");
+  hw::semihost_write_unsigned(s.count);
+  if (s.count == 0U) {
+    hw::semihost_write("\n");
+    return;
+  }
+  hw::semihost_write(" min=");
+  hw::semihost_write_unsigned(cal.instructions(s.min));
+  hw::semihost_write(" mean=");
+  // mean with one decimal: instructions(sum) over count, computed in tenths.
+  const std::uint64_t span = cal.nop_counts - cal.empty_counts;
+  const std::uint64_t net = s.sum - s.count * cal.empty_counts;
+  const std::uint64_t tenths = cal.valid() ? (net * kCalibrationNops * 10U + span * s.count / 2U) / (span * s.count) : 0U;
+  hw::semihost_write_unsigned(tenths / 10U);
+  hw::semihost_write_char('.');
+  hw::semihost_write_unsigned(tenths % 10U);
+  hw::semihost_write(" max=");
+  hw::semihost_write_unsigned(cal.instructions(s.max));
+  hw::semihost_write(" (tick ");
+  hw::semihost_write_unsigned(s.max_tick);
+  hw::semihost_write(")\n");
 }
 
 // --- command line ------------------------------------------------------------------
 char g_command_line[1024];
-constexpr int kMaxWords = 4;
+constexpr int kMaxWords = 5;
 const char* g_words[kMaxWords] = {};
 
 // --- buffers and the controller: all static (no heap) -------------------------
@@ -57,6 +96,7 @@ constexpr std::size_t kChunkTicks = 64;
 std::uint8_t g_input[kChunkTicks * kr::kInputRecordBytes];
 std::uint8_t g_output[kChunkTicks * kr::kOutputRecordBytes];
 kernel::Controller<float> g_controller;
+kernel::Controller<maglev::numeric::Q7_24> g_controller_q7_24;
 stage_profile::StageProfile g_profile{};  // static: ~2 kB, not on the stack
 
 int fail(const char* message, int code) {
@@ -68,28 +108,23 @@ int fail(const char* message, int code) {
 
 }  // namespace
 
-int main() {
-  if (!hw::semihost_command_line(g_command_line, sizeof(g_command_line))) {
-    return fail("no semihosting command line", kBadCommandLine);
-  }
-  // "<kernel path> <vectors> <outputs>"
-  if (kr::split_words(g_command_line, g_words, kMaxWords) < 3) {
-    return fail("usage: -append \"<vectors.bin> <outputs.bin> [--icount]\"", kBadCommandLine);
-  }
-  // SysTick counts are instructions only if QEMU runs with -icount; the caller says so.
-  const bool icount = g_words[3] != nullptr && std::strcmp(g_words[3], "--icount") == 0;
-  const char* vectors_path = g_words[1];
-  const char* outputs_path = g_words[2];
-
-  int in = -1;
+template <typename Controller>
+int replay(Controller& controller, const char* vectors_path, const char* outputs_path, bool icount) {
+  const int in = kr::semihost_open(vectors_path, kr::OpenMode::kReadBinary);
+  if (in < 0) return fail("cannot open the vectors file", kCannotRead);
+  const long length = kr::semihost_file_length(in);
+  std::uint8_t header_bytes[kr::kHeaderBytes];
   kr::InputHeader header{};
-  if (const kr::VectorsOpen e = kr::open_vectors(vectors_path, &in, &header); e != kr::VectorsOpen::kOk) {
-    const bool unreadable = e == kr::VectorsOpen::kCannotOpen || e == kr::VectorsOpen::kCannotReadHeader;
-    return fail(kr::to_string(e), unreadable ? kCannotRead : kBadHeader);
+  if (!kr::semihost_read(in, header_bytes, sizeof(header_bytes))) return fail("cannot read the header", kCannotRead);
+  if (!kr::decode_header(header_bytes, &header)) {
+    return fail("bad header (magic, version or record sizes differ from this image)", kBadHeader);
   }
   if (header.profile_bytes != 0U && header.profile_bytes != sizeof(g_profile)) {
     return fail("the stage profile's size differs from this image's StageProfile", kBadHeader);
   }
+  const auto expected_length = static_cast<long>(kr::kHeaderBytes + header.profile_bytes +
+                                                 static_cast<std::size_t>(header.tick_count) * kr::kInputRecordBytes);
+  if (length != expected_length) return fail("vectors file length does not match its header", kBadHeader);
   // The kernel configuration: the firmware's own profile path (check +
   // MakeKernelConfig) on the recorded profile, or the default.
   kernel::KernelConfig config = kernel::default_kernel_config();
@@ -114,11 +149,16 @@ int main() {
 
   // The recorder applies the same configuration; apply it explicitly so a
   // refused config is visible here as well.
-  if (g_controller.apply_config(config) != kernel::ConfigError::kOk) {
+  if (controller.apply_config(config) != kernel::ConfigError::kOk) {
     return fail("apply_config refused", kConfigRefused);
   }
 
-  const Calibration cal = start_and_calibrate();
+  systick_start();
+  Calibration cal;
+  for (int i = 0; i < 4; ++i) {  // first runs warm QEMU's translation cache
+    cal.empty_counts = measure_empty();
+    cal.nop_counts = measure_nops();
+  }
 
   // Per sequencer state the tick STARTED in (homing's last tick, with its
   // one-off Hall solve, counts as Homing).
@@ -135,14 +175,14 @@ int main() {
       kr::OutputRecord o;
       o.tick = tick;
       if (r.has_command) {
-        o.command_result = static_cast<std::uint8_t>(g_controller.command(r.command));
+        o.command_result = static_cast<std::uint8_t>(controller.command(r.command));
       }
-      const auto state_before = static_cast<int>(g_controller.status().state);
+      const auto state_before = static_cast<int>(controller.status().state);
       const std::uint32_t t0 = systick_now();
-      o.actuator = g_controller.step(r.sample, r.tick_overrun);
+      o.actuator = controller.step(r.sample, r.tick_overrun);
       const std::uint32_t t1 = systick_now();
       const std::uint32_t counts = systick_elapsed(t0, t1);
-      o.status = &g_controller.status();
+      o.status = &controller.status();
       all.add(counts, tick);
       if (state_before >= 0 && state_before < kStates) per_state[state_before].add(counts, tick);
       kr::encode_output(o, &g_output[i * kr::kOutputRecordBytes]);
@@ -173,4 +213,33 @@ int main() {
     if (per_state[i].count > 0U) print_stats(kernel::to_string(static_cast<kernel::SequencerState>(i)), per_state[i], cal);
   }
   return kOk;
+}
+
+int main() {
+  if (!hw::semihost_command_line(g_command_line, sizeof(g_command_line))) {
+    return fail("no semihosting command line", kBadCommandLine);
+  }
+  // "<kernel path> <vectors> <outputs>"
+  const int words = kr::split_words(g_command_line, g_words, kMaxWords);
+  if (words < 3) {
+    return fail("usage: -append \"<vectors.bin> <outputs.bin> [--icount] [--q7.24]\"", kBadCommandLine);
+  }
+  // SysTick counts are instructions only if QEMU runs with -icount; the caller says so.
+  bool icount = false;
+  bool q7_24 = false;
+  for (int w = 3; w < words && w < kMaxWords; ++w) {
+    if (std::strcmp(g_words[w], "--icount") == 0) {
+      icount = true;
+    } else if (std::strcmp(g_words[w], "--q7.24") == 0) {
+      q7_24 = true;
+    } else {
+      return fail("unknown option (expected --icount or --q7.24)", kBadCommandLine);
+    }
+  }
+  const char* vectors_path = g_words[1];
+  const char* outputs_path = g_words[2];
+
+  if (q7_24) hw::semihost_write("kernel-replay: Controller<Q7_24>\n");
+  return q7_24 ? replay(g_controller_q7_24, vectors_path, outputs_path, icount)
+               : replay(g_controller, vectors_path, outputs_path, icount);
 }

@@ -15,6 +15,7 @@
 //   lead-lag  (1 + s/wz) / (1 + s/wp)      (unity dc gain)
 #pragma once
 
+#include "maglev/io/code_placement.hpp"
 #include <cmath>
 #include <cstdint>
 
@@ -59,7 +60,7 @@ struct BiquadDesign {
   bool enabled = false;
 };
 
-inline LoopDesignError design_biquad_double(const BiquadConfig& config, double servo_rate_Hz, BiquadDesign* out) {
+MAGLEV_CONFIG_CODE inline LoopDesignError design_biquad_double(const BiquadConfig& config, double servo_rate_Hz, BiquadDesign* out) {
   constexpr double kPi = 3.14159265358979323846;
   const double f0 = static_cast<double>(config.frequency_Hz);
   const double q = static_cast<double>(config.q);
@@ -120,7 +121,7 @@ inline LoopDesignError design_biquad_double(const BiquadConfig& config, double s
 }
 
 template <typename Scalar>
-LoopDesignError design_biquad(const BiquadConfig& config, double servo_rate_Hz, BiquadCoefficients<Scalar>* out) {
+MAGLEV_CONFIG_CODE LoopDesignError design_biquad(const BiquadConfig& config, double servo_rate_Hz, BiquadCoefficients<Scalar>* out) {
   using Traits = numeric::ScalarTraits<Scalar>;
   BiquadDesign d;
   const LoopDesignError err = design_biquad_double(config, servo_rate_Hz, &d);

@@ -32,6 +32,7 @@
 // pole choice in design_internal_model_double().
 #pragma once
 
+#include "maglev/io/code_placement.hpp"
 #include <cmath>
 
 #include "maglev/axis_loops/design_error.hpp"
@@ -98,7 +99,7 @@ struct InternalModelState {
 namespace detail {
 
 // Solves M x = rhs (n <= 5) by Gaussian elimination with partial pivoting.
-inline bool solve5(double M[5][5], double rhs[5], double x[5]) {
+MAGLEV_CONFIG_CODE inline bool solve5(double M[5][5], double rhs[5], double x[5]) {
   constexpr int n = 5;
   for (int col = 0; col < n; ++col) {
     int piv = col;
@@ -128,7 +129,7 @@ inline bool solve5(double M[5][5], double rhs[5], double x[5]) {
   return true;
 }
 
-inline void matmul5(const double A[5][5], const double B[5][5], double C[5][5]) {
+MAGLEV_CONFIG_CODE inline void matmul5(const double A[5][5], const double B[5][5], double C[5][5]) {
   for (int i = 0; i < 5; ++i) {
     for (int j = 0; j < 5; ++j) {
       double s = 0.0;
@@ -140,7 +141,7 @@ inline void matmul5(const double A[5][5], const double B[5][5], double C[5][5]) 
 
 // Exact ZOH of x' = [[0,1],[-k,-c]] x + [0,g] u over T: the 3x3 augmented
 // exponential expm([[A, B], [0, 0]] T) by scaling-and-squaring + Taylor.
-inline void zoh2(double k, double c, double g, double T, double Ad[2][2], double Bd[2]) {
+MAGLEV_CONFIG_CODE inline void zoh2(double k, double c, double g, double T, double Ad[2][2], double Bd[2]) {
   double M[3][3] = {{0.0, T, 0.0}, {-k * T, -c * T, g * T}, {0.0, 0.0, 0.0}};
   int squarings = 0;
   double norm = std::fabs(k * T) + std::fabs(c * T) + std::fabs(g * T) + T;
@@ -198,7 +199,7 @@ inline constexpr double kBessel3Pair[2] = {-0.7456, 0.7114};
 
 // Builds the augmented discrete model z = [y, y', xi0, r1, r2] (kernel units,
 // e = -y for r = 0) and returns the state-feedback gains in double.
-inline LoopDesignError design_internal_model_double(const InternalModelConfig& cfg, double servo_rate_Hz,
+MAGLEV_CONFIG_CODE inline LoopDesignError design_internal_model_double(const InternalModelConfig& cfg, double servo_rate_Hz,
                                                     InternalModelDesign* out) {
   constexpr double kPi = 3.14159265358979323846;
   const double w0 = static_cast<double>(cfg.omega0_rad_s);
@@ -342,7 +343,7 @@ inline LoopDesignError design_internal_model_double(const InternalModelConfig& c
 }
 
 template <typename Scalar>
-LoopDesignError design_internal_model(const InternalModelConfig& cfg, double servo_rate_Hz,
+MAGLEV_CONFIG_CODE LoopDesignError design_internal_model(const InternalModelConfig& cfg, double servo_rate_Hz,
                                       InternalModelCoefficients<Scalar>* out) {
   using Traits = numeric::ScalarTraits<Scalar>;
   const double bw = static_cast<double>(cfg.setpoint_weight_p);

@@ -34,6 +34,7 @@
 //   pid.apply_limit(u_applied);         // back-calculation (zero if u == v)
 #pragma once
 
+#include "maglev/io/code_placement.hpp"
 #include <cmath>
 
 #include "maglev/io/axis.hpp"
@@ -83,7 +84,7 @@ struct Pid2DofState {
 
 // Config -> coefficients. On error *out is left untouched.
 template <typename Scalar>
-LoopDesignError design_pid2dof(const Pid2DofConfig& config, double servo_rate_Hz, Pid2DofCoefficients<Scalar>* out) {
+MAGLEV_CONFIG_CODE LoopDesignError design_pid2dof(const Pid2DofConfig& config, double servo_rate_Hz, Pid2DofCoefficients<Scalar>* out) {
   using Traits = numeric::ScalarTraits<Scalar>;
   const double kp = static_cast<double>(config.kp);
   const double ki = static_cast<double>(config.ki);

@@ -11,6 +11,7 @@
 // (homing's one-off Hall solve is the documented exception, docs/KERNEL.md).
 #pragma once
 
+#include "maglev/io/code_placement.hpp"
 #include "maglev/io/enum_names.hpp"
 
 #include <cstdint>
@@ -284,10 +285,10 @@ class Controller {
  public:
   using Traits = numeric::ScalarTraits<Scalar>;
 
-  Controller();  // applies default_kernel_config()
+  MAGLEV_CONFIG_CODE Controller();  // applies default_kernel_config()
 
-  ConfigError apply_config(const KernelConfig& config);
-  CommandResult command(const MotionCommand& cmd);
+  MAGLEV_CONFIG_CODE ConfigError apply_config(const KernelConfig& config);
+  MAGLEV_CONFIG_CODE CommandResult command(const MotionCommand& cmd);
   io::ActuatorCommand step(const io::SensorSample& sample, bool tick_overrun);
 
   const ControllerStatus& status() const { return status_; }
@@ -398,10 +399,10 @@ class Controller {
   void publish_status(const Tick& t, bool amplifiers_enabled);
 
   bool levitated_or_busy() const;
-  AxisReferenceLimits axis_limits(int a) const;
+  MAGLEV_CONFIG_CODE AxisReferenceLimits axis_limits(int a) const;
   void cancel_profile(int a);
-  CommandResult start_excitation(const MotionCommand& cmd);
-  CommandResult start_calibration();
+  MAGLEV_CONFIG_CODE CommandResult start_excitation(const MotionCommand& cmd);
+  MAGLEV_CONFIG_CODE CommandResult start_calibration();
   void calibrate(Tick& t);            // before excite(): aborts, starts each experiment
   void calibration_accumulate();      // after the loops: the DFTs of U and Y
   void finish_calibration(CouplingCalibrationResult r, bool restore);

@@ -1,6 +1,7 @@
 // Template bodies of force_allocation.hpp (included at its end).
 #pragma once
 
+#include "maglev/io/code_placement.hpp"
 #include <cstdint>
 
 #include "maglev/numeric/fixed.hpp"
@@ -23,7 +24,7 @@ constexpr Scalar MaxScalar(Scalar a, Scalar b) {
 }  // namespace detail_fa
 
 template <typename Scalar>
-ForceAllocationError ApplyForceAllocationConfig(const ForceAllocationConfig& config,
+MAGLEV_CONFIG_CODE ForceAllocationError ApplyForceAllocationConfig(const ForceAllocationConfig& config,
                                                 ForceAllocationState<Scalar>* state) {
   using Traits = numeric::ScalarTraits<Scalar>;
   ForceAllocationState<Scalar> s{};
