@@ -255,6 +255,48 @@ TEST(Application, WatchdogFedOnlyWhenServoAndCommsBothRan) {
   LONGS_EQUAL(3, fx.dog.feeds);
 }
 
+namespace {
+// A cycle counter that advances g_step cycles per read: a tick (two reads) takes g_step.
+std::uint32_t g_cycles = 0;
+std::uint32_t g_step = 1000;
+std::uint32_t fake_cycles() {
+  g_cycles += g_step;
+  return g_cycles;
+}
+std::uint32_t read_i32(const modbus::RegisterServer& r, modbus::RegId id) {
+  const modbus::RegisterDef& d = modbus::def(id);
+  std::uint16_t w[2] = {0, 0};
+  CHECK(r.read_registers(d.address, 2, w) == modbus::ExceptionCode::kNone);
+  return (static_cast<std::uint32_t>(w[0]) << 16) | w[1];  // I32: high word first
+}
+}  // namespace
+
+TEST(Application, ServoTimingRegistersReadTheLoopsOwnCounters) {
+  Fixture fx;
+  App application(fx.kernel, &fx.store, fx.node.get(), &fx.uart, &fx.recorder, fx.gate, fx.dog,
+                  app::ApplicationConfig{}, fx.hooks);
+  NullKernel k;
+  NullSensors sensors;
+  NullSink sink;
+  // Budget 1500 cycles: the 2500-cycle tick below is an overrun.
+  app::ServoLoop<NullKernel> loop(sensors, sink, k, app::ServoConfig{1500, 3000, 3},
+                                  app::ServoHooks{&fake_cycles, nullptr, nullptr, nullptr});
+  // Not attached: the registers exist and read 0 (the bench, the host server).
+  LONGS_EQUAL(0, read_i32(application.registers(), modbus::RegId::servo_max_cycles));
+  application.attach_servo_state(&loop.state());
+  g_step = 1000;
+  loop.on_tick();  // 1000 cycles
+  g_step = 2500;
+  loop.on_tick();  // 2500
+  g_step = 1000;
+  loop.on_tick();  // 1000
+  LONGS_EQUAL(2500, read_i32(application.registers(), modbus::RegId::servo_max_cycles));
+  LONGS_EQUAL(1000, read_i32(application.registers(), modbus::RegId::servo_last_cycles));
+  LONGS_EQUAL(1, read_i32(application.registers(), modbus::RegId::servo_overruns));
+  CHECK(g_critical_sections > 0);  // read with the tick masked
+  LONGS_EQUAL(0, g_critical_depth);
+}
+
 TEST(Application, RecorderIsDrainedOldestFirstAndLossCounted) {
   Fixture fx;
   App application(fx.kernel, nullptr, nullptr, nullptr, &fx.recorder, fx.gate, fx.dog,

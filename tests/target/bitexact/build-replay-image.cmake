@@ -2,7 +2,7 @@
 #
 # Part of the host build (target maglev-qemu-kernel-replay-image, in ALL): the
 # host-side bit-exact tests replay on the qemu-m7 build's replay images (the
-# paper-000 kernel's, paper 002's and paper 001's), so the host preset builds
+# paper-000 kernel's, paper 002's and paper 001's, and the whole servo tick's), so the host preset builds
 # those targets of the qemu-m7 build, in one build of that tree, -- configuring it with its preset if it was never
 # configured. `ctest --preset host` then passes without a separate qemu-m7
 # workflow; in CI (.ci/run: the qemu-m7 workflow first) it is an up-to-date
@@ -18,9 +18,9 @@ if(NOT EXISTS "${BUILD_DIR}/CMakeCache.txt")
   endif()
 endif()
 execute_process(COMMAND ${CMAKE_COMMAND} --build ${BUILD_DIR} --target maglev-qemu-kernel-replay maglev-qemu-pmlsm-replay
-                        maglev-qemu-selfstab-replay
+                        maglev-qemu-selfstab-replay maglev-qemu-servo-tick
                 RESULT_VARIABLE _rc)
 if(NOT _rc EQUAL 0)
   message(FATAL_ERROR "kernel replay images: 'cmake --build ${BUILD_DIR} --target maglev-qemu-kernel-replay "
-                      "maglev-qemu-pmlsm-replay maglev-qemu-selfstab-replay' failed (${_rc}); fix the qemu-m7 build (cmake --workflow --preset qemu-m7 shows it).")
+                      "maglev-qemu-pmlsm-replay maglev-qemu-selfstab-replay maglev-qemu-servo-tick' failed (${_rc}); fix the qemu-m7 build (cmake --workflow --preset qemu-m7 shows it).")
 endif()

@@ -9,10 +9,17 @@
 // Exit status 0 only if the stage reached Ready and every command was accepted
 // (so the recorded run really exercises the levitated kernel).
 //
-// usage: kernel-vector-recorder <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home] [--q7.24]
+// usage: kernel-vector-recorder <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home] [--q7.24] [--rate HZ]
 // --q7.24: the kernel is Controller<Q7_24> (the fixed-point build) instead of
 // Controller<float>; the replay image must then be run with --q7.24 too.
+// --rate HZ: servo rate (2500, 5000, 10000 or 20000; default: the
+// configuration's, 2500): the kernel is configured at HZ, the plant steps
+// at HZ (hil::ApplyServoRate) and the schedule's tick offsets, the start-up
+// limit and the ticks after Ready scale with it, so the session covers the
+// same seconds (the whole-servo-interrupt measurement at 20 kHz:
+// firmware/board/mps2_an500/servo_tick).
 #include <cstdint>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -24,6 +31,7 @@
 #include "maglev/plant/plant.hpp"
 #include "maglev/plant/plant_config.hpp"
 #include "maglev/plant/plant_profile.hpp"
+#include "maglev/io/stage_parameters.hpp"
 #include "maglev/kernel_replay/replay_format.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
@@ -112,20 +120,36 @@ double reference_si(const kernel::ControllerStatus& st, Axis axis) {
 }  // namespace
 
 template <typename Scalar>
-int record(int argc, char** argv, bool near_home);
+int record(int argc, char** argv, bool near_home, double rate_Hz);
 
 int main(int argc, char** argv) {
+  // --rate HZ (anywhere after the two paths): taken out before the positional parsing below.
+  double rate_Hz = 0.0;
+  for (int i = 3; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) == "--rate") {
+      rate_Hz = std::strtod(argv[i + 1], nullptr);
+      for (int j = i; j + 2 < argc; ++j) argv[j] = argv[j + 2];
+      argc -= 2;
+      break;
+    }
+  }
+  if (rate_Hz != 0.0 && !maglev::io::stage::is_supported_servo_rate(rate_Hz)) {
+    std::fprintf(stderr, "recorder: --rate %g: not an offered servo rate (2500, 5000, 10000, 20000)\n", rate_Hz);
+    return 2;
+  }
   const bool q7_24 = argc > 3 && std::string(argv[argc - 1]) == "--q7.24";
   if (q7_24) --argc;
   const bool near_home = argc > 3 && std::string(argv[argc - 1]) == "--near-home";
   if (near_home) --argc;
-  return q7_24 ? record<maglev::numeric::Q7_24>(argc, argv, near_home) : record<float>(argc, argv, near_home);
+  return q7_24 ? record<maglev::numeric::Q7_24>(argc, argv, near_home, rate_Hz)
+               : record<float>(argc, argv, near_home, rate_Hz);
 }
 
 template <typename Scalar>
-int record(int argc, char** argv, bool near_home) {
+int record(int argc, char** argv, bool near_home, double rate_Hz) {
   if (argc != 3 && !(argc == 5 && std::string(argv[3]) == "--profile")) {
-    std::fprintf(stderr, "usage: %s <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home] [--q7.24]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s <vectors.bin> <host_outputs.bin> [--profile FILE] [--near-home] [--q7.24] [--rate HZ]\n",
+                 argv[0]);
     return 2;
   }
   // With --profile: the stage's kernel configuration and plant both from the
@@ -152,6 +176,19 @@ int record(int argc, char** argv, bool near_home) {
     std::memcpy(profile_bytes.data(), &parsed.profile, sizeof parsed.profile);
     std::printf("recorder: stage profile %s\n", parsed.profile.name);
   }
+  if (rate_Hz != 0.0) {
+    config.servo_rate_Hz = static_cast<float>(rate_Hz);
+    config.measurement.servo_rate_Hz = config.servo_rate_Hz;  // one rate, as the servo.rate register sets it
+    maglev::hil::ApplyServoRate(rate_Hz, &plant_config);
+  }
+  const double tick_rate_Hz = static_cast<double>(config.servo_rate_Hz);
+  // Tick counts below are written for 2.5 kHz; other rates cover the same seconds.
+  const double tick_scale = tick_rate_Hz / 2500.0;
+  const auto scaled = [tick_scale](std::uint32_t ticks) {
+    return static_cast<std::uint32_t>(static_cast<double>(ticks) * tick_scale + 0.5);
+  };
+  const std::uint32_t max_startup_ticks = scaled(kMaxStartupTicks);
+  if (rate_Hz != 0.0) std::printf("recorder: servo rate %g Hz\n", tick_rate_Hz);
   maglev::hil::Plant plant(plant_config, kSeed);
   auto controller = std::make_unique<kernel::Controller<Scalar>>();
   if (controller->apply_config(config) != kernel::ConfigError::kOk) {
@@ -168,7 +205,7 @@ int record(int argc, char** argv, bool near_home) {
   header.profile_bytes = static_cast<std::uint32_t>(profile_bytes.size());
   bool ok = true;
   std::int64_t ready_tick = -1;
-  std::uint32_t end_tick = kMaxStartupTicks;
+  std::uint32_t end_tick = max_startup_ticks;
 
   for (std::uint32_t tick = 0; tick < end_tick; ++tick) {
     kr::InputRecord in;
@@ -180,7 +217,7 @@ int record(int argc, char** argv, bool near_home) {
       in.command = make(MotionType::kLevitate, Axis::kX);
       text = "levitate";
     } else if (ready_tick >= 0 && next < plan.size() &&
-               static_cast<std::int64_t>(tick) == ready_tick + plan[next].after_ready) {
+               static_cast<std::int64_t>(tick) == ready_tick + scaled(plan[next].after_ready)) {
       in.has_command = true;
       in.command = plan[next].command;
       if (plan[next].relative_to_reference) {
@@ -217,8 +254,8 @@ int record(int argc, char** argv, bool near_home) {
 
     if (ready_tick < 0 && out.status->state == kernel::SequencerState::kReady) {
       ready_tick = tick;
-      end_tick = tick + kTicksAfterReady;
-      std::printf("recorder: tick %6u  Ready (start-up took %.3f s)\n", tick, tick / 2500.0);
+      end_tick = tick + scaled(kTicksAfterReady);
+      std::printf("recorder: tick %6u  Ready (start-up took %.3f s)\n", tick, tick / tick_rate_Hz);
     }
     if (out.status->fault != kernel::FaultCode::kNone) {
       std::printf("recorder: tick %6u  FAULT %u latched\n", tick, static_cast<unsigned>(out.status->fault));
@@ -237,7 +274,7 @@ int record(int argc, char** argv, bool near_home) {
   std::printf("recorder: %u ticks, %u commands; wrote %zu input bytes to %s, %zu output bytes to %s\n",
               header.tick_count, header.command_count, inputs.size(), argv[1], outputs.size(), argv[2]);
   if (ready_tick < 0) {
-    std::fprintf(stderr, "recorder: FAIL: the stage never reached Ready within %u ticks\n", kMaxStartupTicks);
+    std::fprintf(stderr, "recorder: FAIL: the stage never reached Ready within %u ticks\n", max_startup_ticks);
     return 1;
   }
   if (next != plan.size()) ok = false;

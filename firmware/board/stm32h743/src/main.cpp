@@ -43,12 +43,8 @@
 #if MAGLEV_BOARD_HIL
 #include "maglev/app/can_io.hpp"
 #else
-#include "maglev/board/stm32h743/amplifier_board_io.hpp"
-#include "maglev/drivers/ad5764.hpp"
-#include "maglev/drivers/ad7606.hpp"
+#include "maglev/board/stm32h743/amplifier_board_drivers.hpp"
 #include "maglev/drivers/convst_timer.hpp"
-#include "maglev/drivers/quadrature_encoder.hpp"
-#include "maglev/drivers/stm32h7_spi.hpp"
 #endif
 
 namespace r = maglev::stm32h7;
@@ -116,31 +112,10 @@ d::Stm32OutputPin<Bus> g_led{g_bus, pins::kLed};
 // polled SPI read fills it today; the SPI3 RX DMA stream fills it unchanged. ---
 [[gnu::section(".dma_bss")]] alignas(32) std::uint32_t g_adc_dma_rx[2][4];
 
-d::Stm32OutputPin<Bus> g_dac_sync{g_bus, pins::kDacSync};
-d::Stm32OutputPin<Bus> g_dac_ldac{g_bus, pins::kDacLdac};
-d::Stm32OutputPin<Bus> g_adc0_cs{g_bus, pins::kAdc0Cs};
-d::Stm32OutputPin<Bus> g_adc1_cs{g_bus, pins::kAdc1Cs};
-d::Stm32InputPin<Bus> g_adc_busy{g_bus, pins::kAdcBusy};
-d::Stm32InputPin<Bus> g_loss0{g_bus, pins::kLoss0};
-d::Stm32InputPin<Bus> g_loss1{g_bus, pins::kLoss1};
-d::Stm32InputPin<Bus> g_loss2{g_bus, pins::kLoss2};
-
-// SPI: pll1_q 80 MHz kernel clock. DAC: /4 = 20 MHz (AD5764 max 30 MHz),
-// mode 1 (data latched on SCLK falling edges). ADC: /8 = 10 MHz, mode 2.
-const d::SpiDeviceSettings kDacSpi[1] = {{&g_dac_sync, 1, false, true}};
-const d::SpiDeviceSettings kAdcSpi[2] = {{&g_adc0_cs, 2, true, false}, {&g_adc1_cs, 2, true, false}};
-d::Stm32SpiMaster<Bus, 1> g_spi_dac{g_bus, r::spi::kSpi1, kDacSpi};
-d::Stm32SpiMaster<Bus, 2> g_spi_adc{g_bus, r::spi::kSpi3, kAdcSpi};
-
-// Parts
-d::ad5764::Chain<2> g_dac{g_spi_dac, 0, g_dac_ldac};
-const std::uint8_t kAdcCs[2] = {0, 1};
-d::ad7606::Adc g_adc{g_spi_adc, kAdcCs, g_adc_busy, g_adc_dma_rx};
-using Encoder = d::QuadratureEncoder<Bus>;
-Encoder g_enc0{g_bus, {r::tim::kTim2, true, 1, false}, g_loss0};
-Encoder g_enc1{g_bus, {r::tim::kTim5, true, 1, false}, g_loss1};
-Encoder g_enc2{g_bus, {r::tim::kTim3, false, 1, false}, g_loss2};
-b::AmplifierBoardSensors<Encoder> g_sensors{g_adc, g_enc0, g_enc1, g_enc2};
+// The parts (SPI1 DAC chain, SPI3 ADC pair, encoder counters): one composition
+// shared with the QEMU whole-servo-tick image (amplifier_board_drivers.hpp).
+b::AmplifierBoardDrivers<Bus> g_board{g_bus, g_adc_dma_rx};
+auto& g_sensors = g_board.sensors;
 #endif
 
 d::AmplifierEnable* g_amp = nullptr;  // constructed in main() after the GPIO is configured
@@ -256,27 +231,7 @@ void configure_pins() {
   d::configure_alternate_pin(g_bus, pins::kRs485De, pins::kAfUsart2);
   g_led.configure(false);
 #if !MAGLEV_BOARD_HIL
-  d::configure_alternate_pin(g_bus, pins::kDacSck, pins::kAfSpi1);
-  d::configure_alternate_pin(g_bus, pins::kDacMiso, pins::kAfSpi1);
-  d::configure_alternate_pin(g_bus, pins::kDacMosi, pins::kAfSpi1);
-  d::configure_alternate_pin(g_bus, pins::kAdcSck, pins::kAfSpi3);
-  d::configure_alternate_pin(g_bus, pins::kAdcMiso, pins::kAfSpi3);
-  d::configure_alternate_pin(g_bus, pins::kAdcMosi, pins::kAfSpi3);
-  d::configure_alternate_pin(g_bus, pins::kAdcConvst, pins::kAfTim1);
-  d::configure_alternate_pin(g_bus, pins::kEnc0A, pins::kAfTim2, 2);
-  d::configure_alternate_pin(g_bus, pins::kEnc0B, pins::kAfTim2, 2);
-  d::configure_alternate_pin(g_bus, pins::kEnc1A, pins::kAfTim5, 2);
-  d::configure_alternate_pin(g_bus, pins::kEnc1B, pins::kAfTim5, 2);
-  d::configure_alternate_pin(g_bus, pins::kEnc2A, pins::kAfTim3, 2);
-  d::configure_alternate_pin(g_bus, pins::kEnc2B, pins::kAfTim3, 2);
-  g_dac_sync.configure(true);
-  g_dac_ldac.configure(true);
-  g_adc0_cs.configure(true);
-  g_adc1_cs.configure(true);
-  g_adc_busy.configure();
-  g_loss0.configure(1);
-  g_loss1.configure(1);
-  g_loss2.configure(1);
+  g_board.configure_pins();
 #endif
 }
 
@@ -344,15 +299,9 @@ extern "C" void board_main() {
 #if MAGLEV_BOARD_HIL
   maglev::app::ActuatorSink& actuators = g_can_actuators;
 #else
-  static b::AmplifierBoardActuators board_actuators(g_dac, amp);
+  static b::AmplifierBoardActuators board_actuators(g_board.dac, amp);
   maglev::app::ActuatorSink& actuators = board_actuators;
-  g_spi_dac.init();
-  g_spi_adc.init();
-  g_dac.init();
-  (void)g_dac.write_zero();  // outputs at 0 A before the amplifiers can ever be enabled
-  g_enc0.init();
-  g_enc1.init();
-  g_enc2.init();
+  g_board.init();  // DAC outputs at 0 A before the amplifiers can ever be enabled
 #endif
   (void)g_can.init();
   g_rs485.init();
@@ -395,6 +344,7 @@ extern "C" void board_main() {
   static maglev::app::ServoLoop<b::ServoKernel> servo(g_sensors, actuators, g_kernel, servo_timing(g_servo_rate_Hz),
                                                       hooks);
   g_servo = &servo;
+  application.attach_servo_state(&servo.state());  // servo.max_cycles / last_cycles / overruns over Modbus
 
   g_bus.write32(r::scb::kBase + r::scb::kShpr3, 1u << 28);  // SysTick priority 1
   g_bus.write32(r::systick::kRvr, b::kCpu_Hz / 1000u - 1u);
@@ -462,7 +412,7 @@ extern "C" {
 }
 
 // 16-bit encoder extension points (wrap, 0x4000, 0xC000). Same priority as the tick.
-[[gnu::section(".itcm_text")]] void TIM3_IRQHandler() { g_enc2.on_timer_irq(); }
+[[gnu::section(".itcm_text")]] void TIM3_IRQHandler() { g_board.enc2.on_timer_irq(); }
 #endif
 
 void SysTick_Handler() {

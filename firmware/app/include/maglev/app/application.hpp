@@ -46,6 +46,7 @@
 #include "maglev/motion_commands/to_motion_command.hpp"
 #include "maglev/app/host_command_queue.hpp"
 #include "maglev/app/recorder.hpp"
+#include "maglev/app/servo_loop.hpp"
 #include "maglev/app/telemetry.hpp"
 #include "maglev/can_link/catalog.hpp"
 #include "maglev/can_link/codec.hpp"
@@ -137,10 +138,17 @@ class GuardedDevice final : public modbus::Device {
   }
   double read_status(modbus::RegId id) const override {
     enter();
-    const double v = inner_.read_status(id);
+    double v = 0.0;
+    if (servo_ != nullptr && servo_status(id, &v)) {
+      exit();
+      return v;
+    }
+    v = inner_.read_status(id);
     exit();
     return v;
   }
+  // The servo loop's own timing (servo.* registers); null: they read 0.
+  void set_servo_state(const ServoState* servo) { servo_ = servo; }
   ApplyResult apply_config(modbus::ConfigImage& config, bool live_tuning) override {
     enter();
     const ApplyResult r = inner_.apply_config(config, live_tuning);
@@ -176,8 +184,17 @@ class GuardedDevice final : public modbus::Device {
   void exit() const {
     if (hooks_.critical_exit != nullptr) hooks_.critical_exit();
   }
+  bool servo_status(modbus::RegId id, double* v) const {
+    switch (id) {
+      case modbus::RegId::servo_max_cycles: *v = servo_->max_cycles; return true;
+      case modbus::RegId::servo_last_cycles: *v = servo_->last_cycles; return true;
+      case modbus::RegId::servo_overruns: *v = servo_->overruns; return true;
+      default: return false;
+    }
+  }
   modbus::Device& inner_;
   const ApplicationHooks& hooks_;
+  const ServoState* servo_ = nullptr;
 };
 
 template <typename T>
@@ -236,6 +253,9 @@ class Application {
   modbus::PersistStatus persist_status() const { return device_.persist_status(); }
   // The lab tools behind the rec.* / wave.* registers (firmware/lab_tools/registers).
   void attach_lab_tools(modbus::LabTools* lab) { registers_.set_lab_tools(lab); }
+  // The board's ServoLoop state behind servo.max_cycles / last_cycles /
+  // overruns (read with the tick masked, like every kernel status read).
+  void attach_servo_state(const ServoState* servo) { guarded_.set_servo_state(servo); }
   const modbus::RegisterServer& registers() const { return registers_; }
   const modbus::RtuServer& rtu() const { return rtu_; }
   const can::LinkReceiver& receiver() const { return receiver_; }

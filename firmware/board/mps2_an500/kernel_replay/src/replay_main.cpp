@@ -17,6 +17,7 @@
 #include <cstring>
 
 #include "maglev/board/mps2_an500/instruction_counter.hpp"
+#include "maglev/board/mps2_an500/instruction_stats.hpp"
 #include "maglev/board/mps2_an500/semihosting.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/kernel_replay/replay_format.hpp"
@@ -42,48 +43,9 @@ enum ExitCode : int {
 // SysTick as an instruction counter: maglev/board/mps2_an500/instruction_counter.hpp.
 using namespace hw::icount;
 
-struct Stats {
-  std::uint64_t count = 0;
-  std::uint64_t sum = 0;
-  std::uint64_t min = ~std::uint64_t{0};
-  std::uint64_t max = 0;
-  std::uint32_t max_tick = 0;
-  void add(std::uint64_t v, std::uint32_t tick) {
-    ++count;
-    sum += v;
-    if (v < min) min = v;
-    if (v > max) {
-      max = v;
-      max_tick = tick;
-    }
-  }
-};
-
-
+using Stats = TickStats;  // instruction_stats.hpp, shared with the whole-servo-tick image
 void print_stats(const char* label, const Stats& s, const Calibration& cal) {
-  hw::semihost_write("step_instructions ");
-  hw::semihost_write(label);
-  hw::semihost_write(": ticks=");
-  hw::semihost_write_unsigned(s.count);
-  if (s.count == 0U) {
-    hw::semihost_write("\n");
-    return;
-  }
-  hw::semihost_write(" min=");
-  hw::semihost_write_unsigned(cal.instructions(s.min));
-  hw::semihost_write(" mean=");
-  // mean with one decimal: instructions(sum) over count, computed in tenths.
-  const std::uint64_t span = cal.nop_counts - cal.empty_counts;
-  const std::uint64_t net = s.sum - s.count * cal.empty_counts;
-  const std::uint64_t tenths = cal.valid() ? (net * kCalibrationNops * 10U + span * s.count / 2U) / (span * s.count) : 0U;
-  hw::semihost_write_unsigned(tenths / 10U);
-  hw::semihost_write_char('.');
-  hw::semihost_write_unsigned(tenths % 10U);
-  hw::semihost_write(" max=");
-  hw::semihost_write_unsigned(cal.instructions(s.max));
-  hw::semihost_write(" (tick ");
-  hw::semihost_write_unsigned(s.max_tick);
-  hw::semihost_write(")\n");
+  print_tick_stats("step_instructions", label, s, cal);
 }
 
 // --- command line ------------------------------------------------------------------

@@ -65,4 +65,16 @@ struct Calibration {
   }
 };
 
+// SysTick started and the ratio calibrated; the first runs only warm QEMU's
+// translation cache, the last one counts.
+inline Calibration start_and_calibrate() {
+  systick_start();
+  Calibration cal;
+  for (int i = 0; i < 4; ++i) {
+    cal.empty_counts = measure_empty();
+    cal.nop_counts = measure_nops();
+  }
+  return cal;
+}
+
 }  // namespace maglev::board::mps2_an500::icount

@@ -1,0 +1,137 @@
+// The STM32H743 amplifier board's registers, as far as the servo tick's
+// drivers touch them, answered by a heap-free fake: the register-bus policy
+// (stm32h7::RegisterBus: read32/write32) the real drivers are templated on,
+// in place of MmioBus. What the drivers read is one recorded SensorSample
+// (present()), so they take their normal full path:
+//
+//   * SPI1 / SPI3 SR: TXP, RXP and EOT always set (every poll succeeds at
+//     once: the wire time of the polled transfers is NOT in the count, see
+//     docs/PERFORMANCE.md "Whole servo interrupt at 20 kHz");
+//   * SPI3 RXDR: the selected AD7606's DOUTA words, V(2w+1) << 16 | V(2w+2),
+//     device chosen by its CS line (GPIOE BSRR: ADC0 CS PE15, ADC1 CS PE10),
+//     word index restarted on CS low; ADC0 V1..V3 displacement, V4..V7 Hall,
+//     V8 0; ADC1 V1..V8 the coil current monitors (amplifier_board_io.hpp's
+//     map_to_sample, inverted);
+//   * SPI1 RXDR: the AD5764 chain's SDO, i.e. the word written two TXDR
+//     writes earlier (48-bit chain: the driver's link check sees its echo);
+//   * TIM2 / TIM5 CNT: interferometer counts 0 / 1 (32-bit counters), TIM3
+//     CNT: the low 16 bits of counts 2 (the driver extends them);
+//   * GPIOE IDR: BUSY (PE11) low = conversion done; GPIOF IDR: the three
+//     signal-loss lines (PF12..14, active low) high = no loss;
+//   * EXTI CPUPR1: 0 (the next tick is not pending yet).
+// Writes are kept where the tick's result shows: the DAC words (SPI1 TXDR),
+// the amplifier-enable line (GPIOG BSRR, PG3). Everything else reads 0 and
+// writes are dropped (clock, pin and peripheral set-up).
+//
+// kCountAccesses: count every read/write (a measurement pass that does not
+// report the whole tick's instructions; counting costs instructions itself).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "maglev/io/actuator_command.hpp"
+#include "maglev/io/sensor_sample.hpp"
+#include "maglev/stm32h7/registers.hpp"
+
+namespace maglev::servo_tick {
+
+namespace r = maglev::stm32h7;
+
+template <bool kCountAccesses>
+class BoardRegisterFake {
+ public:
+  // The sensor values the next tick's drivers read.
+  void present(const io::SensorSample& s) {
+    for (int i = 0; i < 3; ++i) adc_[0][i] = s.displacement_adc[i];
+    for (int i = 0; i < 4; ++i) adc_[0][3 + i] = s.hall_adc[i];
+    adc_[0][7] = 0;
+    for (int i = 0; i < 8; ++i) adc_[1][i] = s.coil_current_adc[i];
+    for (int i = 0; i < 3; ++i) counts_[i] = s.interferometer_counts[i];
+    dac_words_ = 0;
+  }
+
+  // One counter alone (TIM3's 16-bit extension is walked to the first
+  // sample's count at boot, see servo_tick_main.cpp).
+  void set_count(int axis, std::uint32_t count) { counts_[axis] = count; }
+
+  std::uint32_t read32(r::Addr a) {
+    if constexpr (kCountAccesses) ++reads_;
+    if (a == r::spi::kSpi3 + r::spi::kSr || a == r::spi::kSpi1 + r::spi::kSr) {
+      return r::spi::kSrTxp | r::spi::kSrRxp | r::spi::kSrEot;
+    }
+    if (a == r::spi::kSpi3 + r::spi::kRxdr) {
+      const std::uint32_t w = adc_word_ < 4 ? adc_word_ : 3u;
+      ++adc_word_;
+      const std::int16_t* v = adc_[adc_selected_];
+      return (static_cast<std::uint32_t>(static_cast<std::uint16_t>(v[2 * w])) << 16) |
+             static_cast<std::uint16_t>(v[2 * w + 1]);
+    }
+    if (a == r::spi::kSpi1 + r::spi::kRxdr) return dac_sdo_;
+    if (a == r::tim::kTim2 + r::tim::kCnt) return counts_[0];
+    if (a == r::tim::kTim5 + r::tim::kCnt) return counts_[1];
+    if (a == r::tim::kTim3 + r::tim::kCnt) return counts_[2] & 0xFFFFu;
+    if (a == r::gpio::port('F') + r::gpio::kIdr) return (1u << 12) | (1u << 13) | (1u << 14);
+    return 0u;  // GPIOE IDR: BUSY low; EXTI CPUPR1: nothing pending; the rest
+  }
+
+  void write32(r::Addr a, std::uint32_t v) {
+    if constexpr (kCountAccesses) ++writes_;
+    if (a == r::spi::kSpi1 + r::spi::kTxdr) {
+      dac_sdo_ = dac_chain_[0];
+      dac_chain_[0] = dac_chain_[1];
+      dac_chain_[1] = v;
+      if (dac_words_ < kDacWords) dac_word_[dac_words_] = v;
+      ++dac_words_;
+      return;
+    }
+    if (a == r::gpio::port('E') + r::gpio::kBsrr) {
+      if ((v & (1u << (15 + 16))) != 0u) select_adc(0);  // ADC0 CS low
+      if ((v & (1u << (10 + 16))) != 0u) select_adc(1);  // ADC1 CS low
+      return;
+    }
+    if (a == r::gpio::port('G') + r::gpio::kBsrr) {
+      if ((v & (1u << 3)) != 0u) amplifier_enable_ = true;
+      if ((v & (1u << (3 + 16))) != 0u) amplifier_enable_ = false;
+    }
+  }
+
+  // What the AD5764 chain received this tick (since present()): eight words,
+  // frames of two, the last device's word first (ad5764.hpp). False unless
+  // exactly four frames with channels A..D arrived.
+  bool dac_command(io::ActuatorCommand* out) const {
+    if (dac_words_ != kDacWords) return false;
+    for (std::size_t k = 0; k < kDacWords; ++k) {
+      const std::uint32_t w = dac_word_[k];
+      const std::size_t device = (k % 2u == 0u) ? 1u : 0u;
+      const std::size_t channel = (w >> 16) & 7u;
+      if (((w >> 19) & 0x1Fu) != 0b00010u || channel != k / 2u) return false;  // write, data register
+      out->dac_code[device * 4u + channel] = static_cast<std::int16_t>(static_cast<std::uint16_t>(w & 0xFFFFu));
+    }
+    out->amplifier_enable = amplifier_enable_;
+    return true;
+  }
+
+  std::uint32_t reads() const { return reads_; }
+  std::uint32_t writes() const { return writes_; }
+
+ private:
+  static constexpr std::size_t kDacWords = 8;
+  void select_adc(std::uint32_t d) {
+    adc_selected_ = d;
+    adc_word_ = 0;
+  }
+  std::int16_t adc_[2][8]{};
+  std::uint32_t counts_[3]{};
+  std::uint32_t adc_selected_ = 0;
+  std::uint32_t adc_word_ = 0;
+  std::uint32_t dac_chain_[2]{};
+  std::uint32_t dac_sdo_ = 0;
+  std::uint32_t dac_word_[kDacWords]{};
+  std::size_t dac_words_ = 0;
+  bool amplifier_enable_ = false;
+  std::uint32_t reads_ = 0;
+  std::uint32_t writes_ = 0;
+};
+
+}  // namespace maglev::servo_tick

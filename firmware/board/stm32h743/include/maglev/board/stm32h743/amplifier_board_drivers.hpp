@@ -1,0 +1,98 @@
+// The production amplifier board's part drivers on one register bus, composed
+// once: the board image (src/main.cpp, non-HIL) and the QEMU image that counts
+// the whole servo interrupt (firmware/board/mps2_an500/servo_tick, on a fake
+// register bus) build the same objects, wired the same way.
+//
+//   SPI1 -> AD5764 chain (SYNC PD14, LDAC PD15), SPI3 -> two AD7606 (CS PE15 /
+//   PE10, BUSY PE11, raw words into `adc_rx`), TIM2 / TIM5 / TIM3 encoder
+//   counters (loss lines PF12..14, active low), AmplifierBoardSensors over them.
+// The amplifier-enable line and AmplifierBoardActuators stay with the board
+// (the HIL image shares the enable pin).
+#pragma once
+
+#include <cstdint>
+
+#include "maglev/board/stm32h743/amplifier_board_io.hpp"
+#include "maglev/board/stm32h743/pinmap.hpp"
+#include "maglev/drivers/ad5764.hpp"
+#include "maglev/drivers/ad7606.hpp"
+#include "maglev/drivers/quadrature_encoder.hpp"
+#include "maglev/drivers/stm32h7_gpio.hpp"
+#include "maglev/drivers/stm32h7_spi.hpp"
+#include "maglev/stm32h7/register_bus.hpp"
+
+namespace maglev::board::stm32h743 {
+
+template <stm32h7::RegisterBus Bus>
+struct AmplifierBoardDrivers {
+  using Encoder = drivers::QuadratureEncoder<Bus>;
+  static constexpr std::uint8_t kAdcCs[2] = {0, 1};  // SPI3 chip-select index of ADC 0 / 1
+
+  // `adc_rx`: the AD7606 raw words (the board: D2 SRAM, non-cacheable, where
+  // the SPI3 RX DMA stream will write them).
+  AmplifierBoardDrivers(Bus& b, std::uint32_t (*adc_rx)[drivers::ad7606::kChannelsPerDevice / 2])
+      : bus(b), adc{spi_adc, kAdcCs, adc_busy, adc_rx} {}
+  AmplifierBoardDrivers(const AmplifierBoardDrivers&) = delete;
+  AmplifierBoardDrivers& operator=(const AmplifierBoardDrivers&) = delete;
+
+  Bus& bus;
+  drivers::Stm32OutputPin<Bus> dac_sync{bus, pins::kDacSync};
+  drivers::Stm32OutputPin<Bus> dac_ldac{bus, pins::kDacLdac};
+  drivers::Stm32OutputPin<Bus> adc0_cs{bus, pins::kAdc0Cs};
+  drivers::Stm32OutputPin<Bus> adc1_cs{bus, pins::kAdc1Cs};
+  drivers::Stm32InputPin<Bus> adc_busy{bus, pins::kAdcBusy};
+  drivers::Stm32InputPin<Bus> loss0{bus, pins::kLoss0};
+  drivers::Stm32InputPin<Bus> loss1{bus, pins::kLoss1};
+  drivers::Stm32InputPin<Bus> loss2{bus, pins::kLoss2};
+  // SPI: pll1_q 80 MHz kernel clock. DAC: /4 = 20 MHz (AD5764 max 30 MHz),
+  // mode 1 (data latched on SCLK falling edges). ADC: /8 = 10 MHz, mode 2.
+  const drivers::SpiDeviceSettings dac_spi[1] = {{&dac_sync, 1, false, true}};
+  const drivers::SpiDeviceSettings adc_spi[2] = {{&adc0_cs, 2, true, false}, {&adc1_cs, 2, true, false}};
+  drivers::Stm32SpiMaster<Bus, 1> spi_dac{bus, stm32h7::spi::kSpi1, dac_spi};
+  drivers::Stm32SpiMaster<Bus, 2> spi_adc{bus, stm32h7::spi::kSpi3, adc_spi};
+  drivers::ad5764::Chain<2> dac{spi_dac, 0, dac_ldac};
+  drivers::ad7606::Adc adc;
+  Encoder enc0{bus, {stm32h7::tim::kTim2, true, 1, false}, loss0};
+  Encoder enc1{bus, {stm32h7::tim::kTim5, true, 1, false}, loss1};
+  Encoder enc2{bus, {stm32h7::tim::kTim3, false, 1, false}, loss2};  // 16-bit: TIM3_IRQHandler extends it
+  AmplifierBoardSensors<Encoder> sensors{adc, enc0, enc1, enc2};
+
+  // Alternate functions and GPIO of the parts (clocks already on).
+  void configure_pins() {
+    drivers::configure_alternate_pin(bus, pins::kDacSck, pins::kAfSpi1);
+    drivers::configure_alternate_pin(bus, pins::kDacMiso, pins::kAfSpi1);
+    drivers::configure_alternate_pin(bus, pins::kDacMosi, pins::kAfSpi1);
+    drivers::configure_alternate_pin(bus, pins::kAdcSck, pins::kAfSpi3);
+    drivers::configure_alternate_pin(bus, pins::kAdcMiso, pins::kAfSpi3);
+    drivers::configure_alternate_pin(bus, pins::kAdcMosi, pins::kAfSpi3);
+    drivers::configure_alternate_pin(bus, pins::kAdcConvst, pins::kAfTim1);
+    drivers::configure_alternate_pin(bus, pins::kEnc0A, pins::kAfTim2, 2);
+    drivers::configure_alternate_pin(bus, pins::kEnc0B, pins::kAfTim2, 2);
+    drivers::configure_alternate_pin(bus, pins::kEnc1A, pins::kAfTim5, 2);
+    drivers::configure_alternate_pin(bus, pins::kEnc1B, pins::kAfTim5, 2);
+    drivers::configure_alternate_pin(bus, pins::kEnc2A, pins::kAfTim3, 2);
+    drivers::configure_alternate_pin(bus, pins::kEnc2B, pins::kAfTim3, 2);
+    dac_sync.configure(true);
+    dac_ldac.configure(true);
+    adc0_cs.configure(true);
+    adc1_cs.configure(true);
+    adc_busy.configure();
+    loss0.configure(1);
+    loss1.configure(1);
+    loss2.configure(1);
+  }
+
+  // SPI masters, the DAC at 0 A (before the amplifiers can ever be enabled),
+  // the encoder counters from 0.
+  void init() {
+    spi_dac.init();
+    spi_adc.init();
+    dac.init();
+    (void)dac.write_zero();
+    enc0.init();
+    enc1.init();
+    enc2.init();
+  }
+};
+
+}  // namespace maglev::board::stm32h743
