@@ -11,37 +11,19 @@
 #    (the host bench's session with the family's kernel);
 # 2. replay the vectors through the same kernel on QEMU's Cortex-M7;
 # 3. compare the two output files.
-if(NOT EXISTS "${ELF}")
-  message(FATAL_ERROR "${NAME}: the M7 replay image ${ELF} does not exist "
-                      "(the host build makes it: target maglev-qemu-kernel-replay-image)")
-endif()
-if(NOT QEMU)
-  message(FATAL_ERROR "${NAME}: qemu-system-arm not found; run ./cmake/setup-debian.sh")
-endif()
+include(${CMAKE_CURRENT_LIST_DIR}/bitexact-steps.cmake)
+maglev_bitexact_preflight(${NAME} "${QEMU}" "${ELF}" "(the host build makes it: target maglev-qemu-kernel-replay-image)")
 file(MAKE_DIRECTORY ${WORKDIR})
 set(_vectors ${WORKDIR}/vectors.bin)
 set(_host ${WORKDIR}/host_outputs.bin)
 set(_target ${WORKDIR}/target_outputs.bin)
 file(REMOVE ${_target})
-execute_process(COMMAND ${RECORDER} ${RECORDER_COMMAND} ${_vectors} ${_host} --profile ${PROFILE}
-                RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _out)
-message("${_out}")
-if(NOT _rc EQUAL 0)
-  message(FATAL_ERROR "${NAME}: the recorder failed (${_rc})")
-endif()
-set(_cmd ${QEMU} -M mps2-an500 -nographic -monitor none -serial null -semihosting-config enable=on,target=native)
+maglev_bitexact_record(${NAME} ${RECORDER} ${RECORDER_COMMAND} ${_vectors} ${_host} --profile ${PROFILE})
 set(_append "${_vectors} ${_target}")
 if(DEFINED ICOUNT_SHIFT)
-  list(APPEND _cmd -icount shift=${ICOUNT_SHIFT})
-  set(_append "${_append} --icount")
+  string(APPEND _append " --icount")
 endif()
-list(APPEND _cmd -kernel ${ELF} -append "${_append}")
-execute_process(COMMAND ${_cmd} INPUT_FILE /dev/null RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _out
-                TIMEOUT ${TIMEOUT})
-message("${_out}")
-if(NOT _rc EQUAL 0)
-  message(FATAL_ERROR "${NAME}: the replay image failed under QEMU (status ${_rc})")
-endif()
+maglev_qemu_run(${NAME} "${QEMU}" "${ELF}" "${_append}" "${ICOUNT_SHIFT}" ${TIMEOUT} _qemu_out)
 
 if(DEFINED COMPARER)
   execute_process(COMMAND ${COMPARER} --compare ${_host} ${_target}

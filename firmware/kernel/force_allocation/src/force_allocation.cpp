@@ -215,38 +215,6 @@ MAGLEV_CONFIG_CODE ForceAllocationError ComputeForceAllocationTables(const Force
   return ForceAllocationError::kOk;
 }
 
-MAGLEV_CONFIG_CODE std::uint32_t PositionToTurn(std::int64_t pos_pm, std::int64_t pitch_pm) {
-  return static_cast<std::uint32_t>(static_cast<std::uint64_t>(PositionToTurnsQ32(pos_pm, pitch_pm)) & 0xffffffffu);
-}
-
-MAGLEV_CONFIG_CODE std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm) {
-  // pos = q * pitch + r, r in [0, pitch), pitch < 2^36. floor(r * 2^32 / pitch)
-  // in two exact steps so that no intermediate exceeds 2^63:
-  //   r * 2^26 < 2^62;  remainder * 2^6 < 2^42.
-  std::int64_t q = pos_pm / pitch_pm;
-  std::int64_t r = pos_pm - q * pitch_pm;
-  q -= r < 0 ? 1 : 0;
-  r += r < 0 ? pitch_pm : 0;
-  const std::int64_t n1 = r << 26;
-  const std::int64_t f1 = n1 / pitch_pm;
-  const std::int64_t r1 = n1 - f1 * pitch_pm;
-  const std::int64_t f2 = (r1 << 6) / pitch_pm;
-  // q * 2^32 + frac: |q| < 2^31 for any position below 1e8 m.
-  return static_cast<std::int64_t>(static_cast<std::uint64_t>(q) << 32) + (f1 << 6) + f2;
-}
-
-std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm, double inv_pitch_pm) {
-  // The same two steps with exact floor divisions done in double
-  // (numeric::FloorDiv: |quotients| < 2^50 here).
-  const std::int64_t q = numeric::FloorDiv(pos_pm, pitch_pm, inv_pitch_pm);
-  const std::int64_t r = pos_pm - q * pitch_pm;
-  const std::int64_t n1 = r << 26;
-  const std::int64_t f1 = numeric::FloorDiv(n1, pitch_pm, inv_pitch_pm);
-  const std::int64_t r1 = n1 - f1 * pitch_pm;
-  const std::int64_t f2 = numeric::FloorDiv(r1 << 6, pitch_pm, inv_pitch_pm);
-  return static_cast<std::int64_t>(static_cast<std::uint64_t>(q) << 32) + (f1 << 6) + f2;
-}
-
 void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
                   std::uint32_t first_coil_phase_turn[kForcers]) {
   // Turns of each coordinate, NOT reduced: for a direction cosine h that is
@@ -279,14 +247,12 @@ namespace detail_fa {
 
 MAGLEV_CONFIG_CODE ForceAllocationError FillCommon(const ForceAllocationConfig& c, const ForceAllocationTablesDouble& t,
                                 CommutationTables* ct) {
-  ct->pitch_pm = RoundToInt64(c.pitch_m * 1e12);
-  if (ct->pitch_pm >= (std::int64_t{1} << 36)) return ForceAllocationError::kBadGeometry;
-  ct->inv_pitch_pm = 1.0 / static_cast<double>(ct->pitch_pm);
+  const std::int64_t pitch_pm = RoundToInt64(c.pitch_m * 1e12);
+  if (pitch_pm >= (std::int64_t{1} << 36)) return ForceAllocationError::kBadGeometry;
+  ct->inv_pitch_pm = 1.0 / static_cast<double>(pitch_pm);  // of the whole-pm pitch
   ct->base_x_pm = RoundToInt64(c.base_point_x_m * 1e12);
   ct->base_y_pm = RoundToInt64(c.base_point_y_m * 1e12);
   for (int k = 0; k < kForcers; ++k) {
-    ct->h_q30[k][0] = RoundToInt64(t.h_dir[k][0] * 1073741824.0);
-    ct->h_q30[k][1] = RoundToInt64(t.h_dir[k][1] * 1073741824.0);
     ct->h_dir[k][0] = t.h_dir[k][0];
     ct->h_dir[k][1] = t.h_dir[k][1];
   }

@@ -22,6 +22,7 @@
 #include "maglev/controller/controller.hpp"
 #include "maglev/kernel_replay/replay_format.hpp"
 #include "maglev/kernel_replay/semihost_file.hpp"
+#include "maglev/kernel_replay/vectors_file.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 
 namespace {
@@ -72,21 +73,15 @@ int fail(const char* message, int code) {
 
 template <typename Controller>
 int replay(Controller& controller, const char* vectors_path, const char* outputs_path, bool icount) {
-  const int in = kr::semihost_open(vectors_path, kr::OpenMode::kReadBinary);
-  if (in < 0) return fail("cannot open the vectors file", kCannotRead);
-  const long length = kr::semihost_file_length(in);
-  std::uint8_t header_bytes[kr::kHeaderBytes];
+  int in = -1;
   kr::InputHeader header{};
-  if (!kr::semihost_read(in, header_bytes, sizeof(header_bytes))) return fail("cannot read the header", kCannotRead);
-  if (!kr::decode_header(header_bytes, &header)) {
-    return fail("bad header (magic, version or record sizes differ from this image)", kBadHeader);
+  if (const kr::VectorsOpen e = kr::open_vectors(vectors_path, &in, &header); e != kr::VectorsOpen::kOk) {
+    const bool unreadable = e == kr::VectorsOpen::kCannotOpen || e == kr::VectorsOpen::kCannotReadHeader;
+    return fail(kr::to_string(e), unreadable ? kCannotRead : kBadHeader);
   }
   if (header.profile_bytes != 0U && header.profile_bytes != sizeof(g_profile)) {
     return fail("the stage profile's size differs from this image's StageProfile", kBadHeader);
   }
-  const auto expected_length = static_cast<long>(kr::kHeaderBytes + header.profile_bytes +
-                                                 static_cast<std::size_t>(header.tick_count) * kr::kInputRecordBytes);
-  if (length != expected_length) return fail("vectors file length does not match its header", kBadHeader);
   // The kernel configuration: the firmware's own profile path (check +
   // MakeKernelConfig) on the recorded profile, or the default.
   kernel::KernelConfig config = kernel::default_kernel_config();
@@ -115,12 +110,7 @@ int replay(Controller& controller, const char* vectors_path, const char* outputs
     return fail("apply_config refused", kConfigRefused);
   }
 
-  systick_start();
-  Calibration cal;
-  for (int i = 0; i < 4; ++i) {  // first runs warm QEMU's translation cache
-    cal.empty_counts = measure_empty();
-    cal.nop_counts = measure_nops();
-  }
+  const Calibration cal = start_and_calibrate();
 
   // Per sequencer state the tick STARTED in (homing's last tick, with its
   // one-off Hall solve, counts as Homing).

@@ -94,12 +94,9 @@ constexpr int kStates = static_cast<int>(kernel::SequencerState::kFault) + 1;
 struct StateStats {
   Stats s[kStates];
 };
-void print_stats(const char* what, const char* label, const Stats& s, const Calibration& cal) {
-  print_tick_stats(what, label, s, cal);
-}
 void print_all(const char* what, const StateStats& st, const Calibration& cal) {
   for (int i = 0; i < kStates; ++i) {
-    if (st.s[i].count > 0U) print_stats(what, kernel::to_string(static_cast<kernel::SequencerState>(i)), st.s[i], cal);
+    if (st.s[i].count > 0U) print_tick_stats(what, kernel::to_string(static_cast<kernel::SequencerState>(i)), st.s[i], cal);
   }
 }
 
@@ -277,8 +274,8 @@ void measure_drivers_on_memory_bus(const Calibration& cal) {
     t1 = systick_now();
     actuators.add(systick_elapsed(t0, t1), i);
   }
-  print_stats("drivers_on_memory_bus", "sensors", sensors, cal);
-  print_stats("drivers_on_memory_bus", "actuators", actuators, cal);
+  print_tick_stats("drivers_on_memory_bus", "sensors", sensors, cal);
+  print_tick_stats("drivers_on_memory_bus", "actuators", actuators, cal);
 }
 
 char g_command_line[1024];

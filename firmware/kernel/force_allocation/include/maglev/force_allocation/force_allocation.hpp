@@ -92,14 +92,12 @@ struct ForceAllocationTablesDouble {
 ForceAllocationError ComputeForceAllocationTables(const ForceAllocationConfig& config,
                                                   ForceAllocationTablesDouble* out);
 
-// Integer commutation (shared by every Scalar): per-coil phase, 2^32 = one turn.
+// Commutation (shared by every Scalar): per-coil phase, 2^32 = one turn.
 struct CommutationTables {
-  std::int64_t pitch_pm;
-  double inv_pitch_pm;  // 1 / pitch_pm: the tick's exact floor divisions (numeric::FloorDiv)
+  double inv_pitch_pm;  // 1 / pitch (the pitch in whole pm): the tick's turns (ForcerPhases)
   std::int64_t base_x_pm;
   std::int64_t base_y_pm;
-  std::int64_t h_q30[kForcers][2];  // direction cosines, Q2.30 (exactly +-2^30 for X/Y axes)
-  double h_dir[kForcers][2];        // the same direction cosines in double (the tick's form)
+  double h_dir[kForcers][2];  // forcer thrust direction cosines (exactly +-1 / 0 for X/Y axes)
   // Coil 2k's offset; coil 2k+1's is coil 2k's + or - exactly a quarter turn
   // (second_coil_leads[k]): the configuration requires quadrature to 1e-9 rad
   // and the offsets are snapped to it (< 2^-32 turn = 1.5 nrad). So one table
@@ -110,7 +108,7 @@ struct CommutationTables {
 };
 
 // x, y (pm, magnet frame) -> per-coil phase psi_j (uint32, 2^32 = one turn):
-// exact integer modulo of the pitch, floor rounding (< 2^-32 turn).
+// ForcerPhases, and each forcer's second coil a quarter turn off its first.
 void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& tables,
                        std::uint32_t coil_phase_turn[io::kCoils]);
 // The tick's form: the phase of each forcer's first coil (coil 2k); the
@@ -121,18 +119,10 @@ void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTa
 // relative, so within 2^-46 turn (2^-14 of a phase LSB) anywhere within a
 // metre of the base point: the phase is floor(exact) or, when the exact value
 // lies within that distance of an integer, one LSB (1.5 nrad) off it. IEEE
-// double throughout: host and M7 give the same bits. (The exact integer form,
-// PositionToTurnsQ32, took three floor divisions per coordinate.)
+// double throughout: host and M7 give the same bits. (The exact integer form
+// it replaced took three int64 floor divisions per coordinate.)
 void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& tables,
                   std::uint32_t first_coil_phase_turn[kForcers]);
-
-// Fraction of a pitch, Q32: floor(FloorMod(pos, pitch) * 2^32 / pitch), exact.
-std::uint32_t PositionToTurn(std::int64_t pos_pm, std::int64_t pitch_pm);
-// Whole turns too: floor(pos * 2^32 / pitch) as int64 (exact, pitch < 2^36 pm).
-std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm);
-// The same value without an int64 division (inv_pitch_pm = 1.0 / pitch_pm):
-// the tick's form.
-std::int64_t PositionToTurnsQ32(std::int64_t pos_pm, std::int64_t pitch_pm, double inv_pitch_pm);
 
 template <typename Scalar>
 struct ForceAllocationState {
