@@ -116,6 +116,13 @@ kernel::ForceAllocationConfig allocation_of(const StageProfile& p) {
   c.lever_arm_m = h.lever_arm_m;
   if (h.layout == ForcerLayout::kTriangle) c.triangle_alpha_rad = h.triangle_alpha_rad;
   c.pitch_m = h.pitch_m;
+  // Coil centres at this pitch (the seed's layout rule: cross and square);
+  // the triangle's coil places are not the seed's, so its forces stay at the
+  // forcer centres as eq (8) writes them.
+  kernel::SetCoilCentreOffsets(&c);
+  if (h.layout == ForcerLayout::kTriangle) {
+    for (auto& o : c.coil_centre_offset_m) o[0] = o[1] = 0.0;
+  }
   c.two_b_star_identified_N_per_A = h.two_b_star_N_per_A;
   c.coil_effective_length_m = h.coil_effective_length_m;
   c.coil_side_width_m = h.coil_side_width_m;

@@ -3,9 +3,10 @@
 //
 //  * actuator side: DAC codes -> coil currents i_j = code / (codes per A) ->
 //    the effort the coils really produce, U = A G with G_h = sum_j i_j sin psi_j / 2,
-//    G_z = sum_j i_j cos psi_j / 2 over each forcer's two coils (exact inverse
-//    of eq (24) i = 2 S_xy B U, because A B = I and the two coils of a forcer
-//    are pi/2 apart), psi from the same integer commutation as the kernel.
+//    G_z = sum_j i_j cos psi_j / 2 over each forcer's two coils, plus the
+//    tilt torque of each coil's vertical force about its forcer centre (the
+//    coil centres of DefaultForceAllocationConfig, as the HIL plant places
+//    them), psi from the same integer commutation as the kernel.
 //  * plant, per axis (paper 000 eqs (25)-(31)): y'' + c' y' + k' y = (2 b*/m) U,
 //    z with gravity and a floor (z >= 0); semi-implicit Euler, 8 sub-steps per tick.
 //  * sensor side: the pose -> interferometer counts (beam layout of
@@ -74,11 +75,15 @@ class AxisStage {
       std::uint32_t phase[io::kCoils];
       CommutationPhases(x_pm, y_pm, alloc_.commutation, phase);
       double g[kForcerForces] = {};
+      const ForceAllocationConfig geometry = DefaultForceAllocationConfig();
       for (int j = 0; j < io::kCoils; ++j) {
         const double i = static_cast<double>(cmd.dac_code[j]) / alloc_.dac_codes_per_A;
         const double psi = static_cast<double>(phase[j]) * (2.0 * 3.14159265358979323846 / 4294967296.0);
         g[2 * (j / 2)] += 0.5 * i * std::sin(psi);
         g[2 * (j / 2) + 1] += 0.5 * i * std::cos(psi);
+        // Coil j's vertical force acts at its own centre, off the forcer's.
+        u[4] += geometry.coil_centre_offset_m[j][1] * 0.5 * i * std::cos(psi);
+        u[5] -= geometry.coil_centre_offset_m[j][0] * 0.5 * i * std::cos(psi);
       }
       for (int a = 0; a < kAxisCount; ++a) {
         for (int r = 0; r < kForcerForces; ++r) u[a] += alloc_.tables.a[a][r] * g[r];

@@ -57,10 +57,25 @@ void TestGeometry(ForceLayout layout, double l, double alpha, TestForcer f[4]) {
   }
 }
 
+// Where coil j sits along its forcer's thrust axis, from the forcer centre
+// (the plant's layout rule, written here from the coil phases, not from the
+// kernel's table): coil j's force (sin, cos)(gamma_1 s + phase_j) comes from
+// a side at s0 = (phase_j + pi/2) / gamma_1; it is centred at 0 when s0 is
+// L/4 off a multiple of L/2, else at +L/4 (forcers 1, 2) or -L/4 (3, 4).
+double CoilCentreAlong(int j) {
+  const double L = stage::kPitch_m;
+  const double s0 = (stage::kCoilPhase_rad[j] + kPi / 2.0) / (2.0 * kPi / L);
+  const double m = (s0 - L / 4.0) / (L / 2.0);
+  if (std::fabs(m - std::nearbyint(m)) <= 1e-9) return 0.0;
+  return (j / 2 < 2) ? L / 4.0 : -L / 4.0;
+}
+
 // Independent physics: coil j of forcer k at platen coordinate s along the
 // forcer's axis (the base point x2 / y8) feels, by eqs (10)-(15) reduced to
 // the fundamental, the force b* i_j (sin, cos)(gamma_1 s + phase_j) along
-// (thrust axis, Z). Sum per forcer, then the wrench Sum r x F about the
+// (thrust axis, Z), acting at the coil's own centre (the forcer point plus
+// CoilCentreAlong(j) along the thrust axis; 0 for the triangle, whose coil
+// places this model does not know). Then the wrench Sum r x F about the
 // platen centre. Returns [Fx Fy Tz Fz Tx Ty].
 void ForcerModelWrench(const double current[8], double x, double y, ForceLayout layout, double l, double alpha,
                        double b_star, double w[6]) {
@@ -71,21 +86,22 @@ void ForcerModelWrench(const double current[8], double x, double y, ForceLayout 
   for (int k = 0; k < 4; ++k) {
     if (!f[k].used) continue;
     const double s = f[k].hx * (x + stage::kBasePointX2_m) + f[k].hy * (y + stage::kBasePointY8_m);
-    double fh = 0.0, fz = 0.0;
     for (int c = 0; c < 2; ++c) {
       const int j = 2 * k + c;
       const double psi = g1 * s + stage::kCoilPhase_rad[j];
-      fh += b_star * current[j] * std::sin(psi);
-      fz += b_star * current[j] * std::cos(psi);
+      const double fh = b_star * current[j] * std::sin(psi);
+      const double fz = b_star * current[j] * std::cos(psi);
+      const double along = layout == ForceLayout::kTriangular ? 0.0 : CoilCentreAlong(j);
+      const double px = f[k].px + along * f[k].hx, py = f[k].py + along * f[k].hy;
+      const double fx = fh * f[k].hx, fy = fh * f[k].hy;
+      // r x F with r = (px, py, 0), F = (fx, fy, fz)
+      w[0] += fx;
+      w[1] += fy;
+      w[2] += px * fy - py * fx;
+      w[3] += fz;
+      w[4] += py * fz;
+      w[5] += -px * fz;
     }
-    const double fx = fh * f[k].hx, fy = fh * f[k].hy;
-    // r x F with r = (px, py, 0), F = (fx, fy, fz)
-    w[0] += fx;
-    w[1] += fy;
-    w[2] += f[k].px * fy - f[k].py * fx;
-    w[3] += fz;
-    w[4] += f[k].py * fz;
-    w[5] += -f[k].px * fz;
   }
 }
 
@@ -99,10 +115,15 @@ Scalar FromD(double v) {
 }
 
 // Max over 1000 random (x, y) and random U of |wrench/(2b*) - U|_inf / |U|_inf.
+// coil_centres = false: the kernel as paper 000 writes it (every coil's force
+// at its forcer centre), against the same physics.
 template <typename Scalar>
-double WorstRelativeWrenchError(ForceLayout layout, std::uint32_t seed) {
+double WorstRelativeWrenchError(ForceLayout layout, std::uint32_t seed, bool coil_centres = true) {
   ForceAllocationConfig cfg = DefaultForceAllocationConfig();
   cfg.layout = layout;
+  if (layout == ForceLayout::kTriangular || !coil_centres) {
+    for (auto& o : cfg.coil_centre_offset_m) o[0] = o[1] = 0.0;
+  }
   static ForceAllocationState<Scalar> st;
   CHECK(ApplyForceAllocationConfig<Scalar>(cfg, &st) == ForceAllocationError::kOk);
   std::mt19937 rng(seed);
@@ -220,7 +241,11 @@ TEST(ForceAllocation, CoilPhasesReproduceEq19AndKernelReproducesEq23) {
   std::uniform_real_distribution<double> pos(-0.1, 0.1);
   const double g1 = 2.0 * kPi / stage::kPitch_m;
   static ForceAllocationState<float> st;
-  CHECK(ApplyForceAllocationConfig<float>(DefaultForceAllocationConfig(), &st) == ForceAllocationError::kOk);
+  // Eq (23) as printed: every coil's force at its forcer centre (the kernel
+  // with its coil-centre torque correction off).
+  ForceAllocationConfig cfg = DefaultForceAllocationConfig();
+  for (auto& o : cfg.coil_centre_offset_m) o[0] = o[1] = 0.0;
+  CHECK(ApplyForceAllocationConfig<float>(cfg, &st) == ForceAllocationError::kOk);
   for (int n = 0; n < 200; ++n) {
     const double x = pos(rng), y = pos(rng);
     const double sx = std::sin(g1 * x), cx = std::cos(g1 * x), sy = std::sin(g1 * y), cy = std::cos(g1 * y);
@@ -257,6 +282,39 @@ TEST(ForceAllocation, CoilPhasesReproduceEq19AndKernelReproducesEq23) {
       DOUBLES_EQUAL(expect, static_cast<double>(out.current_A[j]), 5e-6);
     }
   }
+}
+
+// The seed layout's coil centres, as the kernel holds them, are the ones the
+// plant's rule gives (CoilCentreAlong, from the phases).
+TEST(ForceAllocation, CoilCentresAreThoseThePhasesPlace) {
+  const ForceAllocationConfig cfg = DefaultForceAllocationConfig();
+  for (int j = 0; j < 8; ++j) {
+    const bool fx = (j / 2) % 2 == 0;
+    DOUBLES_EQUAL(fx ? CoilCentreAlong(j) : 0.0, cfg.coil_centre_offset_m[j][0], 1e-15);
+    DOUBLES_EQUAL(fx ? 0.0 : CoilCentreAlong(j), cfg.coil_centre_offset_m[j][1], 1e-15);
+  }
+}
+
+// Without the coil centres the tilt torques are off by up to a quarter of the
+// effort away from home (the forcer's vertical force moves between its coils
+// with the commutation): what the bench measured as theta_x -> theta_y
+// coupling. With them, the exact 2 x 2 solve leaves float round-off.
+TEST(ForceAllocation, ForcerCentreModelLeavesTiltTorqueCoupling) {
+  for (ForceLayout layout : {ForceLayout::kCross, ForceLayout::kSquare}) {
+    const double worst = WorstRelativeWrenchError<float>(layout, 3000u + static_cast<unsigned>(layout), false);
+    std::printf("\n  forcer-centre model, layout %d: worst |W/2b* - U|/|U| = %.3g", static_cast<int>(layout), worst);
+    CHECK(worst > 0.05);
+  }
+}
+
+TEST(ForceAllocation, CoilCentresBeyondAPitchOrNotFiniteRefused) {
+  static ForceAllocationState<float> st;
+  ForceAllocationConfig cfg = DefaultForceAllocationConfig();
+  cfg.coil_centre_offset_m[3][1] = 1.5 * cfg.pitch_m;
+  CHECK(ApplyForceAllocationConfig<float>(cfg, &st) == ForceAllocationError::kBadCoilCentres);
+  cfg = DefaultForceAllocationConfig();
+  cfg.coil_centre_offset_m[0][0] = std::nan("");
+  CHECK(ApplyForceAllocationConfig<float>(cfg, &st) == ForceAllocationError::kBadCoilCentres);
 }
 
 TEST(ForceAllocation, CurrentsProduceCommandedWrenchFloat) {

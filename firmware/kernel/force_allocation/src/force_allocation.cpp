@@ -123,6 +123,15 @@ MAGLEV_CONFIG_CODE std::uint32_t RadToTurn(double rad) {
 
 }  // namespace
 
+MAGLEV_CONFIG_CODE void SetCoilCentreOffsets(ForceAllocationConfig* c) {
+  for (int j = 0; j < io::kCoils; ++j) {
+    const double along = stage::kCoilCentreQuarterPitches[j] * (c->pitch_m / 4.0);
+    const bool fx_coil = (j / 2) % 2 == 0;  // coils 1, 2, 5, 6 thrust along x
+    c->coil_centre_offset_m[j][0] = fx_coil ? along : 0.0;
+    c->coil_centre_offset_m[j][1] = fx_coil ? 0.0 : along;
+  }
+}
+
 MAGLEV_CONFIG_CODE ForceAllocationConfig DefaultForceAllocationConfig() {
   ForceAllocationConfig c{};
   c.layout = ForceLayout::kCross;
@@ -132,6 +141,7 @@ MAGLEV_CONFIG_CODE ForceAllocationConfig DefaultForceAllocationConfig() {
   for (int j = 0; j < io::kCoils; ++j) c.coil_phase_rad[j] = stage::kCoilPhase_rad[j];
   c.base_point_x_m = stage::kBasePointX2_m;
   c.base_point_y_m = stage::kBasePointY8_m;
+  SetCoilCentreOffsets(&c);
   c.two_b_star_identified_N_per_A = stage::kTwoBStarIdentified_N_per_A;
   c.magnetization_A_per_m = 0.0;
   c.coil_effective_length_m = stage::kCoilEffectiveLength_m;
@@ -205,6 +215,13 @@ MAGLEV_CONFIG_CODE ForceAllocationError ComputeForceAllocationTables(const Force
     if (!t.forcer_used[k]) continue;
     if (!(std::fabs(numeric::dcos(c.coil_phase_rad[2 * k] - c.coil_phase_rad[2 * k + 1])) < 1e-9)) {
       return ForceAllocationError::kBadCoilPhases;
+    }
+  }
+
+  for (int j = 0; j < io::kCoils; ++j) {
+    for (int a = 0; a < 2; ++a) {
+      const double d = c.coil_centre_offset_m[j][a];
+      if (!(d >= -c.pitch_m && d <= c.pitch_m)) return ForceAllocationError::kBadCoilCentres;  // NaN too
     }
   }
 

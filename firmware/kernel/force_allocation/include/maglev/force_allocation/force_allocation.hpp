@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <type_traits>
 
 #include "maglev/io/sensor_sample.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
@@ -41,6 +42,12 @@ struct ForceAllocationConfig {
   double coil_phase_rad[io::kCoils];
   double base_point_x_m;  // x2 - x (platen frame)
   double base_point_y_m;  // y8 - y
+  // Each coil's centre from its forcer's centre, platen frame (x, y), m. A
+  // forcer's vertical force splits between its two coils by the commutation
+  // (cos^2 / sin^2 of the phase), so it acts at a point that moves with the
+  // position; eq (18) puts it at the forcer centre (paper 000 neglects the
+  // torque). AllocateCurrents cancels that torque when any offset is non-zero.
+  double coil_centre_offset_m[io::kCoils][2];
   // b*(z0): eq (20) when magnetization_A_per_m > 0, else the identified
   // 2 b*(z0) of eq (29).
   double two_b_star_identified_N_per_A;
@@ -64,6 +71,9 @@ struct ForceAllocationConfig {
 };
 
 ForceAllocationConfig DefaultForceAllocationConfig();
+// The seed layout's coil centres (stage::kCoilCentreQuarterPitches) at
+// c->pitch_m: Fx coils (forcers 1, 3) along x, Fy coils along y.
+void SetCoilCentreOffsets(ForceAllocationConfig* c);
 
 // b*(z0) of eq (20) (N/A per coil), from M0 and the coil/magnet geometry.
 double BStarFromGeometry(const ForceAllocationConfig& config);
@@ -77,6 +87,7 @@ enum class ForceAllocationError : std::uint8_t {
   kBadBStar,
   kBadLimits,
   kScalarRange,         // a B entry (or another constant) does not fit the Scalar
+  kBadCoilCentres,      // a coil centre offset not finite or beyond a pitch
 };
 
 // Double-precision tables (configuration time; kept for diagnostics/tests).
@@ -129,6 +140,14 @@ struct ForceAllocationState {
   ForceAllocationTablesDouble tables;
   CommutationTables commutation;
   Scalar b[kForcerForces][kEfforts];
+  // The coil-centre correction's arithmetic (AllocateCurrents): float for the
+  // float kernel, double for fixed point.
+  using CorrectionScalar = std::conditional_t<numeric::ScalarTraits<Scalar>::kIsFixed, double, Scalar>;
+  // Torque arms (m) of each coil's vertical force about its forcer centre:
+  // row 0 -> theta_x (+dy), row 1 -> theta_y (-dx).
+  CorrectionScalar coil_torque_arm[2][io::kCoils];
+  CorrectionScalar b_tilt_columns[2][kForcerForces];  // B's theta_x, theta_y columns
+  bool coil_centres_active;  // any offset non-zero: AllocateCurrents corrects
   Scalar peak_current_A;
   Scalar half_peak_current_A;
   Scalar gravity_effort_A;  // (m + payload) g / (2 b*)

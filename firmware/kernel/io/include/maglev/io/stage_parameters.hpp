@@ -60,6 +60,15 @@ inline constexpr double kCoilPhase_rad[8] = {0.0, -kPi / 2, kPi / 2, 0.0,
 // (ours) base-point offsets of x2 and y8 from the platen centre.
 inline constexpr double kBasePointX2_m = 0.0;
 inline constexpr double kBasePointY8_m = 0.0;
+// (ours) Each coil's centre along its array axis (x for the Fx coils 1, 2, 5, 6;
+// y for the Fy coils 3, 4, 7, 8), from its forcer's centre, in quarter pitches:
+// a coil sits at 0 when its phase allows it, else at +L/4 (pairs 1&2, 3&4) or
+// -L/4 (5&6, 7&8), so the layout is symmetric under a 180 deg turn and a
+// pair's four sides are L/4 apart (Sec. III; the plant builds its coil sides
+// from these phases by that rule, hil/plant BuildArraySides). A forcer's
+// vertical force therefore acts between its coils' centres, weighted by the
+// commutation (Fig. 5(b)): the force allocation takes it into account.
+inline constexpr int kCoilCentreQuarterPitches[8] = {0, 1, 1, 0, -1, 0, 0, -1};
 
 // --- Servo rate -------------------------------------------------------------
 // (ours) 2.5 kHz: theta_z crosses over at 81.3 Hz (fs/fc = 31) and the

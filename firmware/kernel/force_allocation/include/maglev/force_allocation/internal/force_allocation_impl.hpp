@@ -3,6 +3,7 @@
 
 #include "maglev/io/code_placement.hpp"
 #include <cstdint>
+#include <type_traits>
 
 #include "maglev/numeric/fixed.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
@@ -41,6 +42,25 @@ MAGLEV_CONFIG_CODE ForceAllocationError ApplyForceAllocationConfig(const ForceAl
       if (!fits(v)) return ForceAllocationError::kScalarRange;
       s.b[r][c] = Traits::from_double(v);
     }
+  s.coil_centres_active = false;
+  using C = typename ForceAllocationState<Scalar>::CorrectionScalar;
+  for (int j = 0; j < io::kCoils; ++j) {
+    const double dx = config.coil_centre_offset_m[j][0], dy = config.coil_centre_offset_m[j][1];
+    s.coil_torque_arm[0][j] = static_cast<C>(dy);   // tau_x = +dy F_z
+    s.coil_torque_arm[1][j] = static_cast<C>(-dx);  // tau_y = -dx F_z
+    s.coil_centres_active = s.coil_centres_active || dx != 0.0 || dy != 0.0;
+  }
+  // B's theta_x / theta_y columns as the correction reads them: the Scalar
+  // value itself for float, the exact table for Q7.24.
+  for (int r = 0; r < kForcerForces; ++r) {
+    for (int col = 0; col < 2; ++col) {
+      if constexpr (Traits::kIsFixed) {
+        s.b_tilt_columns[col][r] = s.tables.b[r][4 + col];
+      } else {
+        s.b_tilt_columns[col][r] = s.b[r][4 + col];
+      }
+    }
+  }
   s.two_b_star_N_per_A = s.tables.two_b_star_N_per_A;
   const double gravity_A = (config.mass_kg + config.payload_kg) * config.gravity_m_per_s2 / s.two_b_star_N_per_A;
   if (!fits(config.peak_current_A) || !fits(gravity_A) || !fits(1.0 / s.two_b_star_N_per_A)) {
@@ -85,22 +105,89 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
   // cos(p +- 1/4) = -+sin p, exactly the values the table gives there.
   std::uint32_t phase[kForcers];
   ForcerPhases(x_pm, y_pm, state.commutation, phase);
-  // Work with half-currents h = i / 2 until the limit is applied: doubles
-  // the Q7.24 headroom (|h| < 128 A), so efforts up to ~20 A per axis never
-  // saturate an intermediate (which would bend the wrench direction).
-  Scalar half_i[io::kCoils];
-  Scalar max_abs = Traits::zero();
+  // Per coil (sin psi_j, cos psi_j): one table lookup per forcer.
+  Scalar sin_psi[io::kCoils], cos_psi[io::kCoils];
 #pragma GCC unroll 4
   for (int k = 0; k < kForcers; ++k) {
     const auto sc = Traits::sin_cos(phase[k]);
     const bool leads = state.commutation.second_coil_leads[k];
-    const Scalar s2 = leads ? sc.cos : -sc.cos;
-    const Scalar c2 = leads ? -sc.sin : sc.sin;
-    half_i[2 * k] = sc.sin * g[2 * k] + sc.cos * g[2 * k + 1];
-    half_i[2 * k + 1] = s2 * g[2 * k] + c2 * g[2 * k + 1];
-    max_abs = detail_fa::MaxScalar(max_abs, detail_fa::AbsScalar(half_i[2 * k]));
-    max_abs = detail_fa::MaxScalar(max_abs, detail_fa::AbsScalar(half_i[2 * k + 1]));
+    sin_psi[2 * k] = sc.sin;
+    cos_psi[2 * k] = sc.cos;
+    sin_psi[2 * k + 1] = leads ? sc.cos : -sc.cos;
+    cos_psi[2 * k + 1] = leads ? -sc.sin : sc.sin;
   }
+  // Work with half-currents h = i / 2 until the limit is applied: doubles
+  // the Q7.24 headroom (|h| < 128 A), so efforts up to ~20 A per axis never
+  // saturate an intermediate (which would bend the wrench direction).
+  Scalar half_i[io::kCoils];
+  const auto half_currents = [&]() {
+#pragma GCC unroll 8
+    for (int j = 0; j < io::kCoils; ++j) {
+      const int f = j & ~1;
+      half_i[j] = sin_psi[j] * g[f] + cos_psi[j] * g[f + 1];
+    }
+  };
+  half_currents();
+  if (state.coil_centres_active) {
+    // Coil j's vertical force (units of 2 b*) is h_j cos psi_j, acting at its
+    // own centre, not at the forcer centre eq (18) assumes: it adds a torque
+    // p = Q G to theta_x / theta_y. Per forcer (coils a, b a quarter turn
+    // apart: s_b c_b = -s c, c_b^2 = s^2), its share is
+    //   (arm_a - arm_b) s c G_h + (arm_a c^2 + arm_b s^2) G_z.
+    // Solve A G + Q G = U on G = B V exactly: G = G0 - B45 p with
+    // (I + Q B45) p = Q G0 (B45: B's theta_x / theta_y columns), a 2 x 2
+    // system. One reciprocal, no iteration. p is formed in float for the
+    // float kernel and in double for Q7.24 (a fixed-point product costs
+    // ~10 M7 instructions, a double one ~2; same bits on host and M7 either
+    // way), then G is corrected in Scalar.
+    using C = std::conditional_t<Traits::kIsFixed, double, Scalar>;
+    const auto to_c = [](Scalar v) -> C {
+      if constexpr (Traits::kIsFixed) {
+        return Traits::to_double(v);
+      } else {
+        return v;
+      }
+    };
+    C qh[2][kForcers], qz[2][kForcers];
+#pragma GCC unroll 4
+    for (int k = 0; k < kForcers; ++k) {
+      const C s = to_c(sin_psi[2 * k]), c = to_c(cos_psi[2 * k]);
+      const C sc = s * c, cc = c * c, ss = s * s;
+      for (int row = 0; row < 2; ++row) {
+        const C arm_a = state.coil_torque_arm[row][2 * k], arm_b = state.coil_torque_arm[row][2 * k + 1];
+        qh[row][k] = (arm_a - arm_b) * sc;
+        qz[row][k] = arm_a * cc + arm_b * ss;
+      }
+    }
+    const auto torque = [&](int row, const C* column) {
+      C acc = C(0);
+#pragma GCC unroll 4
+      for (int k = 0; k < kForcers; ++k) acc += qh[row][k] * column[2 * k] + qz[row][k] * column[2 * k + 1];
+      return acc;
+    };
+    C gc[kForcerForces];
+    for (int r = 0; r < kForcerForces; ++r) gc[r] = to_c(g[r]);
+    const C p0x = torque(0, gc), p0y = torque(1, gc);
+    const C a = C(1) + torque(0, state.b_tilt_columns[0]), d01 = torque(0, state.b_tilt_columns[1]);
+    const C d10 = torque(1, state.b_tilt_columns[0]), d = C(1) + torque(1, state.b_tilt_columns[1]);
+    const C inv_det = C(1) / (a * d - d01 * d10);
+    C pxc = (d * p0x - d01 * p0y) * inv_det;
+    C pyc = (a * p0y - d10 * p0x) * inv_det;
+    Scalar px, py;
+    if constexpr (Traits::kIsFixed) {
+      px = Traits::from_double(pxc);
+      py = Traits::from_double(pyc);
+    } else {
+      px = pxc;
+      py = pyc;
+    }
+#pragma GCC unroll 8
+    for (int r = 0; r < kForcerForces; ++r) g[r] = g[r] - state.b[r][4] * px - state.b[r][5] * py;
+    half_currents();
+  }
+  Scalar max_abs = Traits::zero();
+#pragma GCC unroll 8
+  for (int j = 0; j < io::kCoils; ++j) max_abs = detail_fa::MaxScalar(max_abs, detail_fa::AbsScalar(half_i[j]));
   // One common factor k <= 1 keeps the wrench direction: saturation never
   // becomes a cross-axis force. k = (peak/2) / max(max|h|, peak/2) is exactly
   // 1 when nothing is limited (x / x == 1 in float and in Fixed).
