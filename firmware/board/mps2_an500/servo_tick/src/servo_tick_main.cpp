@@ -173,7 +173,7 @@ struct Board {
   std::uint32_t adc_dma_rx[2][4]{};
   d::Stm32OutputPin<Bus> amp_enable_pin{bus, pins::kAmpEnable};
   b::AmplifierBoardDrivers<Bus> parts{bus, adc_dma_rx};  // main.cpp's g_board
-  b::AmplifierBoardSensors<typename b::AmplifierBoardDrivers<Bus>::Encoder>& board_sensors = parts.sensors;
+  decltype(b::AmplifierBoardDrivers<Bus>::sensors)& board_sensors = parts.sensors;
   d::AmplifierEnable amp{amp_enable_pin};
   b::AmplifierBoardActuators board_actuators{parts.dac, amp};
   b::ServoKernel controller;
