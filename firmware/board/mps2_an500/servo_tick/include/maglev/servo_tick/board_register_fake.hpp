@@ -98,6 +98,7 @@ class BoardRegisterFake final : public drivers::dma::WordSource {
       ++dac_words_;
       return;
     }
+    if ((a & ~r::Addr{0x3FF}) == r::spi::kSpi1) return;  // SPI1 set-up: dropped
     if (a == r::gpio::port('E') + r::gpio::kBsrr) {
       if ((v & (1u << (15 + 16))) != 0u) select_adc(0);  // ADC0 CS low
       if ((v & (1u << (10 + 16))) != 0u) select_adc(1);  // ADC1 CS low
