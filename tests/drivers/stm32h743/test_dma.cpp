@@ -70,6 +70,16 @@ TEST(DmaStream, RefusesWhileEnabledAndBadArguments) {
   LONGS_EQUAL(0, bus.log_size());  // nothing touched
 }
 
+namespace {
+// What the hardware does at the end of a transfer (or on an error): EN
+// clears, the stream's flags are set.
+void hardware_ends(Bus& bus, unsigned stream, std::uint32_t hisr) {
+  const r::Addr cr = r::dma::stream(r::dma::kDma1, stream) + r::dma::kSxCr;
+  bus.preset(cr, bus.peek(cr) & ~r::dma::kCrEn);
+  bus.preset(r::dma::kDma1 + r::dma::kHisr, hisr);
+}
+}  // namespace
+
 TEST(DmaStream, CompletionAndErrorReportedOnceFromTheirOwnStreamBits) {
   Bus bus;
   dma::Stream<Bus> s(bus, {r::dma::kDma1, 5, r::dma::kReqSpi3Rx, true});  // HISR bits 11..6
@@ -78,16 +88,16 @@ TEST(DmaStream, CompletionAndErrorReportedOnceFromTheirOwnStreamBits) {
   bus.preset(r::dma::kDma1 + r::dma::kLisr, 0xFFFFFFFFu);          // other streams' flags: ignored
   bus.preset(r::dma::kDma1 + r::dma::kHisr, r::dma::kFlagTc);      // stream 4's TCIF: not ours
   CHECK(s.poll() == dma::Status::kBusy);
-  bus.preset(r::dma::kDma1 + r::dma::kHisr, r::dma::kFlagTc << 6);  // stream 5 TCIF
+  hardware_ends(bus, 5, r::dma::kFlagTc << 6);  // stream 5 TCIF
   CHECK(s.poll() == dma::Status::kComplete);
   UNSIGNED_LONGS_EQUAL(0x3Du << 6, bus.peek(r::dma::kDma1 + r::dma::kHifcr));
   CHECK(s.poll() == dma::Status::kIdle);  // reported once
   // TEIF (even together with TCIF) is an error.
   CHECK(s.start_peripheral_to_memory(0x40003C30u, 0x30000100u, 4) == dma::Status::kBusy);
-  bus.preset(r::dma::kDma1 + r::dma::kHisr, (r::dma::kFlagTc | r::dma::kFlagTe) << 6);
+  hardware_ends(bus, 5, (r::dma::kFlagTc | r::dma::kFlagTe) << 6);
   CHECK(s.poll() == dma::Status::kError);
   CHECK(s.start_peripheral_to_memory(0x40003C30u, 0x30000100u, 4) == dma::Status::kBusy);
-  bus.preset(r::dma::kDma1 + r::dma::kHisr, r::dma::kFlagDme << 6);
+  hardware_ends(bus, 5, r::dma::kFlagDme << 6);
   CHECK(s.poll() == dma::Status::kError);
 }
 
