@@ -227,8 +227,7 @@ inline constexpr std::uint32_t kCr1Ssi = bit(12);
 inline constexpr Addr kCr2 = 0x04;     // TSIZE[15:0]
 inline constexpr Addr kCfg1 = 0x08;    // DSIZE[4:0] = bits - 1, FTHLV[8:5], MBR[30:28]
 inline constexpr unsigned kCfg1MbrShift = 28;
-inline constexpr std::uint32_t kCfg1Rxdmaen = bit(14);  // §50.11.3: RX-packet DMA request
-inline constexpr std::uint32_t kCfg1Txdmaen = bit(15);  // §50.11.3: TX-packet DMA request
+inline constexpr std::uint32_t kCfg1Rxdmaen = bit(14);  // §50.11.3: RX-packet DMA request (TXDMAEN is bit 15)
 inline constexpr Addr kCfg2 = 0x0C;
 // COMM[18:17] (§50.11.4): 0 full duplex, 1 simplex transmitter, 2 simplex
 // receiver (the master clocks TSIZE frames after CSTART with no TXDR writes).
@@ -262,7 +261,7 @@ inline constexpr Addr kDma2 = 0x40020400;
 // 0x10 + 0x18 n: SxCR, SxNDTR, SxPAR, SxM0AR, SxM1AR, SxFCR.
 inline constexpr Addr kLisr = 0x00, kHisr = 0x04, kLifcr = 0x08, kHifcr = 0x0C;
 constexpr Addr stream(Addr dma, unsigned n) { return dma + 0x10 + 0x18 * n; }  // SxCR at +0
-inline constexpr Addr kSxCr = 0x00, kSxNdtr = 0x04, kSxPar = 0x08, kSxM0ar = 0x0C, kSxM1ar = 0x10, kSxFcr = 0x14;
+inline constexpr Addr kSxCr = 0x00, kSxNdtr = 0x04, kSxPar = 0x08, kSxM0ar = 0x0C, kSxFcr = 0x14;
 // Status/clear flags of one stream, before the shift below: FEIF 0, DMEIF 2,
 // TEIF 3, HTIF 4, TCIF 5.
 inline constexpr std::uint32_t kFlagFe = bit(0);
@@ -281,23 +280,20 @@ inline constexpr std::uint32_t kCrDmeie = bit(1);
 inline constexpr std::uint32_t kCrTeie = bit(2);
 inline constexpr std::uint32_t kCrTcie = bit(4);
 inline constexpr unsigned kCrDirShift = 6;   // DIR[7:6]: 0 peripheral->memory, 1 memory->peripheral
-inline constexpr std::uint32_t kDirPeripheralToMemory = 0, kDirMemoryToPeripheral = 1;
+inline constexpr std::uint32_t kDirPeripheralToMemory = 0;
 inline constexpr std::uint32_t kCrMinc = bit(10);
 inline constexpr unsigned kCrPsizeShift = 11;  // PSIZE[12:11] / MSIZE[14:13]: 0 byte, 1 half-word, 2 word
 inline constexpr unsigned kCrMsizeShift = 13;
 inline constexpr std::uint32_t kSizeWord = 2;
 inline constexpr unsigned kCrPlShift = 16;     // PL[17:16]: 3 = very high
-// SxFCR (§15.5.16): DMDIS 2 = 0 -> direct mode (no FIFO; PSIZE = MSIZE).
-inline constexpr std::uint32_t kFcrDmdis = bit(2);
-inline constexpr std::uint32_t kFcrFeie = bit(7);
+// SxFCR (§15.5.16): 0 = DMDIS clear -> direct mode (no FIFO; PSIZE = MSIZE).
 // DMAMUX1 (§17.6.1): channel c's CxCR at +4 c, DMAREQ_ID[6:0]; channels 0..7
 // serve DMA1 streams 0..7, channels 8..15 DMA2 streams 0..7 (§17.3.2).
 inline constexpr Addr kDmamux1 = 0x40020800;
 constexpr Addr dmamux_channel(Addr dma, unsigned n) { return kDmamux1 + 4u * ((dma == kDma2 ? 8u : 0u) + n); }
 // DMAMUX1 request inputs (§17.3.2 table 121).
-inline constexpr std::uint32_t kReqSpi1Rx = 37, kReqSpi1Tx = 38;
-inline constexpr std::uint32_t kReqSpi2Rx = 39, kReqSpi2Tx = 40;
-inline constexpr std::uint32_t kReqSpi3Rx = 61, kReqSpi3Tx = 62;
+inline constexpr std::uint32_t kReqSpi2Rx = 39;
+inline constexpr std::uint32_t kReqSpi3Rx = 61;
 }  // namespace dma
 
 // --- FDCAN, RM0433 §56.5 ------------------------------------------------------------------
