@@ -245,6 +245,12 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     R.metrics["calibration_coupling_before"] = static_cast<double>(fin.calibration_coupling_before);
     R.metrics["calibration_coupling_after"] = static_cast<double>(fin.calibration_coupling_after);
     R.metrics["calibration_inconsistency"] = static_cast<double>(fin.calibration_inconsistency);
+    // The correction the kernel holds at the end (row-major, Axis order):
+    // what a user checks before saving it.
+    for (int i = 0; i < kernel::kCouplingMatrixSize; ++i) {
+      R.metrics["coupling_correction_" + std::to_string(i / kernel::kAxisCount) + std::to_string(i % kernel::kAxisCount)] =
+          static_cast<double>(R.coupling.matrix[i]);
+    }
   }
   compute_metrics(sc, MetricInputs{actions, tr, excitations, levitate_t, ready_t, sc.duration_s(), rate_Hz},
                   &R.metrics, &R.warnings);

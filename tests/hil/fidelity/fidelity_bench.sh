@@ -30,6 +30,13 @@ run seed3a --error-seed 3
 run seed3b --error-seed 3
 run seed4 --error-seed 4
 run nominal --plant nominal
+# The issue's 2-5 mm CoM band: error seed 5 lifts to theta_x -230 urad, beyond
+# the +-200 urad reference range; TiltLock ramps the reference in, so the
+# 0.1 urad steps are accepted (they were refused as out of range before).
+"$HIL" run "$DIR/../../../hil/scenarios/theta_x_steps.scenario" --plant as-built --error-seed 5 --out "$OUT/level" \
+  --no-plots --quiet > "$OUT/level.log" 2>&1 || { cat "$OUT/level.log"; fail "run level"; }
+[ "$(grep -c 'step theta_x 0.1urad  -> accepted' "$OUT/level/commands.txt")" = 2 ] ||
+  { cat "$OUT/level/commands.txt"; fail "as built, CoM band 2-5 mm: theta_x steps not accepted"; }
 "$HIL" run "$DIR/../bench/short.scenario" --plant ideal --out "$OUT/ideal" --no-plots --quiet > "$OUT/ideal.log" 2>&1 ||
   { cat "$OUT/ideal.log"; fail "run ideal"; }
 "$PY" - "$OUT" <<'PYEOF' || exit 1
@@ -50,6 +57,13 @@ assert m["seed3a"]["plant_model"] == 3 and m["nominal"]["plant_model"] == 2
 assert not errors(m["nominal"]), "nominal recorded drawn errors"
 assert m["ideal"]["plant_model"] == 1 and not errors(m["ideal"])
 assert m["ideal"]["completed"] == 1
+import csv
+rows = list(csv.DictReader(open(f"{out}/level/trace.csv")))
+tiltlock = [float(r["theta_x_rad"]) for r in rows if r["state"] == "5"]
+ready = [float(r["theta_x_ref_rad"]) for r in rows if r["state"] == "6"]
+assert tiltlock and tiltlock[0] < -210e-6, f"error seed 5 captured theta_x {tiltlock[:1]}: not beyond the range"
+assert ready and all(-200.0001e-6 <= v <= 200.0001e-6 for v in ready), "a Ready theta_x reference outside +-200 urad"
+print(f"levelling: captured theta_x {tiltlock[0]*1e6:.1f} urad, Ready reference {ready[0]*1e6:.1f} urad")
 # As built couples: theta_y p-p during the move well above its rest p-p and
 # above the nominal stage's (thrust below the raised CoM, roll, b* spread).
 for n in ("seed3a", "seed4"):

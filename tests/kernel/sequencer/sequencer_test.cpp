@@ -189,6 +189,20 @@ TEST(Sequencer, TiltLockTimeout) {
   CHECK(r.seq.output().last_reason == TransitionReason::kTiltLockTimeout);
 }
 
+// A tilt reference captured beyond the reference range (the controller ramps
+// it in): TiltLock waits for it however small the errors are, then settles
+// in tilt_settle_time_s.
+TEST(Sequencer, TiltLockWaitsForTheTiltReferencesInRange) {
+  Rig r;
+  r.seq.command(SequencerCommand::kLevitate, false);
+  r.in.homing_done = true;
+  CHECK(r.run_until(SequencerState::kTiltLock, 30000, true) > 0);
+  r.in.tilt_references_in_range = false;
+  LONGS_EQUAL(-1, r.run_until(SequencerState::kReady, 1000, true));
+  r.in.tilt_references_in_range = true;
+  LONGS_EQUAL(250, r.run_until(SequencerState::kReady, 1000, true));
+}
+
 TEST(Sequencer, LandDescendsThenRampsOutThenTouchdown) {
   Rig r;
   r.go_ready();
@@ -337,4 +351,9 @@ TEST(Sequencer, ConfigValidation) {
   bad = c;
   bad.tilt_settle_error_rad = 0.0f / 0.0f;
   CHECK(validate(bad, kRate) == SequencerConfigError::kBadThreshold);
+  bad = c;
+  bad.tilt_reference_rate_rad_per_s = 0.0f;
+  CHECK(validate(bad, kRate) == SequencerConfigError::kBadRampRate);
+  bad.tilt_reference_rate_rad_per_s = 1.0f;  // 1 rad/s: no levelling ramp
+  CHECK(validate(bad, kRate) == SequencerConfigError::kBadRampRate);
 }

@@ -241,6 +241,13 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
   supervisor_.configure(c.supervisor, c.servo_rate_Hz);
   homing_needed_ticks_ = static_cast<std::uint32_t>(c.sequencer.homing_time_s * c.servo_rate_Hz) + 1u;
   coupling_ramp_ticks_ = static_cast<std::uint32_t>(std::lround(kCouplingRamp_s * c.servo_rate_Hz));
+  for (int k = 0; k < 2; ++k) {
+    tilt_min_pico_[k] = numeric::si_to_pico(static_cast<double>(c.references.position_min[4 + k]));
+    tilt_max_pico_[k] = numeric::si_to_pico(static_cast<double>(c.references.position_max[4 + k]));
+  }
+  const std::int64_t level_step = numeric::si_to_pico(static_cast<double>(c.sequencer.tilt_reference_rate_rad_per_s) /
+                                                      static_cast<double>(c.servo_rate_Hz));
+  tilt_level_step_pico_ = level_step > 0 ? level_step : 1;
   status_.last_config_error = ConfigError::kOk;
   return ConfigError::kOk;
 }
@@ -699,6 +706,7 @@ void Controller<Scalar>::sequence(Tick& t) {
   qi.z_valid = t.sup->z_sensors_valid && (t.m.valid_axes & kPoseValidZ) != 0;
   qi.z_m = pico_to_si(measured_.pico[3]);
   for (int a = 0; a < kAxisCount; ++a) qi.abs_error[a] = t.abs_err[a];
+  qi.tilt_references_in_range = tilt_references_in_range_;
   qi.fault_reaction = t.sup->reaction;
   t.so = &sequencer_.step(qi);
 }
@@ -763,6 +771,15 @@ void Controller<Scalar>::advance_references(Tick& t) {
       reference_.pico[a] = measured_.pico[a];  // bumpless: close on the present position
     } else if (a == axis_index(Axis::kZ) && !so.motion_allowed) {
       reference_.pico[a] = numeric::si_to_pico(static_cast<double>(so.z_reference_m));
+    } else if (a >= axis_index(Axis::kThetaX) && so.state == SequencerState::kTiltLock) {
+      // The tilt loops closed on the tilt they found. A CoM offset c tilts
+      // the lifting platen by m g c / k_t (57.5 urad/mm on the seed stage), so
+      // a few mm put it beyond the reference range, where every tilt command
+      // would be refused: ramp such a reference to the range's nearest end.
+      const int k = a - axis_index(Axis::kThetaX);
+      std::int64_t& ref = reference_.pico[a];
+      if (ref > tilt_max_pico_[k]) ref = (ref - tilt_max_pico_[k] > tilt_level_step_pico_) ? ref - tilt_level_step_pico_ : tilt_max_pico_[k];
+      if (ref < tilt_min_pico_[k]) ref = (tilt_min_pico_[k] - ref > tilt_level_step_pico_) ? ref + tilt_level_step_pico_ : tilt_min_pico_[k];
     }
     profile_accel_[a] = acc_now;
     // u_ff = (m or I) a / (2 b*) in double (a in SI, up to 1.5e6 um/s^2 would
@@ -770,6 +787,11 @@ void Controller<Scalar>::advance_references(Tick& t) {
     t.accel_ff[a] = config_.acceleration_feedforward ? Traits::from_double(acc_now * ap.inertia_over_two_b_star[a])
                                                      : Traits::zero();
   }
+  // Only TiltLock reads it (next tick); false elsewhere, so the first TiltLock
+  // tick does not count as in range before it was checked.
+  const std::int64_t tx = reference_.pico[axis_index(Axis::kThetaX)], ty = reference_.pico[axis_index(Axis::kThetaY)];
+  tilt_references_in_range_ = so.state == SequencerState::kTiltLock && tx >= tilt_min_pico_[0] &&
+                              tx <= tilt_max_pico_[0] && ty >= tilt_min_pico_[1] && ty <= tilt_max_pico_[1];
 }
 
 // 5b. excitation d (constant work: every harmonic slot runs).

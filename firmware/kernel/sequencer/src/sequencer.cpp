@@ -41,6 +41,7 @@ MAGLEV_CONFIG_CODE SequencerConfigError validate(const SequencerConfig& c, float
   if (!positive(c.lift_ramp_rate_per_s) || !positive(c.landing_ff_ramp_rate_per_s) ||
       !positive(c.z_reference_rate_m_per_s) || !positive(c.landing_z_rate_m_per_s) ||
       c.z_reference_rate_m_per_s > 1e-2f || c.landing_z_rate_m_per_s > 1e-2f ||
+      !positive(c.tilt_reference_rate_rad_per_s) || c.tilt_reference_rate_rad_per_s > 0.1f ||
       c.lift_ramp_rate_per_s > 10.0f || c.landing_ff_ramp_rate_per_s > 10.0f) {
     return SequencerConfigError::kBadRampRate;
   }
@@ -252,7 +253,7 @@ const SequencerOutput& Sequencer::step(const SequencerInputs& in) {
     }
     case S::kTiltLock: {
       const bool inside = in.abs_error[4] <= config_.tilt_settle_error_rad &&
-                          in.abs_error[5] <= config_.tilt_settle_error_rad;
+                          in.abs_error[5] <= config_.tilt_settle_error_rad && in.tilt_references_in_range;
       settle_ticks_ = inside ? settle_ticks_ + 1 : 0;
       if (settle_ticks_ >= ticks_.tilt_settle) {
         enter(S::kReady, TransitionReason::kTiltSettled);

@@ -437,6 +437,13 @@ class Controller {
   std::uint8_t stage_profile_error_ = 0;  // see set_stage_profile_error()
   std::uint32_t homing_ticks_ = 0;
   std::uint32_t homing_needed_ticks_ = 1;
+  // TiltLock levelling (apply_config): the theta_x / theta_y reference range
+  // and the ramp per tick, in pico; and whether both references are inside
+  // it (advance_references -> next tick's sequencer inputs).
+  std::int64_t tilt_min_pico_[2] = {};
+  std::int64_t tilt_max_pico_[2] = {};
+  std::int64_t tilt_level_step_pico_ = 1;
+  bool tilt_references_in_range_ = false;
   HallSolve hall_solve_{};          // homing's Hall solve, one step per tick
   Pose64 hall_pose_unhomed_{};      // the unhomed pose of the solve's sample
   ControllerStatus status_{};

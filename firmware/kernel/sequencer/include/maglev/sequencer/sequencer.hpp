@@ -132,6 +132,10 @@ struct SequencerConfig {
   float zlock_timeout_s = 3.0f;
   float tilt_settle_error_rad = 20e-6f;
   float tilt_settle_time_s = 0.1f;
+  // TiltLock: a tilt reference captured outside the reference range (a CoM
+  // offset tilts the platen while it lifts with the tilts open) moves to the
+  // range's nearest end at this rate before Ready (the controller ramps it).
+  float tilt_reference_rate_rad_per_s = 1e-3f;
   float tiltlock_timeout_s = 2.0f;
   float landing_z_rate_m_per_s = 60e-6f;      // descent of the z reference
   float landing_ff_ramp_rate_per_s = 1.0f;   // feed-forward fraction ramp-out
@@ -149,6 +153,9 @@ struct SequencerInputs {
   float z_m = 0.0f;            // measured height above rest
   // |reference - measured| per axis in the Axis order, SI (m or rad).
   float abs_error[kSequencedAxes] = {};
+  // theta_x and theta_y references inside the reference range (last tick's):
+  // TiltLock waits for it.
+  bool tilt_references_in_range = true;
   FaultReaction fault_reaction = FaultReaction::kNone;
 };
 
