@@ -6,6 +6,7 @@
 // and that anything but one complete read per tick is sensor loss.
 #include <CppUTest/TestHarness.h>
 
+#include "maglev/board/stm32h743/amplifier_board_io.hpp"
 #include "maglev/drivers/ad7606.hpp"
 #include "maglev/drivers/ad7606_model.hpp"
 #include "maglev/drivers/fake_bus.hpp"
@@ -37,6 +38,12 @@ struct Chips final : dma::WordSource {
 void release(void* model, bool high) {
   if (high) static_cast<ad7606::DeviceModel*>(model)->chip_select_released();
 }
+
+struct FixedEncoder {
+  std::uint32_t count = 0;
+  std::uint32_t update() { return count; }
+  bool signal_lost() const { return false; }
+};
 
 }  // namespace
 
@@ -231,4 +238,26 @@ TEST(Ad7606Dma, PolledTransferRefusedWhileADmaFrameIsOpen) {
   CHECK(spi.start(SpiTransfer{1, 32, rx, rx, 4}) == BusStatus::kBadArgument);  // receive-only
   spi.cancel();
   CHECK(spi.complete() == BusStatus::kNotStarted);
+}
+
+// The board's sensor source over the DMA reader: a completed pair is a good
+// sample; no completed pair is kAdcFault and read() false (the servo loop
+// counts a sensor fault), never the previous sample's ADC values.
+TEST(Ad7606Dma, BoardSensorSourceReportsLossAsAdcFault) {
+  FixedEncoder e0, e1, e2;
+  maglev::board::stm32h743::AmplifierBoardSensors<FixedEncoder, ad7606::DmaReader> sensors{adc, e0, e1, e2};
+  CHECK(adc.begin() == ad7606::Status::kOk);
+  while (adc.advance() == ad7606::DmaReader::Step::kNextDevice) {
+  }
+  maglev::io::SensorSample s{};
+  CHECK_TRUE(sensors.read(s));
+  LONGS_EQUAL(100, s.displacement_adc[0]);
+  LONGS_EQUAL(400, s.hall_adc[0]);           // ADC0 V4
+  LONGS_EQUAL(-8000, s.coil_current_adc[7]);  // ADC1 V8
+  UNSIGNED_LONGS_EQUAL(0u, s.status_flags);
+  // Next tick without a new DMA read (e.g. the stream never completed):
+  maglev::io::SensorSample next{};
+  CHECK_FALSE(sensors.read(next));
+  CHECK(next.status_flags & maglev::io::kAdcFault);
+  LONGS_EQUAL(0, next.displacement_adc[0]);  // nothing copied from the old buffer
 }
