@@ -4,7 +4,10 @@
 //
 //   production (MAGLEV_BOARD_HIL undefined): sensors = AD7606 pair + three
 //     quadrature counters, actuators = AD5764 chain + amplifier enable
-//     (amplifier_board_io.hpp); tick = AD7606 BUSY falling edge (EXTI11).
+//     (amplifier_board_io.hpp); tick = the AD7606 pair's words in D2 SRAM:
+//     BUSY falling edge (EXTI11) starts the SPI3 RX DMA read, the DMA1
+//     stream 0 interrupt chains ADC0 -> ADC1 and then runs the tick
+//     (drivers/ad7606_adc/README.md "DMA schedule").
 //   HIL (MAGLEV_BOARD_HIL=1): sensors/actuators = app::CanSensorSource /
 //     app::CanActuatorSink over FDCAN1 (sensor frame in, actuator frame out);
 //     tick = TIM2 update at 2.5 kHz (the time master). Everything else -- the
@@ -12,8 +15,9 @@
 //     watchdog policy) -- is the same code.
 //
 // Priorities (4 implemented bits, lower = more urgent):
-//   0  servo tick: EXTI15_10 (production) / TIM2 (HIL), and TIM3 (16-bit
-//      encoder extension, production): the same level, never nested.
+//   0  servo tick: DMA1_Stream0 (production; EXTI15_10 starts its read) /
+//      TIM2 (HIL), and TIM3 (16-bit encoder extension, production): the
+//      same level, never nested.
 //   1  SysTick 1 kHz: missed-tick deadline check (safe outputs).
 //   thread mode: app::Application::service -- Modbus RTU (USART2/RS-485),
 //      CAN FD telemetry (controller_status 250 Hz, heartbeat 10 Hz), board
@@ -59,6 +63,7 @@ void board_main();
 void HardFault_Handler();
 void SysTick_Handler();
 void EXTI15_10_IRQHandler();
+void DMA1_Stream0_IRQHandler();
 void TIM3_IRQHandler();
 void TIM2_IRQHandler();
 // Linker script (linker/stm32h743.ld): the two configuration sectors.
@@ -108,8 +113,8 @@ d::Stm32OutputPin<Bus> g_amp_enable_pin{g_bus, pins::kAmpEnable};
 d::Stm32OutputPin<Bus> g_led{g_bus, pins::kLed};
 
 #if !MAGLEV_BOARD_HIL
-// --- DMA buffers in D2 SRAM (MPU: non-cacheable): the AD7606 raw words. The
-// polled SPI read fills it today; the SPI3 RX DMA stream fills it unchanged. ---
+// --- DMA buffers in D2 SRAM (MPU: non-cacheable): the AD7606 raw words, written
+// by the SPI3 RX DMA stream (DMA1 cannot reach DTCM). ---
 [[gnu::section(".dma_bss")]] alignas(32) std::uint32_t g_adc_dma_rx[2][4];
 
 // The parts (SPI1 DAC chain, SPI3 ADC pair, encoder counters): one composition
@@ -215,6 +220,7 @@ void nvic_enable(int irq, std::uint32_t priority) {
 
 void enable_peripheral_clocks() {
   r::modify32(g_bus, r::rcc::kBase + r::rcc::kAhb4enr, 0u, 0x7Fu | r::bit(28));  // GPIOA..G, BKPRAM
+  r::modify32(g_bus, r::rcc::kBase + r::rcc::kAhb1enr, 0u, r::bit(0));            // DMA1 (+ DMAMUX1)
   r::modify32(g_bus, r::rcc::kBase + r::rcc::kApb1lenr, 0u,
               r::bit(0) | r::bit(1) | r::bit(3) | r::bit(15) | r::bit(17));  // TIM2/3/5, SPI3, USART2
   r::modify32(g_bus, r::rcc::kBase + r::rcc::kApb1henr, 0u, r::bit(8));      // FDCAN
@@ -356,6 +362,7 @@ extern "C" void board_main() {
 #else
   configure_busy_exti();
   nvic_enable(r::irq::kExti15_10, 0);
+  nvic_enable(r::irq::kDma1Stream0, 0);
   nvic_enable(r::irq::kTim3, 0);
   // The servo clock: TIM1 CH1 PWM on CONVST (APB2 timer clock 240 MHz).
   d::start_convst_timer(g_bus, r::tim::kTim1, d::convst_timing(b::kApbTimer_Hz, g_servo_rate_Hz, 1000));
@@ -405,10 +412,19 @@ extern "C" {
   if (g_servo != nullptr) g_servo->on_tick();
 }
 #else
-// Servo tick: AD7606 BUSY fell -> both ADCs hold fresh results. ITCM-resident.
+// AD7606 BUSY fell -> both ADCs hold fresh results: start reading them by
+// DMA (a few register writes; the wire runs without the CPU). A read that
+// cannot start (still busy, previous read never completed) runs the tick at
+// once, which reports the sensor loss. ITCM-resident.
 [[gnu::section(".itcm_text")]] void EXTI15_10_IRQHandler() {
   g_bus.write32(r::exti::kBase + r::exti::kCpupr1, r::bit(11));
-  if (g_servo != nullptr) g_servo->on_tick();
+  if (g_board.on_busy_fell() && g_servo != nullptr) g_servo->on_tick();
+}
+
+// Servo tick: the SPI3 RX DMA finished a device. ADC0 -> ADC1 started; ADC1
+// (or an error) -> the tick, which takes the completed buffer.
+[[gnu::section(".itcm_text")]] void DMA1_Stream0_IRQHandler() {
+  if (g_board.on_adc_dma() && g_servo != nullptr) g_servo->on_tick();
 }
 
 // 16-bit encoder extension points (wrap, 0x4000, 0xC000). Same priority as the tick.

@@ -227,7 +227,13 @@ inline constexpr std::uint32_t kCr1Ssi = bit(12);
 inline constexpr Addr kCr2 = 0x04;     // TSIZE[15:0]
 inline constexpr Addr kCfg1 = 0x08;    // DSIZE[4:0] = bits - 1, FTHLV[8:5], MBR[30:28]
 inline constexpr unsigned kCfg1MbrShift = 28;
+inline constexpr std::uint32_t kCfg1Rxdmaen = bit(14);  // §50.11.3: RX-packet DMA request (TXDMAEN is bit 15)
 inline constexpr Addr kCfg2 = 0x0C;
+// COMM[18:17] (§50.11.4): 0 full duplex, 1 simplex transmitter, 2 simplex
+// receiver (the master clocks TSIZE frames after CSTART with no TXDR writes).
+inline constexpr unsigned kCfg2CommShift = 17;
+inline constexpr std::uint32_t kCfg2CommMask = 0x3u << 17;
+inline constexpr std::uint32_t kCommSimplexReceiver = 2;
 inline constexpr std::uint32_t kCfg2Master = bit(22);
 inline constexpr std::uint32_t kCfg2Cpha = bit(24);
 inline constexpr std::uint32_t kCfg2Cpol = bit(25);
@@ -237,18 +243,57 @@ inline constexpr Addr kSr = 0x14;
 inline constexpr std::uint32_t kSrRxp = bit(0);
 inline constexpr std::uint32_t kSrTxp = bit(1);
 inline constexpr std::uint32_t kSrEot = bit(3);
-inline constexpr Addr kIfcr = 0x18;    // EOTC 3, TXTFC 4
+inline constexpr std::uint32_t kSrOvr = bit(6);  // RX overrun (a frame arrived with RxFIFO full)
+inline constexpr Addr kIfcr = 0x18;    // EOTC 3, TXTFC 4, OVRC 6
+inline constexpr std::uint32_t kIfcrEotc = bit(3);
+inline constexpr std::uint32_t kIfcrTxtfc = bit(4);
+inline constexpr std::uint32_t kIfcrOvrc = bit(6);
 inline constexpr Addr kTxdr = 0x20;
 inline constexpr Addr kRxdr = 0x30;
 }  // namespace spi
 
-// --- DMA / DMAMUX, RM0433 §15/§17 (reserved for the SPI DMA upgrade path) --------------
+// --- DMA / DMAMUX, RM0433 §15 (DMA1/DMA2) and §17 (DMAMUX1) ----------------------------
 namespace dma {
 inline constexpr Addr kDma1 = 0x40020000;
 inline constexpr Addr kDma2 = 0x40020400;
+// §15.5.5..15.5.10: interrupt status LISR (streams 0..3) / HISR (4..7) and
+// their write-1-to-clear twins LIFCR / HIFCR; stream n's registers at
+// 0x10 + 0x18 n: SxCR, SxNDTR, SxPAR, SxM0AR, SxM1AR, SxFCR.
+inline constexpr Addr kLisr = 0x00, kHisr = 0x04, kLifcr = 0x08, kHifcr = 0x0C;
 constexpr Addr stream(Addr dma, unsigned n) { return dma + 0x10 + 0x18 * n; }  // SxCR at +0
-inline constexpr Addr kSxCr = 0x00, kSxNdtr = 0x04, kSxPar = 0x08, kSxM0ar = 0x0C;
-inline constexpr Addr kDmamux1 = 0x40020800;  // C0CR..C15CR, DMAREQ_ID[6:0]
+inline constexpr Addr kSxCr = 0x00, kSxNdtr = 0x04, kSxPar = 0x08, kSxM0ar = 0x0C, kSxFcr = 0x14;
+// Status/clear flags of one stream, before the shift below: FEIF 0, DMEIF 2,
+// TEIF 3, HTIF 4, TCIF 5.
+inline constexpr std::uint32_t kFlagFe = bit(0);
+inline constexpr std::uint32_t kFlagDme = bit(2);
+inline constexpr std::uint32_t kFlagTe = bit(3);
+inline constexpr std::uint32_t kFlagHt = bit(4);
+inline constexpr std::uint32_t kFlagTc = bit(5);
+inline constexpr std::uint32_t kFlagsAll = kFlagFe | kFlagDme | kFlagTe | kFlagHt | kFlagTc;
+// Stream n's flags sit at 0, 6, 16, 22 in LISR (n = 0..3) and HISR (n = 4..7).
+constexpr unsigned flag_shift(unsigned n) { return (n % 4u) * 6u + ((n % 4u) >= 2u ? 4u : 0u); }
+constexpr Addr isr(unsigned n) { return n < 4u ? kLisr : kHisr; }
+constexpr Addr ifcr(unsigned n) { return n < 4u ? kLifcr : kHifcr; }
+// SxCR (§15.5.11)
+inline constexpr std::uint32_t kCrEn = bit(0);
+inline constexpr std::uint32_t kCrDmeie = bit(1);
+inline constexpr std::uint32_t kCrTeie = bit(2);
+inline constexpr std::uint32_t kCrTcie = bit(4);
+inline constexpr unsigned kCrDirShift = 6;   // DIR[7:6]: 0 peripheral->memory, 1 memory->peripheral
+inline constexpr std::uint32_t kDirPeripheralToMemory = 0;
+inline constexpr std::uint32_t kCrMinc = bit(10);
+inline constexpr unsigned kCrPsizeShift = 11;  // PSIZE[12:11] / MSIZE[14:13]: 0 byte, 1 half-word, 2 word
+inline constexpr unsigned kCrMsizeShift = 13;
+inline constexpr std::uint32_t kSizeWord = 2;
+inline constexpr unsigned kCrPlShift = 16;     // PL[17:16]: 3 = very high
+// SxFCR (§15.5.16): 0 = DMDIS clear -> direct mode (no FIFO; PSIZE = MSIZE).
+// DMAMUX1 (§17.6.1): channel c's CxCR at +4 c, DMAREQ_ID[6:0]; channels 0..7
+// serve DMA1 streams 0..7, channels 8..15 DMA2 streams 0..7 (§17.3.2).
+inline constexpr Addr kDmamux1 = 0x40020800;
+constexpr Addr dmamux_channel(Addr dma, unsigned n) { return kDmamux1 + 4u * ((dma == kDma2 ? 8u : 0u) + n); }
+// DMAMUX1 request inputs (§17.3.2 table 121).
+inline constexpr std::uint32_t kReqSpi2Rx = 39;
+inline constexpr std::uint32_t kReqSpi3Rx = 61;
 }  // namespace dma
 
 // --- FDCAN, RM0433 §56.5 ------------------------------------------------------------------
@@ -395,6 +440,7 @@ inline constexpr Addr kDemcr = 0xE000EDFC;   // TRCENA bit 24
 
 // --- STM32H743 interrupt numbers, RM0433 §19.1.2 table 145 -----------------------------------
 namespace irq {
+inline constexpr int kDma1Stream0 = 11;  // DMA1_Stream0..6 = 11..17, Stream7 = 47
 inline constexpr int kExti9_5 = 23;
 inline constexpr int kTim2 = 28;
 inline constexpr int kTim3 = 29;

@@ -8,12 +8,21 @@
 // per word: wait TXP, write TXDR; wait RXP, read RXDR -> wait EOT -> clear
 // EOT/TXTF in IFCR -> SPE=0 -> CS high. With DSIZE > 16 a 32-bit TXDR/RXDR
 // access moves exactly one frame, so no packing surprises.
+//
+// Start/complete mode (AsyncSpiMaster, receive-only, needs attach_rx_dma()):
+// RM0433 §50.4.14 "Communication using DMA": SPE=0 -> CFG1 (DSIZE, MBR,
+// RXDMAEN) / CFG2 (mode, COMM = simplex receiver: the master clocks TSIZE
+// frames with no TXDR writes, MOSI idle) -> CR2.TSIZE -> DMA stream armed on
+// RXDR -> SPE=1 -> CS low -> CSTART, and return. complete(): the stream's
+// TCIF (every frame read out of RXDR, so the wire is done) -> EOT checked,
+// OVR checked -> IFCR -> SPE=0 -> CS high. The CPU never waits on the wire.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 
 #include "maglev/drivers/bus.hpp"
+#include "maglev/drivers/stm32h7_dma.hpp"
 #include "maglev/stm32h7/register_bus.hpp"
 
 namespace maglev::drivers {
@@ -26,7 +35,7 @@ struct SpiDeviceSettings {
 };
 
 template <stm32h7::RegisterBus Bus, std::size_t kDevices = 2>
-class Stm32SpiMaster final : public SpiMaster {
+class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
  public:
   Stm32SpiMaster(Bus& bus, stm32h7::Addr base, const SpiDeviceSettings (&devices)[kDevices],
                  std::uint32_t max_polls = 10000)
@@ -43,21 +52,14 @@ class Stm32SpiMaster final : public SpiMaster {
     for (std::size_t i = 0; i < kDevices; ++i) devices_[i].chip_select->write(true);
   }
 
+  // The RX DMA stream of the start/complete mode (init()ed by the caller).
+  void attach_rx_dma(dma::Stream<Bus>* stream) { rx_dma_ = stream; }
+
   BusStatus transfer(const SpiTransfer& t) override {
     namespace s = stm32h7::spi;
-    if (t.device >= kDevices || t.word_bits < 4 || t.word_bits > 32 || t.words == 0 || t.words > 0xFFFF) {
-      return BusStatus::kBadArgument;
-    }
-    const SpiDeviceSettings& d = devices_[t.device];
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
-    bus_.write32(base_ + s::kCfg1, stm32h7::field(d.clock_divider_log2 & 7u, s::kCfg1MbrShift) |
-                                       static_cast<std::uint32_t>(t.word_bits - 1u));
-    bus_.write32(base_ + s::kCfg2, s::kCfg2Master | s::kCfg2Ssm | s::kCfg2Afcntr |
-                                       (d.cpol ? s::kCfg2Cpol : 0u) | (d.cpha ? s::kCfg2Cpha : 0u));
-    bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(t.words));
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
-    d.chip_select->write(false);
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
+    if (!valid(t)) return BusStatus::kBadArgument;
+    if (in_flight_) return BusStatus::kBusy;  // a DMA transaction owns the bus
+    const SpiDeviceSettings& d = begin_frame(t);
     BusStatus status = BusStatus::kOk;
     for (std::size_t i = 0; i < t.words && status == BusStatus::kOk; ++i) {
       if (!stm32h7::wait_for(bus_, base_ + s::kSr, s::kSrTxp, s::kSrTxp, max_polls_)) {
@@ -76,17 +78,102 @@ class Stm32SpiMaster final : public SpiMaster {
         !stm32h7::wait_for(bus_, base_ + s::kSr, s::kSrEot, s::kSrEot, max_polls_)) {
       status = BusStatus::kTimeout;
     }
-    bus_.write32(base_ + s::kIfcr, stm32h7::bit(3) | stm32h7::bit(4));  // EOTC | TXTFC
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi);
-    d.chip_select->write(true);
+    end_frame(d, s::kIfcrEotc | s::kIfcrTxtfc);
     return status;
   }
 
+  // Receive-only by DMA: t.tx must be null, t.rx the DMA-reachable buffer.
+  BusStatus start(const SpiTransfer& t) override {
+    namespace s = stm32h7::spi;
+    if (!valid(t) || t.tx != nullptr || t.rx == nullptr || rx_dma_ == nullptr) return BusStatus::kBadArgument;
+    if (in_flight_) return BusStatus::kBusy;
+    const SpiDeviceSettings& d = devices_[t.device];
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
+    bus_.write32(base_ + s::kCfg1, cfg1(d, t) | s::kCfg1Rxdmaen);
+    bus_.write32(base_ + s::kCfg2, cfg2(d) | stm32h7::field(s::kCommSimplexReceiver, s::kCfg2CommShift));
+    bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(t.words));
+    const dma::Status armed = rx_dma_->start_peripheral_to_memory(
+        base_ + s::kRxdr, reinterpret_cast<stm32h7::Addr>(t.rx), static_cast<std::uint16_t>(t.words));
+    if (armed != dma::Status::kBusy) {
+      bus_.write32(base_ + s::kCfg1, cfg1(d, t));
+      return armed == dma::Status::kStillRunning ? BusStatus::kBusy : BusStatus::kBadArgument;
+    }
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
+    d.chip_select->write(false);
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
+    in_flight_ = true;
+    device_ = t.device;
+    return BusStatus::kOk;
+  }
+
+  BusStatus complete() override {
+    namespace s = stm32h7::spi;
+    if (!in_flight_) return BusStatus::kNotStarted;
+    const dma::Status st = rx_dma_->poll();
+    if (st == dma::Status::kBusy) return BusStatus::kBusy;
+    BusStatus status = st == dma::Status::kComplete ? BusStatus::kOk : BusStatus::kTransferError;
+    // The DMA read the last frame out of RXDR: EOT follows within a few SPI
+    // kernel clocks (a bounded wait, normally one read).
+    if (status == BusStatus::kOk && !stm32h7::wait_for(bus_, base_ + s::kSr, s::kSrEot, s::kSrEot, max_polls_)) {
+      status = BusStatus::kTimeout;
+    }
+    if (status == BusStatus::kOk && (bus_.read32(base_ + s::kSr) & s::kSrOvr) != 0u) status = BusStatus::kTransferError;
+    end_dma_frame();
+    return status;
+  }
+
+  void cancel() override {
+    if (!in_flight_) return;
+    rx_dma_->abort();
+    end_dma_frame();
+  }
+
+  bool busy() const { return in_flight_; }
+
  private:
+  bool valid(const SpiTransfer& t) const {
+    return t.device < kDevices && t.word_bits >= 4 && t.word_bits <= 32 && t.words != 0 && t.words <= 0xFFFF;
+  }
+  static std::uint32_t cfg1(const SpiDeviceSettings& d, const SpiTransfer& t) {
+    return stm32h7::field(d.clock_divider_log2 & 7u, stm32h7::spi::kCfg1MbrShift) |
+           static_cast<std::uint32_t>(t.word_bits - 1u);
+  }
+  static std::uint32_t cfg2(const SpiDeviceSettings& d) {
+    namespace s = stm32h7::spi;
+    return s::kCfg2Master | s::kCfg2Ssm | s::kCfg2Afcntr | (d.cpol ? s::kCfg2Cpol : 0u) | (d.cpha ? s::kCfg2Cpha : 0u);
+  }
+  const SpiDeviceSettings& begin_frame(const SpiTransfer& t) {
+    namespace s = stm32h7::spi;
+    const SpiDeviceSettings& d = devices_[t.device];
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
+    bus_.write32(base_ + s::kCfg1, cfg1(d, t));
+    bus_.write32(base_ + s::kCfg2, cfg2(d));
+    bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(t.words));
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
+    d.chip_select->write(false);
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
+    return d;
+  }
+  void end_frame(const SpiDeviceSettings& d, std::uint32_t clear) {
+    namespace s = stm32h7::spi;
+    bus_.write32(base_ + s::kIfcr, clear);
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi);
+    d.chip_select->write(true);
+  }
+  void end_dma_frame() {
+    namespace s = stm32h7::spi;
+    end_frame(devices_[device_], s::kIfcrEotc | s::kIfcrTxtfc | s::kIfcrOvrc);
+    in_flight_ = false;
+  }
+
+
   Bus& bus_;
   stm32h7::Addr base_;
   std::uint32_t max_polls_;
   SpiDeviceSettings devices_[kDevices]{};
+  dma::Stream<Bus>* rx_dma_ = nullptr;
+  bool in_flight_ = false;
+  std::uint8_t device_ = 0;
 };
 
 }  // namespace maglev::drivers

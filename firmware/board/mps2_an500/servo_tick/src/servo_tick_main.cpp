@@ -19,7 +19,12 @@
 //
 // Two passes over the vectors, each from a fresh kernel and fresh drivers:
 //   A: ServoLoop<Controller<float>> exactly as on the board; SysTick around
-//      the whole on_tick() -> servo_tick_instructions <state>;
+//      the whole on_tick() -> servo_tick_instructions <state>, and around
+//      the AD7606 DMA read's interrupt work before it (BUSY fell: start ADC0;
+//      DMA done: ADC0 -> ADC1; DMA done: pair complete) ->
+//      adc_dma_isr_instructions <state>. The fake completes each device's
+//      DMA transfer at CSTART (the wire time is not in either count);
+//      main.cpp's handlers call the same on_busy_fell() / on_adc_dma();
 //   B: the same composition with timing wrappers around the sensor source,
 //      kernel step() and actuator sink -> servo_step_instructions,
 //      servo_sensors_instructions, servo_actuators_instructions,
@@ -168,7 +173,7 @@ struct Board {
   std::uint32_t adc_dma_rx[2][4]{};
   d::Stm32OutputPin<Bus> amp_enable_pin{bus, pins::kAmpEnable};
   b::AmplifierBoardDrivers<Bus> parts{bus, adc_dma_rx};  // main.cpp's g_board
-  b::AmplifierBoardSensors<typename b::AmplifierBoardDrivers<Bus>::Encoder>& board_sensors = parts.sensors;
+  decltype(b::AmplifierBoardDrivers<Bus>::sensors)& board_sensors = parts.sensors;
   d::AmplifierEnable amp{amp_enable_pin};
   b::AmplifierBoardActuators board_actuators{parts.dac, amp};
   b::ServoKernel controller;
@@ -213,9 +218,22 @@ struct Board {
     }
   }
 
+  // main.cpp's EXTI15_10 (BUSY fell) and DMA1_Stream0 handlers up to the
+  // point where they run the tick: true when they would (a DMA transfer
+  // the fake does not complete would leave the tick unrun: the recorded
+  // session then stops matching, exit 7).
+  bool adc_dma_chain() {
+    if (parts.on_busy_fell()) return true;
+    for (std::size_t device = 0; device < 2; ++device) {
+      if (parts.on_adc_dma()) return true;
+    }
+    return false;
+  }
+
   // board_main()'s driver bring-up, in its order.
   void boot() {
     self = this;
+    if constexpr (requires { bus.map_dma_memory(&adc_dma_rx[0][0], 8); }) bus.map_dma_memory(&adc_dma_rx[0][0], 8);
     amp_enable_pin.configure(false);
     parts.configure_pins();
     parts.init();
@@ -255,18 +273,44 @@ struct MemoryBus {
 };
 Board<false, false, MemoryBus> g_board_d;
 
+std::uint32_t& memory_bus_word(r::Addr a) {
+  return const_cast<std::uint32_t&>(MemoryBus::image[(a & 0xFFFFu) >> 2]);
+}
+
 void measure_drivers_on_memory_bus(const Calibration& cal) {
-  MemoryBus::image[((r::spi::kSpi1 + r::spi::kSr) & 0xFFFFu) >> 2] = r::spi::kSrTxp | r::spi::kSrRxp | r::spi::kSrEot;
-  MemoryBus::image[((r::spi::kSpi3 + r::spi::kSr) & 0xFFFFu) >> 2] = r::spi::kSrTxp | r::spi::kSrRxp | r::spi::kSrEot;
-  MemoryBus::image[((r::gpio::port('F') + r::gpio::kIdr) & 0xFFFFu) >> 2] = (1u << 12) | (1u << 13) | (1u << 14);
+  memory_bus_word(r::spi::kSpi1 + r::spi::kSr) = r::spi::kSrTxp | r::spi::kSrRxp | r::spi::kSrEot;
+  memory_bus_word(r::spi::kSpi3 + r::spi::kSr) = r::spi::kSrTxp | r::spi::kSrRxp | r::spi::kSrEot;
+  memory_bus_word(r::gpio::port('F') + r::gpio::kIdr) = (1u << 12) | (1u << 13) | (1u << 14);
   g_board_d.boot();
-  Stats sensors, actuators;
+  // After boot (TIM2 CR1 shares the word in this 64 KiB image): every poll
+  // of DMA1 stream 0 sees TCIF, as it does when the wire is done.
+  const r::Addr lisr = r::dma::kDma1 + r::dma::kLisr;
+  const r::Addr s0cr = r::dma::stream(r::dma::kDma1, 0) + r::dma::kSxCr;
+  Stats chain, sensors, actuators;
   io::ActuatorCommand c{{100, -200, 300, -400, 500, -600, 700, -800}, true};
   for (std::uint32_t i = 0; i < 1000; ++i) {
-    io::SensorSample s{};
+    // The DMA read's three interrupt bodies, each timed alone: between them
+    // the hardware would have cleared the stream's EN (end of transfer).
+    std::uint32_t pieces = 0;
+    memory_bus_word(lisr) = r::dma::kFlagTc << r::dma::flag_shift(0);
+    memory_bus_word(s0cr) = 0;
     std::uint32_t t0 = systick_now();
-    (void)g_board_d.board_sensors.read(s);
+    (void)g_board_d.parts.on_busy_fell();
     std::uint32_t t1 = systick_now();
+    pieces += systick_elapsed(t0, t1);
+    for (int device = 0; device < 2; ++device) {
+      memory_bus_word(lisr) = r::dma::kFlagTc << r::dma::flag_shift(0);
+      memory_bus_word(s0cr) = 0;
+      t0 = systick_now();
+      (void)g_board_d.parts.on_adc_dma();
+      t1 = systick_now();
+      pieces += systick_elapsed(t0, t1);
+    }
+    chain.add(pieces - 2u * static_cast<std::uint32_t>(cal.empty_counts), i);
+    io::SensorSample s{};
+    t0 = systick_now();
+    (void)g_board_d.board_sensors.read(s);
+    t1 = systick_now();
     sensors.add(systick_elapsed(t0, t1), i);
     c.dac_code[0] = static_cast<std::int16_t>(i);
     t0 = systick_now();
@@ -274,6 +318,7 @@ void measure_drivers_on_memory_bus(const Calibration& cal) {
     t1 = systick_now();
     actuators.add(systick_elapsed(t0, t1), i);
   }
+  print_tick_stats("drivers_on_memory_bus", "adc_dma_isr", chain, cal);
   print_tick_stats("drivers_on_memory_bus", "sensors", sensors, cal);
   print_tick_stats("drivers_on_memory_bus", "actuators", actuators, cal);
 }
@@ -309,7 +354,7 @@ bool same_sample(const io::SensorSample& a, const io::SensorSample& b) {
 }
 
 struct PassResult {
-  StateStats tick, step, sensors, actuators, outside;
+  StateStats tick, step, sensors, actuators, outside, adc_dma;
   std::uint64_t ready_reads = 0, ready_writes = 0, ready_ticks = 0;
   std::uint32_t max_cycles = 0;
   std::uint32_t ticks = 0;
@@ -358,6 +403,15 @@ int run_pass(Board<kTimed, kCount>& board, const char* vectors_path, const char*
       const std::uint32_t reads0 = board.bus.reads(), writes0 = board.bus.writes();
       const auto state_before = static_cast<int>(controller.status().state);
 
+      const std::uint32_t c0 = systick_now();
+      const bool run_tick = board.adc_dma_chain();
+      const std::uint32_t c1 = systick_now();
+      if (!run_tick) {
+        hw::semihost_write("servo-tick: tick ");
+        hw::semihost_write_unsigned(tick);
+        return fail("the AD7606 DMA read did not complete", kDriverMismatch);
+      }
+
       const std::uint32_t t0 = systick_now();
       board.servo.on_tick();
       const std::uint32_t t1 = systick_now();
@@ -365,6 +419,7 @@ int run_pass(Board<kTimed, kCount>& board, const char* vectors_path, const char*
 
       if (state_before >= 0 && state_before < kStates) {
         res.tick.s[state_before].add(counts, tick);
+        res.adc_dma.s[state_before].add(systick_elapsed(c0, c1), tick);
         if constexpr (kTimed) {
           res.step.s[state_before].add(g_step_counts, tick);
           res.sensors.s[state_before].add(g_read_counts, tick);
@@ -440,6 +495,7 @@ int main() {
   hw::semihost_write_unsigned(cal.nop_counts);
   hw::semihost_write(" counts\n");
   print_all("servo_tick_instructions", g_result[0].tick, cal);
+  print_all("adc_dma_isr_instructions", g_result[0].adc_dma, cal);
   hw::semihost_write("servo_loop max_cycles (ServoState, its own cycle_counter hook; SysTick here): ");
   hw::semihost_write_unsigned(cal.instructions(g_result[0].max_cycles >> 8));
   hw::semihost_write(" instructions\n");

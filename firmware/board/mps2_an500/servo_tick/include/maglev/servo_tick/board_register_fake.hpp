@@ -4,14 +4,20 @@
 // in place of MmioBus. What the drivers read is one recorded SensorSample
 // (present()), so they take their normal full path:
 //
-//   * SPI1 / SPI3 SR: TXP, RXP and EOT always set (every poll succeeds at
-//     once: the wire time of the polled transfers is NOT in the count, see
+//   * SPI1 SR: TXP, RXP and EOT always set (every poll succeeds at once: the
+//     wire time of the polled DAC transfer is NOT in the count, see
 //     docs/PERFORMANCE.md "Whole servo interrupt at 20 kHz");
-//   * SPI3 RXDR: the selected AD7606's DOUTA words, V(2w+1) << 16 | V(2w+2),
-//     device chosen by its CS line (GPIOE BSRR: ADC0 CS PE15, ADC1 CS PE10),
-//     word index restarted on CS low; ADC0 V1..V3 displacement, V4..V7 Hall,
-//     V8 0; ADC1 V1..V8 the coil current monitors (amplifier_board_io.hpp's
-//     map_to_sample, inverted);
+//   * SPI3 + its RX DMA (DMA1 stream 0, DMAMUX1 channel 0): the shared
+//     register-level model (drivers/stm32h7_dma spi_rx_dma_model.hpp): a
+//     read set up completely completes at CSTART, the selected AD7606's
+//     DOUTA words written into the mapped buffer (map_dma_memory), TCIF and
+//     EOT set; set up wrongly, it never completes (sensor loss); fault
+//     injection through dma_model();
+//   * the AD7606 words (DMA or a polled SPI3 RXDR read): V(2w+1) << 16 |
+//     V(2w+2), device chosen by its CS line (GPIOE BSRR: ADC0 CS PE15, ADC1
+//     CS PE10), word index restarted on CS low; ADC0 V1..V3 displacement,
+//     V4..V7 Hall, V8 0; ADC1 V1..V8 the coil current monitors
+//     (amplifier_board_io.hpp's map_to_sample, inverted);
 //   * SPI1 RXDR: the AD5764 chain's SDO, i.e. the word written two TXDR
 //     writes earlier (48-bit chain: the driver's link check sees its echo);
 //   * TIM2 / TIM5 CNT: interferometer counts 0 / 1 (32-bit counters), TIM3
@@ -30,6 +36,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "maglev/drivers/spi_rx_dma_model.hpp"
 #include "maglev/io/actuator_command.hpp"
 #include "maglev/io/sensor_sample.hpp"
 #include "maglev/stm32h7/registers.hpp"
@@ -39,8 +46,21 @@ namespace maglev::servo_tick {
 namespace r = maglev::stm32h7;
 
 template <bool kCountAccesses>
-class BoardRegisterFake {
+class BoardRegisterFake final : public drivers::dma::WordSource {
  public:
+  // The buffer the ADC DMA may write (the board's g_adc_dma_rx).
+  void map_dma_memory(std::uint32_t* buffer, std::size_t words) { dma_.map_memory(buffer, words); }
+  drivers::dma::SpiRxDmaModel& dma_model() { return dma_; }
+
+  // The selected AD7606's next DOUTA word (WordSource: what the DMA moves).
+  std::uint32_t next_word() override {
+    const std::uint32_t w = adc_word_ < 4 ? adc_word_ : 3u;
+    ++adc_word_;
+    const std::int16_t* v = adc_[adc_selected_];
+    return (static_cast<std::uint32_t>(static_cast<std::uint16_t>(v[2 * w])) << 16) |
+           static_cast<std::uint16_t>(v[2 * w + 1]);
+  }
+
   // The sensor values the next tick's drivers read.
   void present(const io::SensorSample& s) {
     for (int i = 0; i < 3; ++i) adc_[0][i] = s.displacement_adc[i];
@@ -57,21 +77,14 @@ class BoardRegisterFake {
 
   std::uint32_t read32(r::Addr a) {
     if constexpr (kCountAccesses) ++reads_;
-    if (a == r::spi::kSpi3 + r::spi::kSr || a == r::spi::kSpi1 + r::spi::kSr) {
-      return r::spi::kSrTxp | r::spi::kSrRxp | r::spi::kSrEot;
-    }
-    if (a == r::spi::kSpi3 + r::spi::kRxdr) {
-      const std::uint32_t w = adc_word_ < 4 ? adc_word_ : 3u;
-      ++adc_word_;
-      const std::int16_t* v = adc_[adc_selected_];
-      return (static_cast<std::uint32_t>(static_cast<std::uint16_t>(v[2 * w])) << 16) |
-             static_cast<std::uint16_t>(v[2 * w + 1]);
-    }
+    if (a == r::spi::kSpi1 + r::spi::kSr) return r::spi::kSrTxp | r::spi::kSrRxp | r::spi::kSrEot;
+    if (a == r::spi::kSpi3 + r::spi::kRxdr) return next_word();
     if (a == r::spi::kSpi1 + r::spi::kRxdr) return dac_sdo_;
     if (a == r::tim::kTim2 + r::tim::kCnt) return counts_[0];
     if (a == r::tim::kTim5 + r::tim::kCnt) return counts_[1];
     if (a == r::tim::kTim3 + r::tim::kCnt) return counts_[2] & 0xFFFFu;
     if (a == r::gpio::port('F') + r::gpio::kIdr) return (1u << 12) | (1u << 13) | (1u << 14);
+    if (std::uint32_t v = 0; dma_read(a, &v)) return v;  // SPI3 SR, the DMA stream's CR/NDTR/ISR
     return 0u;  // GPIOE IDR: BUSY low; EXTI CPUPR1: nothing pending; the rest
   }
 
@@ -85,6 +98,7 @@ class BoardRegisterFake {
       ++dac_words_;
       return;
     }
+    if ((a & ~r::Addr{0x3FF}) == r::spi::kSpi1) return;  // SPI1 set-up: dropped
     if (a == r::gpio::port('E') + r::gpio::kBsrr) {
       if ((v & (1u << (15 + 16))) != 0u) select_adc(0);  // ADC0 CS low
       if ((v & (1u << (10 + 16))) != 0u) select_adc(1);  // ADC1 CS low
@@ -93,7 +107,9 @@ class BoardRegisterFake {
     if (a == r::gpio::port('G') + r::gpio::kBsrr) {
       if ((v & (1u << 3)) != 0u) amplifier_enable_ = true;
       if ((v & (1u << (3 + 16))) != 0u) amplifier_enable_ = false;
+      return;
     }
+    if ((a & ~r::Addr{0xFFF}) == r::dma::kDma1 || (a & ~r::Addr{0x3FF}) == r::spi::kSpi3) dma_write(a, v);
   }
 
   // What the AD5764 chain received this tick (since present()): eight words,
@@ -117,6 +133,10 @@ class BoardRegisterFake {
 
  private:
   static constexpr std::size_t kDacWords = 8;
+  // Out of line: the model's decoding stays out of read32/write32, which
+  // the drivers inline at every register access (as MmioBus's are).
+  [[gnu::noinline]] bool dma_read(r::Addr a, std::uint32_t* v) const { return dma_.read(a, v); }
+  [[gnu::noinline]] void dma_write(r::Addr a, std::uint32_t v) { dma_.write(a, v, *this); }
   void select_adc(std::uint32_t d) {
     adc_selected_ = d;
     adc_word_ = 0;
@@ -130,6 +150,7 @@ class BoardRegisterFake {
   std::uint32_t dac_word_[kDacWords]{};
   std::size_t dac_words_ = 0;
   bool amplifier_enable_ = false;
+  drivers::dma::SpiRxDmaModel dma_{r::spi::kSpi3, r::dma::kDma1, 0, r::dma::kReqSpi3Rx};
   std::uint32_t reads_ = 0;
   std::uint32_t writes_ = 0;
 };

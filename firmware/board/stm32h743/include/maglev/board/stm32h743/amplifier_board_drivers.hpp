@@ -4,8 +4,13 @@
 // register bus) build the same objects, wired the same way.
 //
 //   SPI1 -> AD5764 chain (SYNC PD14, LDAC PD15), SPI3 -> two AD7606 (CS PE15 /
-//   PE10, BUSY PE11, raw words into `adc_rx`), TIM2 / TIM5 / TIM3 encoder
-//   counters (loss lines PF12..14, active low), AmplifierBoardSensors over them.
+//   PE10, BUSY PE11, raw words into `adc_rx` by the SPI3 RX DMA: DMA1 stream 0,
+//   DMAMUX1 request spi3_rx_dma), TIM2 / TIM5 / TIM3 encoder counters (loss
+//   lines PF12..14, active low), AmplifierBoardSensors over them.
+// The ADC pair is read by DMA before the tick (ad7606::DmaReader; schedule in
+// drivers/ad7606_adc/README.md): the image calls on_busy_fell() from the BUSY
+// interrupt and on_adc_dma() from the DMA stream's, and runs the servo tick
+// when either says so.
 // The amplifier-enable line and AmplifierBoardActuators stay with the board
 // (the HIL image shares the enable pin).
 #pragma once
@@ -17,6 +22,7 @@
 #include "maglev/drivers/ad5764.hpp"
 #include "maglev/drivers/ad7606.hpp"
 #include "maglev/drivers/quadrature_encoder.hpp"
+#include "maglev/drivers/stm32h7_dma.hpp"
 #include "maglev/drivers/stm32h7_gpio.hpp"
 #include "maglev/drivers/stm32h7_spi.hpp"
 #include "maglev/stm32h7/register_bus.hpp"
@@ -29,7 +35,7 @@ struct AmplifierBoardDrivers {
   static constexpr std::uint8_t kAdcCs[2] = {0, 1};  // SPI3 chip-select index of ADC 0 / 1
 
   // `adc_rx`: the AD7606 raw words (the board: D2 SRAM, non-cacheable, where
-  // the SPI3 RX DMA stream will write them).
+  // the SPI3 RX DMA stream writes them).
   AmplifierBoardDrivers(Bus& b, std::uint32_t (*adc_rx)[drivers::ad7606::kChannelsPerDevice / 2])
       : bus(b), adc{spi_adc, kAdcCs, adc_busy, adc_rx} {}
   AmplifierBoardDrivers(const AmplifierBoardDrivers&) = delete;
@@ -50,12 +56,24 @@ struct AmplifierBoardDrivers {
   const drivers::SpiDeviceSettings adc_spi[2] = {{&adc0_cs, 2, true, false}, {&adc1_cs, 2, true, false}};
   drivers::Stm32SpiMaster<Bus, 1> spi_dac{bus, stm32h7::spi::kSpi1, dac_spi};
   drivers::Stm32SpiMaster<Bus, 2> spi_adc{bus, stm32h7::spi::kSpi3, adc_spi};
+  static constexpr drivers::dma::StreamConfig kAdcRxDma{stm32h7::dma::kDma1, 0, stm32h7::dma::kReqSpi3Rx, true};
+  drivers::dma::Stream<Bus> adc_rx_dma{bus, kAdcRxDma};
   drivers::ad5764::Chain<2> dac{spi_dac, 0, dac_ldac};
-  drivers::ad7606::Adc adc;
+  drivers::ad7606::DmaReader adc;
   Encoder enc0{bus, {stm32h7::tim::kTim2, true, 1, false}, loss0};
   Encoder enc1{bus, {stm32h7::tim::kTim5, true, 1, false}, loss1};
   Encoder enc2{bus, {stm32h7::tim::kTim3, false, 1, false}, loss2};  // 16-bit: TIM3_IRQHandler extends it
-  AmplifierBoardSensors<Encoder> sensors{adc, enc0, enc1, enc2};
+  AmplifierBoardSensors<Encoder, drivers::ad7606::DmaReader> sensors{adc, enc0, enc1, enc2};
+
+  // BUSY fell (EXTI11): start the DMA read of the pair. True: run the tick
+  // now -- the read could not start, and the tick reports the sensor loss.
+  bool on_busy_fell() { return adc.begin() != drivers::ad7606::Status::kOk; }
+  // DMA1 stream 0 interrupt: ADC0 done -> ADC1 started (false); ADC1 done
+  // or a transfer error -> true: run the tick, it takes the buffer (or the loss).
+  bool on_adc_dma() {
+    const auto step = adc.advance();
+    return step == drivers::ad7606::DmaReader::Step::kComplete || step == drivers::ad7606::DmaReader::Step::kError;
+  }
 
   // Alternate functions and GPIO of the parts (clocks already on).
   void configure_pins() {
@@ -82,11 +100,14 @@ struct AmplifierBoardDrivers {
     loss2.configure(1);
   }
 
-  // SPI masters, the DAC at 0 A (before the amplifiers can ever be enabled),
-  // the encoder counters from 0.
+  // SPI masters (the ADC's with its RX DMA stream; DMA1's clock already on),
+  // the DAC at 0 A (before the amplifiers can ever be enabled), the encoder
+  // counters from 0.
   void init() {
     spi_dac.init();
     spi_adc.init();
+    adc_rx_dma.init();
+    spi_adc.attach_rx_dma(&adc_rx_dma);
     dac.init();
     (void)dac.write_zero();
     enc0.init();

@@ -23,10 +23,12 @@ inline void map_to_sample(const drivers::ad7606::Codes& codes, io::SensorSample&
   for (std::size_t i = 0; i < static_cast<std::size_t>(io::kCoils); ++i) sample.coil_current_adc[i] = codes.channel[1][i];
 }
 
-template <typename Encoder>
+// Adc: ad7606::Adc (polled read in the tick) or ad7606::DmaReader (the pair
+// read by DMA before the tick; read() takes the completed buffer).
+template <typename Encoder, typename Adc = drivers::ad7606::Adc>
 class AmplifierBoardSensors final : public app::SensorSource {
  public:
-  AmplifierBoardSensors(drivers::ad7606::Adc& adc, Encoder& enc0, Encoder& enc1, Encoder& enc2)
+  AmplifierBoardSensors(Adc& adc, Encoder& enc0, Encoder& enc1, Encoder& enc2)
       : adc_(adc), encoders_{&enc0, &enc1, &enc2} {}
 
   bool read(io::SensorSample& s) override {
@@ -53,7 +55,7 @@ class AmplifierBoardSensors final : public app::SensorSource {
   }
 
  private:
-  drivers::ad7606::Adc& adc_;
+  Adc& adc_;
   Encoder* encoders_[3];
 };
 
