@@ -116,18 +116,6 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
     sin_psi[2 * k + 1] = leads ? sc.cos : -sc.cos;
     cos_psi[2 * k + 1] = leads ? -sc.sin : sc.sin;
   }
-  // Work with half-currents h = i / 2 until the limit is applied: doubles
-  // the Q7.24 headroom (|h| < 128 A), so efforts up to ~20 A per axis never
-  // saturate an intermediate (which would bend the wrench direction).
-  Scalar half_i[io::kCoils];
-  const auto half_currents = [&]() {
-#pragma GCC unroll 8
-    for (int j = 0; j < io::kCoils; ++j) {
-      const int f = j & ~1;
-      half_i[j] = sin_psi[j] * g[f] + cos_psi[j] * g[f + 1];
-    }
-  };
-  half_currents();
   if (state.coil_centres_active) {
     // Coil j's vertical force (units of 2 b*) is h_j cos psi_j, acting at its
     // own centre, not at the forcer centre eq (18) assumes: it adds a torque
@@ -140,7 +128,7 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
     // float kernel and in double for Q7.24 (a fixed-point product costs
     // ~10 M7 instructions, a double one ~2; same bits on host and M7 either
     // way), then G is corrected in Scalar.
-    using C = std::conditional_t<Traits::kIsFixed, double, Scalar>;
+    using C = typename ForceAllocationState<Scalar>::CorrectionScalar;
     const auto to_c = [](Scalar v) -> C {
       if constexpr (Traits::kIsFixed) {
         return Traits::to_double(v);
@@ -183,7 +171,16 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
     }
 #pragma GCC unroll 8
     for (int r = 0; r < kForcerForces; ++r) g[r] = g[r] - state.b[r][4] * px - state.b[r][5] * py;
-    half_currents();
+  }
+  // Work with half-currents h = i / 2 until the limit is applied: doubles
+  // the Q7.24 headroom (|h| < 128 A), so efforts up to ~20 A per axis never
+  // saturate an intermediate (which would bend the wrench direction).
+  // From the (corrected) G, once.
+  Scalar half_i[io::kCoils];
+#pragma GCC unroll 8
+  for (int j = 0; j < io::kCoils; ++j) {
+    const int f = j & ~1;
+    half_i[j] = sin_psi[j] * g[f] + cos_psi[j] * g[f + 1];
   }
   Scalar max_abs = Traits::zero();
 #pragma GCC unroll 8
