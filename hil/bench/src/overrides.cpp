@@ -39,6 +39,9 @@ void apply_paper_controller(kernel::KernelConfig* c) {
     for (kernel::BiquadConfig& f : axis.filters) f = kernel::BiquadConfig{};
   }
   c->acceleration_feedforward = false;
+  // Nor did the paper's stage repair its displacement sensors' target steps
+  // (ours, SensorsToPoseConfig::lds_target_*): its loops saw them.
+  c->measurement.lds_target_cell_m = 0.0;
 }
 
 std::string offered_servo_rates() {
@@ -250,6 +253,16 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       }
       continue;
     }
+    if (k == "lds_target_steps") {
+      // repair (the kernel's default) | off (the paper's stage: its loops
+      // saw every block step of the magnet array).
+      if (v == "off") {
+        c.measurement.lds_target_cell_m = 0.0;
+      } else if (v != "repair") {
+        fail("[controller] lds_target_steps = " + v + ": expected repair or off");
+      }
+      continue;
+    }
     if (k == "payload_kg") {
       double m = 0;
       if (num("controller", k, v, Dim::kMass, &m)) c.payload_mass_kg = static_cast<float>(m);
@@ -259,7 +272,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     Axis p{};
     if (dot == std::string::npos || !parse_axis(k.substr(0, dot), &p)) {
       fail("[controller] unknown key '" + k +
-           "' (preset, payload_kg, servo_rate_Hz, AXIS.kp|ki|kd|b|derivative_filter_Hz, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
+           "' (preset, payload_kg, servo_rate_Hz, lds_target_steps, AXIS.kp|ki|kd|b|derivative_filter_Hz, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
       continue;
     }
     const std::string field = k.substr(dot + 1);

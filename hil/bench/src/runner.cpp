@@ -240,6 +240,9 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   R.coupling = node.config().coupling;
   const kernel::ControllerStatus& fin = node.status();
   if (opt.coupling) R.metrics["coupling_correction_loaded"] = opt.coupling->enabled;
+  // LDS target steps repaired (issue 15): only when there were any, so the
+  // runs on a flat target keep their keys.
+  if (fin.lds_target_steps != 0) R.metrics["lds_target_steps_repaired"] = static_cast<double>(fin.lds_target_steps);
   if (fin.calibration_result != kernel::CouplingCalibrationResult::kNone) {
     R.metrics["calibration_result"] = static_cast<double>(static_cast<int>(fin.calibration_result));
     R.metrics["calibration_coupling_before"] = static_cast<double>(fin.calibration_coupling_before);

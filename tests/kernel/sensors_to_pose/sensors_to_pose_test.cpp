@@ -649,3 +649,97 @@ TEST(SensorsToPose, TheAccelerationCheckArmsTwoStepsAfterASeedAndCanBeSwitchedOf
   CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadPlausibilityBound);
   LONGS_EQUAL(0, other.lsb_den);
 }
+
+// --- laser displacement sensors' target steps (issue 15) ---------------------
+namespace {
+
+// The heights of sensor 0 (code) with the others at code 0; homed with x
+// offset home_x_m, so sensor 0's spot is at (61.5 mm + home_x_m, 61.5 mm).
+io::SensorSample LdsSample(std::int16_t code0) {
+  io::SensorSample s = ZeroSample();
+  s.displacement_adc[0] = code0;
+  return s;
+}
+SensorsToPoseState& HomedAt(const SensorsToPoseConfig& cfg, double home_x_m) {
+  SensorsToPoseState& st = FreshState(cfg);
+  SetHomingOffsets(HomingOffsets{static_cast<std::int64_t>(std::llround(home_x_m * 1e12)), 0}, &st);
+  return st;
+}
+constexpr std::int16_t kCodes50um = 8192;  // 20 um/V * 10 V / 32768 = 6.1 nm per code
+constexpr std::int16_t kCodes4um = 655;
+
+}  // namespace
+
+TEST(SensorsToPose, ATargetStepAtABlockEdgeIsTakenAsAnOffsetOncePerEdgeVisit) {
+  const SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
+  DOUBLES_EQUAL(stage::kPitch_m / 4.0, cfg.lds_target_cell_m, 1e-15);
+  // Sensor 0's spot 0.3 mm short of the x edge at 5 cells (63.5 mm).
+  SensorsToPoseState& st = HomedAt(cfg, 1.7e-3);
+  const std::int64_t z0 = SensorsToPoseStep(LdsSample(0), &st).pose[maglev::kernel::Axis::kZ];
+  LONGS_EQUAL(z0, SensorsToPoseStep(LdsSample(0), &st).pose[maglev::kernel::Axis::kZ]);
+  // The spot crosses onto a block 50 um lower (the reading rises): repaired,
+  // the pose does not move, and the step is reported.
+  PoseMeasurement pm = SensorsToPoseStep(LdsSample(kCodes50um), &st);
+  LONGS_EQUAL(1, pm.lds_target_step);
+  DOUBLES_EQUAL(kCodes50um * st.lds_gain_pm, st.lds_held_pm[0], 1e-3);
+  DOUBLES_EQUAL(-kCodes50um * st.lds_gain_pm, st.lds_offset_pm[0], 1e-3);
+  CHECK(std::llabs(z0 - pm.pose[maglev::kernel::Axis::kZ]) <= 1);
+  LONGS_EQUAL(1, st.lds_steps_repaired);
+  // The platen's own motion after it is measured as usual (4 um at sensor 0).
+  pm = SensorsToPoseStep(LdsSample(kCodes50um + kCodes4um), &st);
+  LONGS_EQUAL(0, pm.lds_target_step);
+  DOUBLES_EQUAL(kCodes4um * st.lds_gain_pm * st.inv_plane[0][0],
+                static_cast<double>(pm.pose[maglev::kernel::Axis::kZ] - z0), 1.0);
+  // A second jump the same way at the same edge is the platen moving (a fall,
+  // a touchdown): not repaired, the loops and the supervisor see it.
+  pm = SensorsToPoseStep(LdsSample(2 * kCodes50um + kCodes4um), &st);
+  LONGS_EQUAL(0, pm.lds_target_step);
+  CHECK(pm.pose[maglev::kernel::Axis::kZ] - z0 > 16000000);
+  // A jump that undoes the held step (the spot back over the edge, or
+  // dithering on it) is repaired, however often.
+  const std::int64_t z_moved = pm.pose[maglev::kernel::Axis::kZ];
+  for (int k = 0; k < 4; ++k) {
+    pm = SensorsToPoseStep(LdsSample(k % 2 == 0 ? kCodes50um + kCodes4um : 2 * kCodes50um + kCodes4um), &st);
+    LONGS_EQUAL(1, pm.lds_target_step);
+    CHECK(std::llabs(z_moved - pm.pose[maglev::kernel::Axis::kZ]) <= 1);
+  }
+  LONGS_EQUAL(5, st.lds_steps_repaired);
+}
+
+TEST(SensorsToPose, TargetJumpsAwayFromAnEdgeBelowTheThresholdUnhomedOrWithTheRepairOffAreMotion) {
+  const SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
+  const auto jump_repaired = [](SensorsToPoseState& st, std::int16_t codes) {
+    (void)SensorsToPoseStep(LdsSample(0), &st);
+    (void)SensorsToPoseStep(LdsSample(0), &st);
+    return SensorsToPoseStep(LdsSample(codes), &st).lds_target_step;
+  };
+  // At an edge (y: 61.5 mm is 2 mm from 63.5 mm; x 0.5 mm past 63.5 mm): repaired.
+  LONGS_EQUAL(1, jump_repaired(HomedAt(cfg, 2.5e-3), kCodes50um));
+  // 2 mm from both edges (x 61.5 mm, y 61.5 mm): a fault, not the target.
+  LONGS_EQUAL(0, jump_repaired(HomedAt(cfg, 0.0), kCodes50um));
+  // Below the 5 um threshold: left to the loops.
+  LONGS_EQUAL(0, jump_repaired(HomedAt(cfg, 2.5e-3), kCodes4um));
+  // Before homing the spot is not known in the magnet frame.
+  LONGS_EQUAL(0, jump_repaired(FreshState(cfg), kCodes50um));
+  // Off.
+  SensorsToPoseConfig off = cfg;
+  off.lds_target_cell_m = 0.0;
+  LONGS_EQUAL(0, jump_repaired(HomedAt(off, 2.5e-3), kCodes50um));
+  // A railed reading breaks the track: its jump back is not compared with it.
+  SensorsToPoseState& st = HomedAt(cfg, 2.5e-3);
+  (void)SensorsToPoseStep(LdsSample(0), &st);
+  (void)SensorsToPoseStep(LdsSample(32767), &st);
+  LONGS_EQUAL(0, SensorsToPoseStep(LdsSample(kCodes50um), &st).lds_target_step);
+  // Out-of-range settings are refused and leave the state as it was.
+  SensorsToPoseState other{};
+  SensorsToPoseConfig bad = cfg;
+  bad.lds_target_cell_m = -1e-3;
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
+  bad = cfg;
+  bad.lds_target_window_m = cfg.lds_target_cell_m / 2;
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
+  bad = cfg;
+  bad.lds_target_step_min_m = std::nan("");
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
+  LONGS_EQUAL(0, other.lsb_den);
+}

@@ -109,6 +109,10 @@ MAGLEV_CONFIG_CODE SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   // runs (shorted amplifiers and pushes included). 80 m/s^2 is a step change
   // of 20 707 counts (12.8 um) in one tick at 2.5 kHz (docs/RELIABILITY.md).
   c.max_acceleration_m_per_s2 = 80.0;
+  // The LDS look at the magnet array's top: blocks of a quarter pitch.
+  c.lds_target_cell_m = stage::kPitch_m / 4.0;
+  c.lds_target_step_min_m = 5e-6;
+  c.lds_target_window_m = 1e-3;
   return c;
 }
 
@@ -208,6 +212,31 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
   s.hall_min_amplitude_codes = config.hall_min_amplitude_codes;
   s.hall_max_amplitude_codes = config.hall_max_amplitude_codes;
 
+  // --- LDS target-step repair ---------------------------------------------------
+  if (!(config.lds_target_cell_m >= 0.0 && config.lds_target_cell_m < 1.0)) {
+    return SensorsToPoseError::kBadTargetStepRepair;
+  }
+  if (config.lds_target_cell_m > 0.0 &&
+      (!(config.lds_target_step_min_m >= 1e-7 && config.lds_target_step_min_m <= 1e-3) ||
+       !(config.lds_target_window_m > 0.0 && config.lds_target_window_m < 0.5 * config.lds_target_cell_m))) {
+    return SensorsToPoseError::kBadTargetStepRepair;
+  }
+  s.lds_cell_pm = config.lds_target_cell_m * 1e12;
+  s.lds_inv_cell_per_pm = config.lds_target_cell_m > 0.0 ? 1.0 / s.lds_cell_pm : 0.0;
+  // In ADC codes (at least one): the tick compares codes.
+  s.lds_step_min_codes =
+      config.lds_target_cell_m > 0.0
+          ? static_cast<std::int32_t>(std::ceil(config.lds_target_step_min_m * 1e12 / s.lds_gain_pm))
+          : 0;
+  if (s.lds_step_min_codes < 0 || s.lds_step_min_codes > 16384) return SensorsToPoseError::kBadTargetStepRepair;
+  if (config.lds_target_cell_m > 0.0 && s.lds_step_min_codes == 0) s.lds_step_min_codes = 1;
+  s.lds_step_min_pm = static_cast<double>(s.lds_step_min_codes) * s.lds_gain_pm;
+  s.lds_window_pm = config.lds_target_window_m * 1e12;
+  for (int i = 0; i < io::kDisplacementSensors; ++i) {
+    s.lds_sensor_x_pm[i] = config.displacement_sensor_x_m[i] * 1e12;
+    s.lds_sensor_y_pm[i] = config.displacement_sensor_y_m[i] * 1e12;
+  }
+
   s.seeded = false;
   s.homed = false;
   *state = s;
@@ -252,10 +281,82 @@ void ReseedInterferometers(SensorsToPoseState* state) {
   state->steps_seen = 0;
 }
 
+namespace {
+
+// The rare part of the LDS target-step repair (SensorsToPoseConfig::lds_target_*):
+// sensor i's reading changed by jump_codes this tick, or a repaired step is
+// held at its edge.
+[[gnu::noinline, gnu::cold]] void RepairTargetStep(int i, std::int32_t jump_codes, bool jumped,
+                                                    const io::SensorSample& sample, SensorsToPoseState* state,
+                                                    PoseMeasurement* out) {
+  SensorsToPoseState& s = *state;
+  const std::uint8_t bit = static_cast<std::uint8_t>(1u << i);
+  const std::int16_t code = sample.displacement_adc[i];
+  const bool bad = code >= s.adc_rail_code || code <= -s.adc_rail_code - 1 ||
+                   (sample.status_flags & (io::kDisplacementOutOfRange0 << i)) != 0;
+  if ((s.lds_tracked & bit) == 0 || bad || !s.homed) return;
+  const double jump = static_cast<double>(jump_codes) * s.lds_gain_pm;
+  const double x_pm = s.lds_last_x_pm, y_pm = s.lds_last_y_pm;
+  const double held = (s.lds_held & bit) != 0 ? s.lds_held_pm[i] : 0.0;
+  // Spot in the magnet frame (homed x, y; theta_z moves it by less than the
+  // window) and the nearest block edge: its index along x or y (edge k at k
+  // cells) and the spot's distance to it.
+  const double sx = x_pm + numeric::Int64ToDouble(s.home_offset_x_pm) + s.lds_sensor_x_pm[i];
+  const double sy = y_pm + numeric::Int64ToDouble(s.home_offset_y_pm) + s.lds_sensor_y_pm[i];
+  const double fx = sx * s.lds_inv_cell_per_pm, fy = sy * s.lds_inv_cell_per_pm;
+  const double kx = std::floor(fx + 0.5), ky = std::floor(fy + 0.5);
+  const double dx = std::fabs(fx - kx) * s.lds_cell_pm, dy = std::fabs(fy - ky) * s.lds_cell_pm;
+  const bool along_x = dx <= dy;
+  const double edge = along_x ? kx : ky;
+  const double dist = along_x ? dx : dy;
+  // The edge of the step held, if any: is the spot still within its window?
+  const double held_dist = std::fabs((s.lds_held_along_x[i] ? fx : fy) - s.lds_held_edge[i]) * s.lds_cell_pm;
+  const bool at_held_edge = held != 0.0 && held_dist < s.lds_window_pm;
+  // One step per edge visit, or one that undoes the step held (a spot that
+  // went back over the edge, or dithers on it): a second step the same way
+  // at the same edge is the platen moving (a fall, a touchdown), which must
+  // reach the loops and the supervisor.
+  const double undo = jump + held;
+  const bool same_edge = at_held_edge && (s.lds_held_along_x[i] != 0) == along_x && s.lds_held_edge[i] == edge;
+  const bool allowed = !same_edge || (undo < s.lds_step_min_pm && undo > -s.lds_step_min_pm);
+  if (jumped && dist < s.lds_window_pm && allowed) {
+    s.lds_offset_pm[i] -= jump;
+    s.lds_held_pm[i] = jump;
+    s.lds_held = static_cast<std::uint8_t>(s.lds_held | bit);
+    s.lds_held_along_x[i] = along_x ? 1u : 0u;
+    s.lds_held_edge[i] = edge;
+    out->lds_target_step = static_cast<std::uint8_t>(out->lds_target_step | bit);
+    if (s.lds_steps_repaired != 0xFFFFFFFFu) ++s.lds_steps_repaired;
+  } else if (!at_held_edge) {
+    s.lds_held = static_cast<std::uint8_t>(s.lds_held & ~bit);
+  }
+}
+
+}  // namespace
+
 PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseState* state) {
   SensorsToPoseState& s = *state;
   PoseMeasurement out;  // every field is written below (no memset per tick)
   out.beam_glitch = 0;
+  out.lds_target_step = 0;
+
+  // --- laser displacement sensors' target steps (lds_target_*) -------------------
+  // First, while little else is live: per sensor one subtraction and a
+  // compare of ADC codes; the rest (RepairTargetStep) only on a jump, or
+  // while a repaired step is held at its edge. It places the spot with the
+  // previous tick's x, y (at 2 m/s 0.8 mm from this tick's, inside the
+  // window's margin). A stale sample repeats the last one: no step.
+  if (s.lds_step_min_codes != 0 && (sample.status_flags & io::kStaleFrame) == 0) {
+    for (int i = 0; i < io::kDisplacementSensors; ++i) {
+      const std::int32_t code = sample.displacement_adc[i];
+      const std::int32_t jump = code - s.lds_last_code[i];
+      s.lds_last_code[i] = static_cast<std::int16_t>(code);
+      // |jump| > min as one unsigned compare.
+      const bool jumped = static_cast<std::uint32_t>(jump + s.lds_step_min_codes) >
+                          static_cast<std::uint32_t>(2 * s.lds_step_min_codes);
+      if (jumped || (s.lds_held & (1u << i)) != 0) RepairTargetStep(i, jump, jumped, sample, &s, &out);
+    }
+  }
 
   // --- counters ----------------------------------------------------------------
   const bool seed = !s.seeded;
@@ -363,6 +464,12 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
     const bool oor = (sample.status_flags & (io::kDisplacementOutOfRange0 << i)) != 0;
     lds_bad = static_cast<std::uint8_t>(lds_bad | ((railed || oor) ? (1u << i) : 0u));
   }
+  if (s.lds_step_min_codes != 0 && !stale) {
+    // The offsets of the target-step repair (below), and the track: a bad
+    // reading is not compared with the next one.
+    for (int i = 0; i < io::kDisplacementSensors; ++i) h[i] += s.lds_offset_pm[i];
+    s.lds_tracked = static_cast<std::uint8_t>(~lds_bad & 7u);
+  }
   double plane[3];
   for (int r = 0; r < 3; ++r) {
     plane[r] = s.inv_plane[r][0] * h[0] + s.inv_plane[r][1] * h[1] + s.inv_plane[r][2] * h[2];
@@ -375,6 +482,8 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
 
   out.pose_unhomed[Axis::kX] = numeric::RoundToInt64(est[0]);
   out.pose_unhomed[Axis::kY] = numeric::RoundToInt64(est[1]);
+  s.lds_last_x_pm = est[0];
+  s.lds_last_y_pm = est[1];
   out.pose_unhomed[Axis::kZ] = numeric::RoundToInt64(plane[0]);
   out.pose_unhomed[Axis::kThetaX] = numeric::RoundToInt64(plane[1]);
   out.pose_unhomed[Axis::kThetaY] = numeric::RoundToInt64(plane[2]);

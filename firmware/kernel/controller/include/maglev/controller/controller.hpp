@@ -278,6 +278,11 @@ struct ControllerStatus {
   float calibration_coupling_after = 0.0f;   // the same with the new C applied (verification)
   float calibration_inconsistency = 0.0f;    // max line spread of R (scaled)
   bool coupling_correction_active = false;   // a correction (or its ramp) acts this tick
+  // --- issue 15: laser displacement sensor target steps repaired
+  // (SensorsToPoseConfig::lds_target_*) since the configuration was applied,
+  // and the sensors repaired this tick (bit s) ---
+  std::uint32_t lds_target_steps = 0;
+  std::uint8_t lds_target_step = 0;
 };
 
 template <typename Scalar>

@@ -109,6 +109,34 @@ struct SensorsToPoseConfig {
   // beyond it the jump check above acts. Applied from the third fresh sample
   // after a re-seed (it needs two real steps).
   double max_acceleration_m_per_s2;
+
+  // Laser displacement sensors' target steps (issue 15). The sensors look at
+  // the magnet array, whose blocks differ in height (a +-0.05 mm tolerance:
+  // up to 0.1 mm between neighbours). When a sensor's spot crosses from one
+  // block to the next its reading jumps by that step within a tick, and the
+  // z / tilt loops would chase it (a 0.1 mm step is 1.6 mrad of measured tilt
+  // at the seed stage's sensor spacing, past the tilt envelope). The platen
+  // itself cannot move that far in one tick, so a reading that changes by
+  // more than lds_target_step_min_m beyond its previous tick's change, while
+  // the sensor's spot (homed x, y + the sensor's position) is within
+  // lds_target_window_m of a block boundary of the lds_target_cell_m grid,
+  // is a target step: it is taken as an offset of that sensor (the repaired
+  // reading continues the previous one) and reported in
+  // PoseMeasurement::lds_target_step. A jump away from a boundary is not
+  // repaired (a real fault, left to the supervisor). The offsets persist
+  // while the sensor is tracked; they reset when a configuration is applied.
+  // lds_target_cell_m = 0 turns the repair off. The window covers the
+  // sensors' position tolerance and the array's placement; the threshold
+  // is >10x the platen's change per tick in any commanded motion (~0.4 um)
+  // and >> the sensors' noise. The jump is the reading's whole change over
+  // the tick (no extrapolation: a step below the threshold would otherwise
+  // read as a jump back on the next tick). One step is repaired per visit of
+  // an edge's window, plus steps that undo it (a spot that goes back, or
+  // dithers on the edge): a run of same-way jumps at one edge is the platen
+  // moving.
+  double lds_target_cell_m = 0.0;
+  double lds_target_step_min_m = 5e-6;
+  double lds_target_window_m = 1e-3;
 };
 
 // Defaults from io/stage_parameters.hpp. Not constexpr (uses std::exp).
@@ -128,6 +156,7 @@ enum class SensorsToPoseError : std::uint8_t {
   kBadDisplacementScale,
   kBadPitch,
   kBadHallConfig,
+  kBadTargetStepRepair,      // lds_target_*: cell < 0, or threshold / window out of range
 };
 
 // ---------------------------------------------------------------------------
@@ -177,6 +206,27 @@ struct SensorsToPoseState {
   std::int64_t home_offset_x_pm;
   std::int64_t home_offset_y_pm;
   bool homed;
+  // LDS target-step repair (lds_target_*): constants, then runtime.
+  double lds_cell_pm;         // 0: off
+  double lds_inv_cell_per_pm;
+  std::int32_t lds_step_min_codes;  // 0: off
+  double lds_step_min_pm;           // the same in pm
+  double lds_window_pm;
+  double lds_sensor_x_pm[io::kDisplacementSensors];
+  double lds_sensor_y_pm[io::kDisplacementSensors];
+  std::int16_t lds_last_code[io::kDisplacementSensors];  // last reading's ADC code
+  double lds_last_x_pm;  // last tick's unhomed x, y (where the spots are)
+  double lds_last_y_pm;
+  double lds_offset_pm[io::kDisplacementSensors];    // added to the reading
+  // The step last repaired and its edge (lds_held_edge cells
+  // along x or y): until the spot leaves that edge's window, only a step
+  // that undoes it is repaired there.
+  double lds_held_pm[io::kDisplacementSensors];
+  double lds_held_edge[io::kDisplacementSensors];
+  std::uint8_t lds_held_along_x[io::kDisplacementSensors];
+  std::uint8_t lds_held;  // bit i: lds_held_pm[i] is held
+  std::uint8_t lds_tracked;   // bit i: lds_last_raw_pm[i] is from the previous tick
+  std::uint32_t lds_steps_repaired;  // since the configuration was applied (saturating)
 };
 
 // Validates, precomputes, and re-seeds the counters on the next sample.
@@ -198,6 +248,10 @@ struct PoseMeasurement {
   // that reached the kernel a tick early or late over a link).
   std::uint8_t beam_glitch;
   std::int64_t glitch_counts[io::kInterferometerAxes];
+  // bit s: THIS tick's reading of displacement sensor s jumped at a target
+  // block edge and was repaired (lds_target_*; the step is in
+  // SensorsToPoseState::lds_held_pm[s]).
+  std::uint8_t lds_target_step;
   std::uint8_t displacement_bad;  // bit s: out of range, or ADC at the rail
   bool adc_fault;
   bool stale_frame;
