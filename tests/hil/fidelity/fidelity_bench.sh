@@ -74,4 +74,20 @@ for n in ("seed3a", "seed4"):
     print(f"{n}: theta_y p-p {pp:.3g} rad, rest {rest:.3g}, nominal {m['nominal']['move_pp_theta_y_rad']:.3g}")
 print("metrics.json: ok")
 PYEOF
+# The LDS target's block steps (issue 15): the 14 mm move over the target as
+# drawn ends Ready with the kernel's repair, and lands without it.
+for n in fidelity_move_target fidelity_move_target_off; do
+  "$HIL" run "$DIR/$n.scenario" --out "$OUT/$n" --no-plots --quiet > "$OUT/$n.log" 2>&1 ||
+    { cat "$OUT/$n.log"; fail "run $n"; }
+done
+"$PY" - "$OUT" <<'PYEOF' || exit 1
+import json, sys
+out = sys.argv[1]
+on = json.load(open(f"{out}/fidelity_move_target/metrics.json"))
+off = json.load(open(f"{out}/fidelity_move_target_off/metrics.json"))
+assert on["final_sequencer_state"] == 6 and on["fault_code"] == 0, f"repair on: state {on['final_sequencer_state']}, fault {on['fault_code']}"
+assert on.get("lds_target_steps_repaired", 0) >= 1, "repair on: no target step repaired"
+assert off["fault_code"] != 0 and "lds_target_steps_repaired" not in off, "repair off: the move did not fault on the target steps"
+print(f"LDS target steps: repaired {on['lds_target_steps_repaired']:.0f}, Ready; off: fault {off['fault_code']:.0f}")
+PYEOF
 echo "hil_fidelity_bench: passed"
