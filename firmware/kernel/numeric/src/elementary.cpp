@@ -132,6 +132,25 @@ double dcos(double x) {
   }
 }
 
+// Both from one reduction: exactly dsin(x) and dcos(x) (the same r, the same
+// polynomials, the same quadrant selection), for the references' ticks.
+void dsincos(double x, double* sin_out, double* cos_out) {
+  if (std::isnan(x) || std::isinf(x)) {
+    *sin_out = kNaN;
+    *cos_out = kNaN;
+    return;
+  }
+  int q = 0;
+  const double r = reduce(x, &q);
+  const double sp = sin_poly(r), cp = cos_poly(r);
+  switch (q) {
+    case 0: *sin_out = sp; *cos_out = cp; break;
+    case 1: *sin_out = cp; *cos_out = -sp; break;
+    case 2: *sin_out = -sp; *cos_out = -cp; break;
+    default: *sin_out = -cp; *cos_out = sp; break;
+  }
+}
+
 MAGLEV_CONFIG_CODE double dtan(double x) {
   if (std::isnan(x) || std::isinf(x)) return kNaN;
   int q = 0;

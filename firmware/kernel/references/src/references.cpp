@@ -275,7 +275,8 @@ MAGLEV_CONFIG_CODE ReferenceError CircleReference::plan(std::int64_t x0_pico, st
 void CircleReference::sample(std::int64_t tick, AxisReference* x, AxisReference* y) const {
   const AxisReference s = arc_.sample(tick);  // arc length in pm
   const double theta = static_cast<double>(s.position_pico) / kPicoPerSi / radius_m_;
-  const double c = numeric::dcos(theta), sn = numeric::dsin(theta);
+  double sn = 0.0, c = 0.0;
+  numeric::dsincos(theta, &sn, &c);
   const double v = static_cast<double>(s.velocity), at = static_cast<double>(s.acceleration);
   *x = AxisReference{};
   *y = AxisReference{};
@@ -312,6 +313,7 @@ MAGLEV_CONFIG_CODE ReferenceError SinusoidReference::plan(std::int64_t start_pic
   amplitude_ = amplitude_m;
   omega_ = w;
   phase_ = phase_rad;
+  sin_phase_ = s0;
   period_s_ = 1.0 / servo_rate_Hz;
   total_ticks_ = cycles > 0.0 ? ticks_for(cycles / frequency_Hz, servo_rate_Hz) : 0;
   return ReferenceError::kOk;
@@ -323,10 +325,13 @@ AxisReference SinusoidReference::sample(std::int64_t tick) const {
   const bool finished = total_ticks_ > 0 && tick >= total_ticks_;
   const double t = finished ? static_cast<double>(total_ticks_) * period_s_ : static_cast<double>(tick) * period_s_;
   const double ph = omega_ * t + phase_;
-  r.position_pico = start_ + numeric::si_to_pico(amplitude_ * (numeric::dsin(ph) - numeric::dsin(phase_)));
+  // One reduction for sin and cos of ph; sin of the start phase is planned.
+  double s = 0.0, c = 0.0;
+  numeric::dsincos(ph, &s, &c);
+  r.position_pico = start_ + numeric::si_to_pico(amplitude_ * (s - sin_phase_));
   if (!finished) {
-    r.velocity = static_cast<float>(amplitude_ * omega_ * numeric::dcos(ph));
-    r.acceleration = static_cast<float>(-amplitude_ * omega_ * omega_ * numeric::dsin(ph));
+    r.velocity = static_cast<float>(amplitude_ * omega_ * c);
+    r.acceleration = static_cast<float>(-amplitude_ * omega_ * omega_ * s);
   }
   return r;
 }

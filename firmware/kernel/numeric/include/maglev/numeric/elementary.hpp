@@ -21,6 +21,8 @@ namespace maglev::numeric {
 
 double dsin(double x);
 double dcos(double x);
+// *sin_out = dsin(x), *cos_out = dcos(x), bit for bit, from one reduction.
+void dsincos(double x, double* sin_out, double* cos_out);
 double dtan(double x);
 double datan2(double y, double x);
 double datan(double x);

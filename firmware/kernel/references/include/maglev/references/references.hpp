@@ -142,6 +142,7 @@ class SinusoidReference {
  private:
   std::int64_t start_ = 0;
   double amplitude_ = 0.0, omega_ = 0.0, phase_ = 0.0, period_s_ = 0.0;
+  double sin_phase_ = 0.0;  // dsin(phase_), planned once
   std::int64_t total_ticks_ = 0;
 };
 
