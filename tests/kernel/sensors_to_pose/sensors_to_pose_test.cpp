@@ -666,7 +666,7 @@ SensorsToPoseState& HomedAt(const SensorsToPoseConfig& cfg, double home_x_m) {
   return st;
 }
 constexpr std::int16_t kCodes50um = 8192;  // 20 um/V * 10 V / 32768 = 6.1 nm per code
-constexpr std::int16_t kCodes4um = 655;
+constexpr std::int16_t kCodesHalfUm = 82;  // 0.5 um: below the 1 um threshold
 
 }  // namespace
 
@@ -685,21 +685,21 @@ TEST(SensorsToPose, ATargetStepAtABlockEdgeIsTakenAsAnOffsetOncePerEdgeVisit) {
   DOUBLES_EQUAL(-kCodes50um * st.lds_gain_pm, st.lds_offset_pm[0], 1e-3);
   CHECK(std::llabs(z0 - pm.pose[maglev::kernel::Axis::kZ]) <= 1);
   LONGS_EQUAL(1, st.lds_steps_repaired);
-  // The platen's own motion after it is measured as usual (4 um at sensor 0).
-  pm = SensorsToPoseStep(LdsSample(kCodes50um + kCodes4um), &st);
+  // The platen's own motion after it is measured as usual (0.5 um at sensor 0).
+  pm = SensorsToPoseStep(LdsSample(kCodes50um + kCodesHalfUm), &st);
   LONGS_EQUAL(0, pm.lds_target_step);
-  DOUBLES_EQUAL(kCodes4um * st.lds_gain_pm * st.inv_plane[0][0],
+  DOUBLES_EQUAL(kCodesHalfUm * st.lds_gain_pm * st.inv_plane[0][0],
                 static_cast<double>(pm.pose[maglev::kernel::Axis::kZ] - z0), 1.0);
   // A second jump the same way at the same edge is the platen moving (a fall,
   // a touchdown): not repaired, the loops and the supervisor see it.
-  pm = SensorsToPoseStep(LdsSample(2 * kCodes50um + kCodes4um), &st);
+  pm = SensorsToPoseStep(LdsSample(2 * kCodes50um + kCodesHalfUm), &st);
   LONGS_EQUAL(0, pm.lds_target_step);
   CHECK(pm.pose[maglev::kernel::Axis::kZ] - z0 > 16000000);
   // A jump that undoes the held step (the spot back over the edge, or
   // dithering on it) is repaired, however often.
   const std::int64_t z_moved = pm.pose[maglev::kernel::Axis::kZ];
   for (int k = 0; k < 4; ++k) {
-    pm = SensorsToPoseStep(LdsSample(k % 2 == 0 ? kCodes50um + kCodes4um : 2 * kCodes50um + kCodes4um), &st);
+    pm = SensorsToPoseStep(LdsSample(k % 2 == 0 ? kCodes50um + kCodesHalfUm : 2 * kCodes50um + kCodesHalfUm), &st);
     LONGS_EQUAL(1, pm.lds_target_step);
     CHECK(std::llabs(z_moved - pm.pose[maglev::kernel::Axis::kZ]) <= 1);
   }
@@ -717,8 +717,8 @@ TEST(SensorsToPose, TargetJumpsAwayFromAnEdgeBelowTheThresholdUnhomedOrWithTheRe
   LONGS_EQUAL(1, jump_repaired(HomedAt(cfg, 2.5e-3), kCodes50um));
   // 2 mm from both edges (x 61.5 mm, y 61.5 mm): a fault, not the target.
   LONGS_EQUAL(0, jump_repaired(HomedAt(cfg, 0.0), kCodes50um));
-  // Below the 5 um threshold: left to the loops.
-  LONGS_EQUAL(0, jump_repaired(HomedAt(cfg, 2.5e-3), kCodes4um));
+  // Below the 1 um threshold: left to the loops.
+  LONGS_EQUAL(0, jump_repaired(HomedAt(cfg, 2.5e-3), kCodesHalfUm));
   // Before homing the spot is not known in the magnet frame.
   LONGS_EQUAL(0, jump_repaired(FreshState(cfg), kCodes50um));
   // Off.

@@ -111,7 +111,7 @@ MAGLEV_CONFIG_CODE SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   c.max_acceleration_m_per_s2 = 80.0;
   // The LDS look at the magnet array's top: blocks of a quarter pitch.
   c.lds_target_cell_m = stage::kPitch_m / 4.0;
-  c.lds_target_step_min_m = 5e-6;
+  c.lds_target_step_min_m = 1e-6;
   c.lds_target_window_m = 1e-3;
   return c;
 }

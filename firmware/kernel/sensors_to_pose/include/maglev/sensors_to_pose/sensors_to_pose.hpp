@@ -126,16 +126,19 @@ struct SensorsToPoseConfig {
   // repaired (a real fault, left to the supervisor). The offsets persist
   // while the sensor is tracked; they reset when a configuration is applied.
   // lds_target_cell_m = 0 turns the repair off. The window covers the
-  // sensors' position tolerance and the array's placement; the threshold
-  // is >10x the platen's change per tick in any commanded motion (~0.4 um)
-  // and >> the sensors' noise. The jump is the reading's whole change over
+  // sensors' position tolerance and the array's placement; the threshold,
+  // 1 um, is 10x the largest change of a reading per tick in the bench's
+  // suite outside the target steps (0.10 um, loop_response) and 100x the
+  // sensors' 10 nm noise. (5 um left steps up to 5 um to the loops: on the
+  // as-built stage, levelled at the tilt range's end, one such step at the
+  // low corner put it on its stop at the end of a 56 mm move.) The jump is the reading's whole change over
   // the tick (no extrapolation: a step below the threshold would otherwise
   // read as a jump back on the next tick). One step is repaired per visit of
   // an edge's window, plus steps that undo it (a spot that goes back, or
   // dithers on the edge): a run of same-way jumps at one edge is the platen
   // moving.
   double lds_target_cell_m = 0.0;
-  double lds_target_step_min_m = 5e-6;
+  double lds_target_step_min_m = 1e-6;
   double lds_target_window_m = 1e-3;
 };
 
