@@ -435,9 +435,7 @@ kernel::KernelConfig config_of(const StageProfile& p) {
     }
   }
   c.measurement.pitch_m = p.halbach.pitch_m;
-  // The laser displacement sensors look at the array's top: blocks a
-  // quarter pitch wide (a Halbach array's four magnetisations per pitch).
-  c.measurement.lds_target_cell_m = p.halbach.pitch_m / 4.0;
+  c.measurement.lds_target_cell_m = kernel::MagnetBlockWidth_m(p.halbach.pitch_m);
   return c;
 }
 }  // namespace

@@ -960,7 +960,6 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
   status_.excitation_tick = excitation_.tick;
   status_.motion_active = motion_active();
   status_.lds_target_steps = s2p_.lds_steps_repaired;
-  status_.lds_target_step = t.m.lds_target_step;
 }
 
 template <typename Scalar>

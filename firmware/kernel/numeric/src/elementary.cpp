@@ -1,8 +1,8 @@
 #include "maglev/io/code_placement.hpp"
 #include "maglev/numeric/elementary.hpp"
 
-#include <cmath>
-#include <cstdint>  // std::ldexp, std::frexp (exact), std::isnan / isinf (classification)
+#include <cmath>  // std::ldexp, std::frexp (exact), std::isnan / isinf (classification)
+#include <cstdint>
 #include <limits>
 
 namespace maglev::numeric {

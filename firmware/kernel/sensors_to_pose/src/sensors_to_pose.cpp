@@ -109,8 +109,7 @@ MAGLEV_CONFIG_CODE SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   // runs (shorted amplifiers and pushes included). 80 m/s^2 is a step change
   // of 20 707 counts (12.8 um) in one tick at 2.5 kHz (docs/RELIABILITY.md).
   c.max_acceleration_m_per_s2 = 80.0;
-  // The LDS look at the magnet array's top: blocks of a quarter pitch.
-  c.lds_target_cell_m = stage::kPitch_m / 4.0;
+  c.lds_target_cell_m = MagnetBlockWidth_m(stage::kPitch_m);
   c.lds_target_step_min_m = 1e-6;
   c.lds_target_window_m = 1e-3;
   return c;
@@ -223,13 +222,12 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
   }
   s.lds_cell_pm = config.lds_target_cell_m * 1e12;
   s.lds_inv_cell_per_pm = config.lds_target_cell_m > 0.0 ? 1.0 / s.lds_cell_pm : 0.0;
-  // In ADC codes (at least one): the tick compares codes.
+  // In ADC codes (at least one: the minimum is validated > 0): the tick compares codes.
   s.lds_step_min_codes =
       config.lds_target_cell_m > 0.0
           ? static_cast<std::int32_t>(std::ceil(config.lds_target_step_min_m * 1e12 / s.lds_gain_pm))
           : 0;
   if (s.lds_step_min_codes < 0 || s.lds_step_min_codes > 16384) return SensorsToPoseError::kBadTargetStepRepair;
-  if (config.lds_target_cell_m > 0.0 && s.lds_step_min_codes == 0) s.lds_step_min_codes = 1;
   s.lds_step_min_pm = static_cast<double>(s.lds_step_min_codes) * s.lds_gain_pm;
   s.lds_window_pm = config.lds_target_window_m * 1e12;
   for (int i = 0; i < io::kDisplacementSensors; ++i) {
@@ -283,6 +281,13 @@ void ReseedInterferometers(SensorsToPoseState* state) {
 
 namespace {
 
+// A laser displacement reading out of range (its status bit) or at an ADC rail.
+bool LdsReadingBad(const io::SensorSample& sample, int i, const SensorsToPoseState& s) {
+  const std::int16_t code = sample.displacement_adc[i];
+  return code >= s.adc_rail_code || code <= -s.adc_rail_code - 1 ||
+         (sample.status_flags & (io::kDisplacementOutOfRange0 << i)) != 0;
+}
+
 // The rare part of the LDS target-step repair (SensorsToPoseConfig::lds_target_*):
 // sensor i's reading changed by jump_codes this tick, or a repaired step is
 // held at its edge.
@@ -291,10 +296,7 @@ namespace {
                                                     PoseMeasurement* out) {
   SensorsToPoseState& s = *state;
   const std::uint8_t bit = static_cast<std::uint8_t>(1u << i);
-  const std::int16_t code = sample.displacement_adc[i];
-  const bool bad = code >= s.adc_rail_code || code <= -s.adc_rail_code - 1 ||
-                   (sample.status_flags & (io::kDisplacementOutOfRange0 << i)) != 0;
-  if ((s.lds_tracked & bit) == 0 || bad || !s.homed) return;
+  if ((s.lds_tracked & bit) == 0 || LdsReadingBad(sample, i, s) || !s.homed) return;
   const double jump = static_cast<double>(jump_codes) * s.lds_gain_pm;
   const double x_pm = s.lds_last_x_pm, y_pm = s.lds_last_y_pm;
   const double held = (s.lds_held & bit) != 0 ? s.lds_held_pm[i] : 0.0;
@@ -339,14 +341,17 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   PoseMeasurement out;  // every field is written below (no memset per tick)
   out.beam_glitch = 0;
   out.lds_target_step = 0;
+  // A stale sample repeats the previous one (the transport had nothing new):
+  // not a step of the mirror, nor of a displacement reading.
+  const bool stale = (sample.status_flags & io::kStaleFrame) != 0;
 
   // --- laser displacement sensors' target steps (lds_target_*) -------------------
   // First, while little else is live: per sensor one subtraction and a
   // compare of ADC codes; the rest (RepairTargetStep) only on a jump, or
   // while a repaired step is held at its edge. It places the spot with the
   // previous tick's x, y (at 2 m/s 0.8 mm from this tick's, inside the
-  // window's margin). A stale sample repeats the last one: no step.
-  if (s.lds_step_min_codes != 0 && (sample.status_flags & io::kStaleFrame) == 0) {
+  // window's margin).
+  if (s.lds_step_min_codes != 0 && !stale) {
     for (int i = 0; i < io::kDisplacementSensors; ++i) {
       const std::int32_t code = sample.displacement_adc[i];
       const std::int32_t jump = code - s.lds_last_code[i];
@@ -362,10 +367,8 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   const bool seed = !s.seeded;
   s.steps_seen = seed ? std::uint8_t{0} : s.steps_seen;
   s.stale_gap = seed ? std::uint8_t{0} : s.stale_gap;
-  // A stale sample repeats the previous one (the transport had nothing new):
-  // not a step of the mirror. The next fresh sample's step then covers
-  // n = stale_gap + 1 ticks.
-  const bool stale = (sample.status_flags & io::kStaleFrame) != 0;
+  // After stale samples the next fresh sample's step covers n = stale_gap + 1
+  // ticks.
   const std::int64_t n = std::int64_t{s.stale_gap} + 1;
   // The acceleration check needs two real steps after the seed (the seed's
   // own step is zero by construction), and a fresh sample.
@@ -458,11 +461,8 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   double h[3];
   std::uint8_t lds_bad = 0;
   for (int i = 0; i < io::kDisplacementSensors; ++i) {
-    const std::int16_t code = sample.displacement_adc[i];
-    h[i] = s.lds_zero_pm + static_cast<double>(code) * s.lds_gain_pm;
-    const bool railed = code >= s.adc_rail_code || code <= -s.adc_rail_code - 1;
-    const bool oor = (sample.status_flags & (io::kDisplacementOutOfRange0 << i)) != 0;
-    lds_bad = static_cast<std::uint8_t>(lds_bad | ((railed || oor) ? (1u << i) : 0u));
+    h[i] = s.lds_zero_pm + static_cast<double>(sample.displacement_adc[i]) * s.lds_gain_pm;
+    lds_bad = static_cast<std::uint8_t>(lds_bad | (LdsReadingBad(sample, i, s) ? (1u << i) : 0u));
   }
   if (s.lds_step_min_codes != 0 && !stale) {
     // The offsets of the target-step repair (below), and the track: a bad

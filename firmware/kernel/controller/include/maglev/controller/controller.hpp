@@ -279,10 +279,8 @@ struct ControllerStatus {
   float calibration_inconsistency = 0.0f;    // max line spread of R (scaled)
   bool coupling_correction_active = false;   // a correction (or its ramp) acts this tick
   // --- issue 15: laser displacement sensor target steps repaired
-  // (SensorsToPoseConfig::lds_target_*) since the configuration was applied,
-  // and the sensors repaired this tick (bit s) ---
+  // (SensorsToPoseConfig::lds_target_*) since the configuration was applied ---
   std::uint32_t lds_target_steps = 0;
-  std::uint8_t lds_target_step = 0;
 };
 
 template <typename Scalar>

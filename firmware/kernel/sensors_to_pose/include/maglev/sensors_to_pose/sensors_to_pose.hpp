@@ -116,31 +116,31 @@ struct SensorsToPoseConfig {
   // block to the next its reading jumps by that step within a tick, and the
   // z / tilt loops would chase it (a 0.1 mm step is 1.6 mrad of measured tilt
   // at the seed stage's sensor spacing, past the tilt envelope). The platen
-  // itself cannot move that far in one tick, so a reading that changes by
-  // more than lds_target_step_min_m beyond its previous tick's change, while
-  // the sensor's spot (homed x, y + the sensor's position) is within
-  // lds_target_window_m of a block boundary of the lds_target_cell_m grid,
-  // is a target step: it is taken as an offset of that sensor (the repaired
-  // reading continues the previous one) and reported in
-  // PoseMeasurement::lds_target_step. A jump away from a boundary is not
-  // repaired (a real fault, left to the supervisor). The offsets persist
-  // while the sensor is tracked; they reset when a configuration is applied.
-  // lds_target_cell_m = 0 turns the repair off. The window covers the
-  // sensors' position tolerance and the array's placement; the threshold,
-  // 1 um, is 10x the largest change of a reading per tick in the bench's
-  // suite outside the target steps (0.10 um, loop_response) and 100x the
-  // sensors' 10 nm noise. (5 um left steps up to 5 um to the loops: on the
-  // as-built stage, levelled at the tilt range's end, one such step at the
-  // low corner put it on its stop at the end of a 56 mm move.) The jump is the reading's whole change over
-  // the tick (no extrapolation: a step below the threshold would otherwise
-  // read as a jump back on the next tick). One step is repaired per visit of
-  // an edge's window, plus steps that undo it (a spot that goes back, or
-  // dithers on the edge): a run of same-way jumps at one edge is the platen
-  // moving.
+  // itself does not move that far in one tick, so a reading whose whole change
+  // over the tick exceeds lds_target_step_min_m, while the sensor's spot
+  // (homed x, y + the sensor's position) is within lds_target_window_m of a
+  // block edge of the lds_target_cell_m grid, is a target step: it is taken as
+  // an offset of that sensor (the repaired reading continues the previous one)
+  // and reported in PoseMeasurement::lds_target_step. One step is repaired per
+  // visit of an edge's window, plus steps that undo it (a spot that goes back,
+  // or dithers on the edge): a run of same-way jumps at one edge is the platen
+  // moving. A jump away from an edge is not repaired (a real fault, left to the
+  // supervisor). The offsets persist while the sensor is tracked; they reset
+  // when a configuration is applied. lds_target_cell_m = 0 turns the repair off.
+  // The window covers the sensors' position tolerance and the array's
+  // placement. The threshold, 1 um, is 10x the largest change of a reading per
+  // tick in the bench's suite outside the target steps (0.10 um,
+  // loop_response) and 100x the sensors' 10 nm noise; at 5 um a step left to
+  // the loops put the as-built platen's low corner on its stop (docs/KERNEL.md).
   double lds_target_cell_m = 0.0;
   double lds_target_step_min_m = 1e-6;
   double lds_target_window_m = 1e-3;
 };
+
+// The laser displacement sensors' target, the magnet array's top, is made of
+// blocks a quarter pitch wide (a Halbach array's four magnetisations per
+// pitch): lds_target_cell_m of a stage with this pitch.
+constexpr double MagnetBlockWidth_m(double pitch_m) { return pitch_m / 4.0; }
 
 // Defaults from io/stage_parameters.hpp. Not constexpr (uses std::exp).
 SensorsToPoseConfig DefaultSensorsToPoseConfig();
@@ -228,7 +228,7 @@ struct SensorsToPoseState {
   double lds_held_edge[io::kDisplacementSensors];
   std::uint8_t lds_held_along_x[io::kDisplacementSensors];
   std::uint8_t lds_held;  // bit i: lds_held_pm[i] is held
-  std::uint8_t lds_tracked;   // bit i: lds_last_raw_pm[i] is from the previous tick
+  std::uint8_t lds_tracked;   // bit i: lds_last_code[i] was a good reading
   std::uint32_t lds_steps_repaired;  // since the configuration was applied (saturating)
 };
 

@@ -16,7 +16,7 @@ ForceAllocationError FillCommon(const ForceAllocationConfig& c, const ForceAlloc
 
 template <typename Scalar>
 constexpr Scalar AbsScalar(Scalar v) {
-  if constexpr (std::is_same_v<Scalar, float>) {
+  if constexpr (!numeric::ScalarTraits<Scalar>::kIsFixed) {
     // VABS, one instruction on the M7 (the compare-and-negate is four); its
     // one use, MaxScalar(m, |h|), gives the same for every h, NaN included.
     return __builtin_fabsf(v);
