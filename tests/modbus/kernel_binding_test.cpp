@@ -537,3 +537,40 @@ TEST(KernelBinding, TheServoRateIsPersistedRedesignsTheLoopsAndIsRefusedOffRest)
   LONGS_EQUAL(1, modbus_read_registers(rebooted.ctx, addr(RegId::persist_flags), 1, &flags));
   CHECK((flags & kLoadedDefaults) == 0);  // the record, not the defaults
 }
+
+TEST(KernelBinding, TheLdsTargetRepairSwitchIsPersistedAndItsCountIsServed) {
+  {
+    Stage st(flash);
+    // Default on, with the stage's cell (a quarter pitch); nothing repaired yet.
+    LONGS_EQUAL(1, read_u16(st.ctx, RegId::lds_target_repair));
+    LONGS_EQUAL(1, st.config().measurement.lds_target_repair);
+    std::uint16_t n[2] = {0xFFFF, 0xFFFF};
+    LONGS_EQUAL(2, modbus_read_registers(st.ctx, addr(RegId::status_lds_target_steps), 2, n));
+    LONGS_EQUAL(0, n[0]);
+    LONGS_EQUAL(0, n[1]);
+    // Engineer only; 0 or 1, anything else ILLEGAL_DATA_VALUE and nothing changed.
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::lds_target_repair), 0), 1);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+    const kernel::KernelConfig before = st.config();
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::lds_target_repair), 2), 3);
+    CHECK(same_config(before, st.config()));
+    // Off: the switch reaches the kernel, the stage's cell stays, nothing else changes.
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::lds_target_repair), 0));
+    const kernel::KernelConfig c = st.config();
+    LONGS_EQUAL(0, c.measurement.lds_target_repair);
+    DOUBLES_EQUAL(before.measurement.lds_target_cell_m, c.measurement.lds_target_cell_m, 0.0);
+    kernel::KernelConfig others = c;
+    others.measurement.lds_target_repair = before.measurement.lds_target_repair;
+    CHECK(same_config(before, others));
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::config_save), 1));
+    // Off rest: SERVER_DEVICE_BUSY, nothing changed.
+    LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kAccepted),
+                run_command(st.ctx, maglev::can::HostCommandCode::kHome));
+    EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::lds_target_repair), 1), 6);
+    LONGS_EQUAL(0, read_u16(st.ctx, RegId::lds_target_repair));
+  }
+  // Reboot: the saved switch, applied before the first tick.
+  Stage rebooted(flash);
+  LONGS_EQUAL(0, rebooted.config().measurement.lds_target_repair);
+  LONGS_EQUAL(0, read_u16(rebooted.ctx, RegId::lds_target_repair));
+}

@@ -41,7 +41,7 @@ void apply_paper_controller(kernel::KernelConfig* c) {
   c->acceleration_feedforward = false;
   // Nor did the paper's stage repair its displacement sensors' target steps
   // (ours, SensorsToPoseConfig::lds_target_*): its loops saw them.
-  c->measurement.lds_target_cell_m = 0.0;
+  c->measurement.lds_target_repair = 0;
 }
 
 std::string offered_servo_rates() {
@@ -256,9 +256,9 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     if (k == "lds_target_steps") {
       // repair (the kernel's default) | off (the paper's stage: its loops
       // saw every block step of the magnet array).
-      if (v == "off") {
-        c.measurement.lds_target_cell_m = 0.0;
-      } else if (v != "repair") {
+      if (v == "off" || v == "repair") {
+        c.measurement.lds_target_repair = v == "repair" ? 1 : 0;
+      } else {
         fail("[controller] lds_target_steps = " + v + ": expected repair or off");
       }
       continue;

@@ -4,9 +4,9 @@
 # (ctest python_tables_drift fails when this file and the firmware tables differ.)
 """The firmware's tables as Python literals (see maglev.registers for the typed view)."""
 
-SCHEMA_HASH = 0x7AAAD065
+SCHEMA_HASH = 0x280D2689
 ENGINEER_KEY = 0x4e47
-PERSISTED_COUNT = 177
+PERSISTED_COUNT = 178
 BLOCK_WORDS = 124  # registers of a "block" (download window)
 
 # registers.def: (name, address, type, unit, min, max, default, access, writable_when, persisted, kind, description)
@@ -71,6 +71,8 @@ REGISTERS = (
      "board: the last servo interrupt's CPU cycles (as servo.max_cycles)"),
     ("servo.overruns", 140, "i32", "", 0.0, 2147483647.0, 0.0, "read-only", "never", False, "status",
      "board: servo ticks over their cycle budget (half the period), late (the next tick already pending) or re-entered, since boot"),
+    ("status.lds_target_steps", 142, "i32", "", 0.0, 2147483647.0, 0.0, "read-only", "never", False, "status",
+     "laser displacement sensors' target steps (block edges of the magnet array) repaired in sensors_to_pose since the configuration was applied (lds.target_repair; docs/KERNEL.md)"),
     ("cmd.axis", 200, "u16", "", 0.0, 5.0, 0.0, "operator", "always", False, "control",
      "argument: axis 0 x, 1 y, 2 theta_z, 3 z, 4 theta_x, 5 theta_y"),
     ("cmd.value", 201, "f32", "m|rad", -0.1, 0.1, 0.0, "operator", "always", False, "control",
@@ -243,6 +245,8 @@ REGISTERS = (
      "added payload (gravity feed-forward)"),
     ("servo.rate", 1316, "u16", "Hz", 2.5e+03, 2e+04, 2.5e+03, "engineer", "idle", True, "config",
      "servo rate: 2500, 5000, 10000 or 20000 Hz (landed; config.save keeps it)"),
+    ("lds.target_repair", 1318, "u16", "", 0.0, 1.0, 1.0, "engineer", "idle", True, "config",
+     "1: repair the laser displacement sensors' block steps at the magnet array's edges (default); 0: the loops see them (landed)"),
     ("stage.profile", 1400, "u16", "", 0.0, 15.0, 0.0, "engineer", "idle", True, "stage",
      "active stage profile: index into the built-in database (hil/profiles/database.txt: 0 nk2017-cross, 1 nk2020-square, 2 nk2020-triangle); writing it loads that profile's configuration (gains, limits: the other registers change); landed only; checked at boot"),
     ("filter.x.1.type", 1500, "u16", "", 0.0, 3.0, 0.0, "engineer", "gains", True, "config",

@@ -721,10 +721,16 @@ TEST(SensorsToPose, TargetJumpsAwayFromAnEdgeBelowTheThresholdUnhomedOrWithTheRe
   LONGS_EQUAL(0, jump_repaired(HomedAt(cfg, 2.5e-3), kCodesHalfUm));
   // Before homing the spot is not known in the magnet frame.
   LONGS_EQUAL(0, jump_repaired(FreshState(cfg), kCodes50um));
-  // Off.
+  // Off: no cell (a stage without an array), or the switch (register
+  // lds.target_repair) at 0 with the stage's cell kept; back on at 1.
   SensorsToPoseConfig off = cfg;
   off.lds_target_cell_m = 0.0;
   LONGS_EQUAL(0, jump_repaired(HomedAt(off, 2.5e-3), kCodes50um));
+  off = cfg;
+  off.lds_target_repair = 0;
+  LONGS_EQUAL(0, jump_repaired(HomedAt(off, 2.5e-3), kCodes50um));
+  off.lds_target_repair = 1;
+  LONGS_EQUAL(1, jump_repaired(HomedAt(off, 2.5e-3), kCodes50um));
   // A railed reading breaks the track: its jump back is not compared with it.
   SensorsToPoseState& st = HomedAt(cfg, 2.5e-3);
   (void)SensorsToPoseStep(LdsSample(0), &st);
@@ -740,6 +746,9 @@ TEST(SensorsToPose, TargetJumpsAwayFromAnEdgeBelowTheThresholdUnhomedOrWithTheRe
   CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
   bad = cfg;
   bad.lds_target_step_min_m = std::nan("");
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
+  bad = cfg;
+  bad.lds_target_repair = 2;
   CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
   LONGS_EQUAL(0, other.lsb_den);
 }

@@ -212,21 +212,21 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
   s.hall_max_amplitude_codes = config.hall_max_amplitude_codes;
 
   // --- LDS target-step repair ---------------------------------------------------
-  if (!(config.lds_target_cell_m >= 0.0 && config.lds_target_cell_m < 1.0)) {
+  if (!(config.lds_target_cell_m >= 0.0 && config.lds_target_cell_m < 1.0) || config.lds_target_repair > 1) {
     return SensorsToPoseError::kBadTargetStepRepair;
   }
-  if (config.lds_target_cell_m > 0.0 &&
+  // Switched off: as with no cell (the cell itself stays checked above).
+  const double cell_m = config.lds_target_repair != 0 ? config.lds_target_cell_m : 0.0;
+  if (cell_m > 0.0 &&
       (!(config.lds_target_step_min_m >= 1e-7 && config.lds_target_step_min_m <= 1e-3) ||
-       !(config.lds_target_window_m > 0.0 && config.lds_target_window_m < 0.5 * config.lds_target_cell_m))) {
+       !(config.lds_target_window_m > 0.0 && config.lds_target_window_m < 0.5 * cell_m))) {
     return SensorsToPoseError::kBadTargetStepRepair;
   }
-  s.lds_cell_pm = config.lds_target_cell_m * 1e12;
-  s.lds_inv_cell_per_pm = config.lds_target_cell_m > 0.0 ? 1.0 / s.lds_cell_pm : 0.0;
+  s.lds_cell_pm = cell_m * 1e12;
+  s.lds_inv_cell_per_pm = cell_m > 0.0 ? 1.0 / s.lds_cell_pm : 0.0;
   // In ADC codes (at least one: the minimum is validated > 0): the tick compares codes.
   s.lds_step_min_codes =
-      config.lds_target_cell_m > 0.0
-          ? static_cast<std::int32_t>(std::ceil(config.lds_target_step_min_m * 1e12 / s.lds_gain_pm))
-          : 0;
+      cell_m > 0.0 ? static_cast<std::int32_t>(std::ceil(config.lds_target_step_min_m * 1e12 / s.lds_gain_pm)) : 0;
   if (s.lds_step_min_codes < 0 || s.lds_step_min_codes > 16384) return SensorsToPoseError::kBadTargetStepRepair;
   s.lds_step_min_pm = static_cast<double>(s.lds_step_min_codes) * s.lds_gain_pm;
   s.lds_window_pm = config.lds_target_window_m * 1e12;

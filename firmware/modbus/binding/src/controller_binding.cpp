@@ -214,6 +214,7 @@ double ControllerDevice<Scalar>::read_status(RegId id) const {
     case RegId::status_calibration_step: return static_cast<double>(st.calibration_experiment);
     case RegId::status_coupling_before: return static_cast<double>(st.calibration_coupling_before);
     case RegId::status_coupling_after: return static_cast<double>(st.calibration_coupling_after);
+    case RegId::status_lds_target_steps: return static_cast<double>(st.lds_target_steps);
     default: return 0.0;
   }
 }

@@ -135,6 +135,13 @@ struct SensorsToPoseConfig {
   double lds_target_cell_m = 0.0;
   double lds_target_step_min_m = 1e-6;
   double lds_target_window_m = 1e-3;
+  // The repair switch (register lds.target_repair): 1 repairs on the stage's
+  // cell grid, 0 leaves every step to the loops (a flat target, or the paper's
+  // stage) and keeps the cell, so turning it back on needs no stage data.
+  // Repair acts when this is 1 and lds_target_cell_m > 0.
+  std::uint8_t lds_target_repair = 1;
+  // Explicit, always zero (configurations compare byte by byte).
+  std::uint8_t reserved_lds[7] = {};
 };
 
 // The laser displacement sensors' target, the magnet array's top, is made of
