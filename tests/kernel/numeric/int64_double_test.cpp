@@ -11,6 +11,7 @@
 
 namespace {
 
+using maglev::numeric::DivRoundHalfUp;
 using maglev::numeric::FloorDiv;
 using maglev::numeric::Int64ToDouble;
 using maglev::numeric::RoundToInt64;
@@ -94,4 +95,32 @@ TEST(Int64Double, FloorDivIsExact) {
     ++checked;
   }
   CHECK(checked > kSamples / 2);
+}
+
+TEST(Int64Double, DivRoundHalfUpEqualsTheIntegerDivision) {
+  std::uint64_t s = 5;
+  // Edges: both paths' bounds, ties, and the tick's uses (the pico -> Q7.24
+  // error: n = |e| 2^24, d = 10^6; Fixed division: n = a 2^24, d = |b|).
+  const std::uint64_t edge_n[] = {0, 1, 499999, 500000, 500001, (1ull << 50) - 1, 1ull << 50, (1ull << 62) - 1,
+                                  1ull << 62, 1ull << 63, 130000000ull << 24, (1ull << 55) - 1};
+  const std::uint64_t edge_d[] = {1, 2, 3, 4095, 4096, 1000000, 1ull << 25, (1ull << 31) - 1, (1ull << 40) - 1,
+                                  1ull << 40, 1ull << 62, 1ull << 63};
+  for (std::uint64_t n : edge_n) {
+    for (std::uint64_t d : edge_d) {
+      const std::uint64_t expect = (n + d / 2) / d;
+      if (DivRoundHalfUp(n, d) != expect) CHECK_EQUAL(expect, DivRoundHalfUp(n, d));
+    }
+  }
+  for (int i = 0; i < kSamples; ++i) {
+    std::int64_t dn = random_int64(&s, 62), dd = random_int64(&s, 41);
+    const std::uint64_t n = static_cast<std::uint64_t>(dn < 0 ? -dn : dn);
+    std::uint64_t d = static_cast<std::uint64_t>(dd < 0 ? -dd : dd);
+    if (d == 0) d = 1;
+    // Every fourth: exact ties and their neighbours (n = k d + d/2 +- 1).
+    const std::uint64_t k = n % (1ull << 20);
+    const std::uint64_t nn = i % 4 == 0 ? k * d + d / 2 + next(&s) % 3 - 1 : n;
+    const std::uint64_t expect = (nn + d / 2) / d;
+    const std::uint64_t got = DivRoundHalfUp(nn, d);
+    if (got != expect) CHECK_EQUAL(expect, got);
+  }
 }

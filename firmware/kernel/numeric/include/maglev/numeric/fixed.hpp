@@ -74,7 +74,7 @@ constexpr std::int64_t div_round(std::int64_t n, std::int64_t d) {
   const bool negative = (n < 0) != (d < 0);
   const std::uint64_t un = n < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(n) : static_cast<std::uint64_t>(n);
   const std::uint64_t ud = d < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(d) : static_cast<std::uint64_t>(d);
-  const std::uint64_t q = (un + ud / 2) / ud;
+  const std::uint64_t q = DivRoundHalfUp(un, ud);  // (un + ud / 2) / ud, no libgcc division
   return negative ? -static_cast<std::int64_t>(q) : static_cast<std::int64_t>(q);
 }
 

@@ -53,4 +53,22 @@ constexpr std::int64_t FloorDiv(std::int64_t a, std::int64_t d, double inv_d) {
   return q;
 }
 
+// floor((n + floor(d / 2)) / d) exactly, for n <= 2^63 and d > 0 (rounding
+// n / d half up: Fixed's division and the pico -> Q7.24 error). A uint64
+// division is a libgcc call on the M7 (__aeabi_uldivmod -> __udivmoddi4,
+// ~100-200 instructions). When d < 2^40 and the quotient is known to be below
+// 2^50 (n < 2^50, or d >= 2^12 and n < 2^62) FloorDiv gives the same quotient
+// from a double estimate and one exact remainder test each side (its q * d
+// stays below 2^62 + 2^40: no overflow). Otherwise (never in the tick) the
+// integer division.
+constexpr std::uint64_t DivRoundHalfUp(std::uint64_t n, std::uint64_t d) {
+  const std::uint64_t m = n + d / 2u;
+  if (d < (std::uint64_t{1} << 40) &&
+      (n < (std::uint64_t{1} << 50) || (d >= (std::uint64_t{1} << 12) && n < (std::uint64_t{1} << 62)))) {
+    const auto md = static_cast<std::int64_t>(m), dd = static_cast<std::int64_t>(d);
+    return static_cast<std::uint64_t>(FloorDiv(md, dd, 1.0 / Int64ToDouble(dd)));
+  }
+  return m / d;
+}
+
 }  // namespace maglev::numeric
