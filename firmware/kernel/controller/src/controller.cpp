@@ -646,9 +646,13 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
   si.beam_glitch = t.m.beam_glitch;
   // Only a glitching beam's refused step needs converting (two int64
   // divisions each): the fault record's value, almost never.
-  for (int b = 0; b < io::kInterferometerAxes; ++b) {
-    si.beam_glitch_m[b] =
-        (t.m.beam_glitch & (1u << b)) != 0 ? pico_to_si(CountsToPicometres(t.m.glitch_counts[b], s2p_)) : 0.0f;
+  if (t.m.beam_glitch == 0) {
+    for (float& v : si.beam_glitch_m) v = 0.0f;
+  } else {
+    for (int b = 0; b < io::kInterferometerAxes; ++b) {
+      si.beam_glitch_m[b] =
+          (t.m.beam_glitch & (1u << b)) != 0 ? pico_to_si(CountsToPicometres(t.m.glitch_counts[b], s2p_)) : 0.0f;
+    }
   }
   si.stage_profile_error = stage_profile_error_;
   for (int j = 0; j < io::kCoils; ++j) {
@@ -784,8 +788,11 @@ void Controller<Scalar>::advance_references(Tick& t) {
     profile_accel_[a] = acc_now;
     // u_ff = (m or I) a / (2 b*) in double (a in SI, up to 1.5e6 um/s^2 would
     // not fit a Scalar), one rounding to A.
-    t.accel_ff[a] = config_.acceleration_feedforward ? Traits::from_double(acc_now * ap.inertia_over_two_b_star[a])
-                                                     : Traits::zero();
+    // No profile sample: acc_now is 0 and (m or I) / (2 b*) > 0 (b* > 0 and
+    // masses >= 0 are checked at configuration), so the product is +0.
+    t.accel_ff[a] = (config_.acceleration_feedforward && sampled)
+                        ? Traits::from_double(acc_now * ap.inertia_over_two_b_star[a])
+                        : Traits::zero();
   }
   // Only TiltLock reads it (next tick); false elsewhere, so the first TiltLock
   // tick does not count as in range before it was checked.
@@ -848,7 +855,8 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
     AxisLoop<Scalar> l = loop(a);
     // Only the error (and this tick's explicit step) become Scalar: +-128 um.
     const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_.pico[a] - measured_.pico[a]);
-    const Scalar dr_um = numeric::pico_to_micro<Scalar>(t.step_pm[a]);
+    // The explicit step is zero on almost every tick (0 pm is exactly 0).
+    const Scalar dr_um = t.step_pm[a] == 0 ? Traits::zero() : numeric::pico_to_micro<Scalar>(t.step_pm[a]);
     const Scalar ff = a == axis_index(Axis::kZ) ? gravity_A + t.accel_ff[a] : t.accel_ff[a];
     const Scalar v_loop = l.update(e_um, dr_um, ff);
     Scalar v = v_loop;

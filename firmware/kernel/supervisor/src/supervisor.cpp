@@ -161,21 +161,34 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   const float measured_limit = config_.peak_current_A + config_.measured_current_margin_A;
   const float commanded_limit = config_.peak_current_A * 1.001f;
   const float rms2_limit = config_.rms_current_A * config_.rms_current_A;
+  // The masks build in registers (32-bit locals), stored into `c` once: `c`
+  // is passed by reference to attribute(), so byte fields updated in the
+  // loop were re-stored to the stack on every coil.
+  std::uint32_t monitor_rail = 0, mismatch = 0, peak_measured = 0, peak_commanded = 0, rms = 0;
+  const float mismatch_A = config_.current_mismatch_A;
+  const std::uint16_t mismatch_ticks = config_.current_mismatch_ticks;
   for (int j = 0; j < io::kCoils; ++j) {
     const std::uint32_t bit = 1u << j;
     const float m = in.coil_current_measured_A[j];
     const float i = in.coil_current_cmd_A[j];
-    const bool off = abs_f(m - i) > config_.current_mismatch_A;
-    mismatch_run_[j] = next_run(off, mismatch_run_[j]);
+    const bool off = abs_f(m - i) > mismatch_A;
+    const std::uint16_t run = next_run(off, mismatch_run_[j]);
+    mismatch_run_[j] = run;
     // Thermal model: first-order low-pass of i^2 with the coil's time constant.
-    i2_filtered_[j] += thermal_alpha_ * (i * i - i2_filtered_[j]);
-    status_.rms_current_A[j] = std::sqrt(i2_filtered_[j]);
-    c.monitor_rail = static_cast<std::uint8_t>(c.monitor_rail | (at_rail(s.coil_current_adc[j]) ? bit : 0u));
-    c.mismatch = static_cast<std::uint8_t>(c.mismatch | (mismatch_run_[j] >= config_.current_mismatch_ticks ? bit : 0u));
-    c.peak_measured = static_cast<std::uint8_t>(c.peak_measured | (abs_f(m) > measured_limit ? bit : 0u));
-    c.peak_commanded = static_cast<std::uint8_t>(c.peak_commanded | (abs_f(i) > commanded_limit ? bit : 0u));
-    c.rms = static_cast<std::uint8_t>(c.rms | (i2_filtered_[j] > rms2_limit ? bit : 0u));
+    const float i2 = i2_filtered_[j] + thermal_alpha_ * (i * i - i2_filtered_[j]);
+    i2_filtered_[j] = i2;
+    status_.rms_current_A[j] = std::sqrt(i2);
+    monitor_rail |= at_rail(s.coil_current_adc[j]) ? bit : 0u;
+    mismatch |= run >= mismatch_ticks ? bit : 0u;
+    peak_measured |= abs_f(m) > measured_limit ? bit : 0u;
+    peak_commanded |= abs_f(i) > commanded_limit ? bit : 0u;
+    rms |= i2 > rms2_limit ? bit : 0u;
   }
+  c.monitor_rail = static_cast<std::uint8_t>(monitor_rail);
+  c.mismatch = static_cast<std::uint8_t>(mismatch);
+  c.peak_measured = static_cast<std::uint8_t>(peak_measured);
+  c.peak_commanded = static_cast<std::uint8_t>(peak_commanded);
+  c.rms = static_cast<std::uint8_t>(rms);
 
   // --- position limits ---------------------------------------------------------
   const float x = in.pose[0], y = in.pose[1], tz = in.pose[2], z = in.pose[3];

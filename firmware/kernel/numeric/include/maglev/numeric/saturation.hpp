@@ -3,6 +3,7 @@
 
 #include <cstdint>
 
+#include "maglev/numeric/int64_double.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
 
 namespace maglev::numeric {
@@ -32,14 +33,17 @@ constexpr Scalar pico_to_micro(std::int64_t diff_pico) {
   // 2^31 / 2^24 um = 128 um = 1.28e8 pm; clamp first so the products below
   // cannot overflow (1.28e8 * 2^24 ~ 2.1e15 << 2^63).
   constexpr std::int64_t kClampPico = 130000000;
-  const std::int64_t d = diff_pico > kClampPico ? kClampPico : (diff_pico < -kClampPico ? -kClampPico : diff_pico);
   if constexpr (Traits::kIsFixed) {
+    const std::int64_t d = diff_pico > kClampPico ? kClampPico : (diff_pico < -kClampPico ? -kClampPico : diff_pico);
     constexpr int F = Scalar::kFracBits;
     const std::int64_t raw = detail::div_round(d * (std::int64_t{1} << F), kPicoPerMicro);
     return Scalar::from_raw(detail::saturate32(raw));
   } else {
-    // |d| <= 1.3e8 fits int32: one VCVT on the M7 instead of __aeabi_l2d.
-    return Traits::from_double(static_cast<double>(static_cast<std::int32_t>(d)) * 1e-6);
+    // No int64 clamp (two 64-bit compares and selects on the M7): the
+    // conversion is exact below 2^53 pm, and from_double's own clamp at
+    // +-128 um does what the clamp at 130 um did (both saturate), so the
+    // bits are those of the clamped form for every diff (issue 16).
+    return Traits::from_double(Int64ToDouble(diff_pico) * 1e-6);
   }
 }
 

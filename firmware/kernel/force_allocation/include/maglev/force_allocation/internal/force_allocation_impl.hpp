@@ -221,19 +221,21 @@ Scalar EffortFromForce_A(Scalar force, const ForceAllocationState<Scalar>& state
 template <typename Scalar>
 std::int16_t CurrentToDacCode(Scalar current_A, const ForceAllocationState<Scalar>& state) {
   using Traits = numeric::ScalarTraits<Scalar>;
-  std::int64_t code = 0;
   if constexpr (Traits::kIsFixed) {
     // raw (|.| < 2^31) * q32 (< 2^31) < 2^62: exact, then round half away from zero.
-    code = numeric::detail::shift_round(std::int64_t{current_A.raw()} * state.dac_q32_per_raw, 32);
+    std::int64_t code = numeric::detail::shift_round(std::int64_t{current_A.raw()} * state.dac_q32_per_raw, 32);
+    code = code > 32767 ? 32767 : (code < -32768 ? -32768 : code);
+    return static_cast<std::int16_t>(code);
   } else {
+    // Clamped in double to the DAC's own range before rounding: a rounded
+    // value beyond +-32767.5 would saturate anyway, so the codes are those of
+    // rounding first and clamping the int64 after (the form this replaced).
+    // int32 conversion: one VCVT on the M7 (an int64 one is a libgcc call).
     const double v = static_cast<double>(current_A) * state.dac_codes_per_A;
-    const double c = v > 40000.0 ? 40000.0 : (v < -40000.0 ? -40000.0 : v);  // NaN -> 0 below
-    // int32: c is within +-40000, and the conversion is one VCVT on the M7
-    // (an int64 one is a libgcc call).
-    code = (c == c) ? static_cast<std::int32_t>(c >= 0.0 ? c + 0.5 : c - 0.5) : 0;
+    if (!(v == v)) return 0;  // NaN
+    const double c = v > 32767.0 ? 32767.0 : (v < -32768.0 ? -32768.0 : v);
+    return static_cast<std::int16_t>(static_cast<std::int32_t>(c >= 0.0 ? c + 0.5 : c - 0.5));
   }
-  code = code > 32767 ? 32767 : (code < -32768 ? -32768 : code);
-  return static_cast<std::int16_t>(code);
 }
 
 template <typename Scalar>
