@@ -4,8 +4,12 @@
 # host than -O2 (docs/PERFORMANCE.md, "On-target" and "Bench speed"). The
 # results are the same bits at any level: no FP contraction
 # (-ffp-contract=off everywhere) and no reassociation without -ffast-math.
+# -fno-math-errno: sqrt becomes the bare instruction (VSQRT / sqrtsd),
+# without the compare and the library call that would set errno for a
+# negative argument; IEEE sqrt is correctly rounded, so the same bits, and
+# no kernel code reads errno.
 function(maglev_hot_path)
   foreach(_target ${ARGN})
-    target_compile_options(${_target} PRIVATE -O3)
+    target_compile_options(${_target} PRIVATE -O3 -fno-math-errno)
   endforeach()
 endfunction()
