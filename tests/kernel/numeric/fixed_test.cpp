@@ -76,6 +76,47 @@ TEST(Fixed, AddSubSaturateAtBoundaries) {
   LONGS_EQUAL(kMax, a.raw());
 }
 
+// The 32-bit saturating add / subtract (issue 16) against the 64-bit sum
+// clamped, the form they replaced: every pair of edge values and 1 million
+// pseudo-random pairs (half of them small, no saturation); also run on the
+// M7 (kernel-numeric-m7).
+namespace {
+std::uint64_t Next(std::uint64_t* x) {  // splitmix64
+  std::uint64_t z = (*x += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+}  // namespace
+
+TEST(Fixed, SaturatingAddAndSubtractEqualTheWideForms) {
+  using maglev::numeric::detail::add_sat32;
+  using maglev::numeric::detail::saturate32;
+  using maglev::numeric::detail::sub_sat32;
+  long mismatches = 0;
+  const std::int32_t edges[] = {0, 1, -1, kMax, kMin, kMax - 1, kMin + 1, kMax / 2, kMin / 2, kMax / 2 + 1,
+                                kMin / 2 - 1};
+  for (std::int32_t a : edges) {
+    for (std::int32_t b : edges) {
+      mismatches += add_sat32(a, b) != saturate32(std::int64_t{a} + b) ? 1 : 0;
+      mismatches += sub_sat32(a, b) != saturate32(std::int64_t{a} - b) ? 1 : 0;
+    }
+  }
+  std::uint64_t x = 16;
+  for (int i = 0; i < 1000000; ++i) {
+    std::int32_t a = static_cast<std::int32_t>(Next(&x)), b = static_cast<std::int32_t>(Next(&x));
+    if (a == INT32_MIN) a = kMin;  // Fixed's raw range is symmetric
+    if (b == INT32_MIN) b = kMin;
+    if ((i & 1) != 0) b = static_cast<std::int32_t>(b / 65536);
+    mismatches += add_sat32(a, b) != saturate32(std::int64_t{a} + b) ? 1 : 0;
+    mismatches += sub_sat32(a, b) != saturate32(std::int64_t{a} - b) ? 1 : 0;
+  }
+  LONGS_EQUAL(0, mismatches);
+  LONGS_EQUAL(kMax, (R(kMax) + R(kMax)).raw());
+  LONGS_EQUAL(kMin, (R(kMin) + R(kMin)).raw());
+  LONGS_EQUAL(kMin, (R(kMin) - R(kMax)).raw());
+}
+
 TEST(Fixed, MultiplyRoundsHalfAwayFromZeroAndSaturates) {
   // 0.5 LSB products: raw 1 * raw (1<<23) = 2^23 -> exactly half an LSB.
   const Q7_24 half = Q7_24::from_double(0.5);

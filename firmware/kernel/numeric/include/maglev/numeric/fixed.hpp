@@ -49,7 +49,10 @@ constexpr std::int64_t saturate64_add(std::int64_t a, std::int64_t b) {
 
 // Right shift by s >= 0 bits, rounding to nearest, ties away from zero.
 // Valid for every v in [-INT64_MAX, INT64_MAX] (works on the magnitude in
-// uint64, so v + half can never overflow).
+// uint64, so v + half can never overflow). The magnitude form is also the
+// cheap one on the M7: GCC then saturates a product with one unsigned
+// compare per sign (measured: a branch-free floor/remainder form made the
+// Q7.24 tick 2 400 instructions heavier).
 constexpr std::int64_t shift_round(std::int64_t v, int s) {
   if (s <= 0) return v;
   const std::uint64_t half = std::uint64_t{1} << (s - 1);
@@ -58,6 +61,23 @@ constexpr std::int64_t shift_round(std::int64_t v, int s) {
   }
   const std::uint64_t mag = std::uint64_t{0} - static_cast<std::uint64_t>(v);
   return -static_cast<std::int64_t>((mag + half) >> s);
+}
+
+// a + b and a - b saturated to [-INT32_MAX, INT32_MAX] for a, b in that
+// range: the 32-bit operation and its overflow flag instead of a 64-bit sum
+// and two 64-bit compares. On overflow the true result lies beyond the
+// range on the side of its sign (a's sign for a sum of two same-signed
+// values; a > b for a difference); without overflow it is exact, and the
+// one value outside the symmetric range, INT32_MIN, goes to -INT32_MAX.
+constexpr std::int32_t add_sat32(std::int32_t a, std::int32_t b) {
+  std::int32_t r = 0;
+  if (__builtin_add_overflow(a, b, &r)) return a > 0 ? kRaw32Max : kRaw32Min;
+  return r < kRaw32Min ? kRaw32Min : r;
+}
+constexpr std::int32_t sub_sat32(std::int32_t a, std::int32_t b) {
+  std::int32_t r = 0;
+  if (__builtin_sub_overflow(a, b, &r)) return a > b ? kRaw32Max : kRaw32Min;
+  return r < kRaw32Min ? kRaw32Min : r;
 }
 
 // Left shift by s >= 0 bits with saturation.
@@ -136,10 +156,10 @@ class Fixed {
 
   constexpr Fixed operator-() const { return from_raw(-raw_); }  // raw_ >= -INT32_MAX
   friend constexpr Fixed operator+(Fixed a, Fixed b) {
-    return from_raw(detail::saturate32(std::int64_t{a.raw_} + b.raw_));
+    return from_raw(detail::add_sat32(a.raw_, b.raw_));
   }
   friend constexpr Fixed operator-(Fixed a, Fixed b) {
-    return from_raw(detail::saturate32(std::int64_t{a.raw_} - b.raw_));
+    return from_raw(detail::sub_sat32(a.raw_, b.raw_));
   }
   friend constexpr Fixed operator*(Fixed a, Fixed b) {
     return from_raw(detail::saturate32(detail::shift_round(std::int64_t{a.raw_} * b.raw_, FracBits)));
