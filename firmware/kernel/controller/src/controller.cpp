@@ -924,11 +924,17 @@ io::ActuatorCommand Controller<Scalar>::coil_currents_to_dac(const Tick& t) {
   const Applied& ap = applied_[active_];
   io::ActuatorCommand cmd = io::kSafeActuatorCommand;
   const bool enable = t.so->amplifier_enable;
-  for (int j = 0; j < io::kCoils; ++j) {
-    const std::int16_t code = CurrentToDacCode<Scalar>(t.out.current_A[j], ap.allocation);
-    cmd.dac_code[j] = enable ? code : std::int16_t{0};
-    last_current_A_[j] = enable ? Traits::to_float(t.out.current_A[j]) : 0.0f;
-    status_.coil_current_A[j] = last_current_A_[j];
+  if (enable) {
+    for (int j = 0; j < io::kCoils; ++j) {
+      cmd.dac_code[j] = CurrentToDacCode<Scalar>(t.out.current_A[j], ap.allocation);
+      last_current_A_[j] = Traits::to_float(t.out.current_A[j]);
+      status_.coil_current_A[j] = last_current_A_[j];
+    }
+  } else {  // the safe command's codes are already 0
+    for (int j = 0; j < io::kCoils; ++j) {
+      last_current_A_[j] = 0.0f;
+      status_.coil_current_A[j] = 0.0f;
+    }
   }
   cmd.amplifier_enable = enable;
   last_current_limited_ = enable && t.out.saturated;
@@ -952,11 +958,19 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
   status_.reaction = sup.reaction;
   status_.saturated = t.out.saturated;
   status_.scale_k = Traits::to_float(t.out.scale_k);
+  if (enable) {
+    for (int a = 0; a < kAxisCount; ++a) {
+      status_.effort_A[a] = Traits::to_float(t.effort[a]);
+      status_.total_effort_A[a] = status_.effort_A[a];
+      status_.loop_effort_A[a] = Traits::to_float(t.loop_out[a]);
+      status_.applied_effort_A[a] = Traits::to_float(t.out.applied_effort_A[a]);
+    }
+  } else {
+    for (int a = 0; a < kAxisCount; ++a) {
+      status_.effort_A[a] = status_.total_effort_A[a] = status_.loop_effort_A[a] = status_.applied_effort_A[a] = 0.0f;
+    }
+  }
   for (int a = 0; a < kAxisCount; ++a) {
-    status_.effort_A[a] = enable ? Traits::to_float(t.effort[a]) : 0.0f;
-    status_.total_effort_A[a] = status_.effort_A[a];
-    status_.loop_effort_A[a] = enable ? Traits::to_float(t.loop_out[a]) : 0.0f;
-    status_.applied_effort_A[a] = enable ? Traits::to_float(t.out.applied_effort_A[a]) : 0.0f;
     status_.excitation_A[a] = Traits::to_float(t.excitation[a]);
     status_.reference_acceleration[a] = profile_accel_[a];
   }
