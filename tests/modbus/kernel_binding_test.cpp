@@ -574,3 +574,59 @@ TEST(KernelBinding, TheLdsTargetRepairSwitchIsPersistedAndItsCountIsServed) {
   LONGS_EQUAL(0, rebooted.config().measurement.lds_target_repair);
   LONGS_EQUAL(0, read_u16(rebooted.ctx, RegId::lds_target_repair));
 }
+
+// The repair's threshold and window (F32, um): the kernel's float fields
+// exactly, range-checked by the map (03) and by the kernel against the
+// stage's block width (03), persisted, landed only (06).
+TEST(KernelBinding, TheLdsTargetThresholdAndWindowAreRegistersInMicrometres) {
+  const auto read_f32 = [](modbus_t* ctx, RegId id) {
+    std::uint16_t w[2] = {0, 0};
+    LONGS_EQUAL(2, modbus_read_registers(ctx, addr(id), 2, w));
+    return get_f32(w);
+  };
+  const auto write_f32 = [](modbus_t* ctx, RegId id, float v) {
+    std::uint16_t w[2];
+    set_f32(v, w);
+    return modbus_write_registers(ctx, addr(id), 2, w);
+  };
+  {
+    Stage st(flash);
+    // Defaults: 1 um and 1000 um, which the kernel holds as 1e-6 m / 1e-3 m.
+    DOUBLES_EQUAL(1.0, read_f32(st.ctx, RegId::lds_target_step_min), 0.0);
+    DOUBLES_EQUAL(1000.0, read_f32(st.ctx, RegId::lds_target_window), 0.0);
+    DOUBLES_EQUAL(1.0, st.config().measurement.lds_target_step_min_um, 0.0);
+    DOUBLES_EQUAL(1000.0, st.config().measurement.lds_target_window_um, 0.0);
+    EXPECT_EXCEPTION(write_f32(st.ctx, RegId::lds_target_step_min, 2.0f), 1);  // engineer only
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+    const kernel::KernelConfig before = st.config();
+    // Out of the register range, NaN, and a window past half the stage's
+    // block width (the kernel's check): refused, nothing changed.
+    EXPECT_EXCEPTION(write_f32(st.ctx, RegId::lds_target_step_min, 0.05f), 3);
+    EXPECT_EXCEPTION(write_f32(st.ctx, RegId::lds_target_step_min, std::nanf("")), 3);
+    EXPECT_EXCEPTION(write_f32(st.ctx, RegId::lds_target_window, 30000.0f), 3);
+    const float half_block_um = static_cast<float>(before.measurement.lds_target_cell_m / 2 * 1e6);
+    CHECK(half_block_um < 25000.0f);
+    EXPECT_EXCEPTION(write_f32(st.ctx, RegId::lds_target_window, half_block_um), 3);
+    CHECK(same_config(before, st.config()));
+    // Accepted values reach the kernel exactly; nothing else changes.
+    LONGS_EQUAL(2, write_f32(st.ctx, RegId::lds_target_step_min, 2.5f));
+    LONGS_EQUAL(2, write_f32(st.ctx, RegId::lds_target_window, 750.0f));
+    const kernel::KernelConfig c = st.config();
+    DOUBLES_EQUAL(2.5, c.measurement.lds_target_step_min_um, 0.0);
+    DOUBLES_EQUAL(750.0, c.measurement.lds_target_window_um, 0.0);
+    kernel::KernelConfig others = c;
+    others.measurement.lds_target_step_min_um = before.measurement.lds_target_step_min_um;
+    others.measurement.lds_target_window_um = before.measurement.lds_target_window_um;
+    CHECK(same_config(before, others));
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::config_save), 1));
+    // Off rest: SERVER_DEVICE_BUSY, nothing changed.
+    LONGS_EQUAL(static_cast<int>(kernel::CommandResult::kAccepted),
+                run_command(st.ctx, maglev::can::HostCommandCode::kHome));
+    EXPECT_EXCEPTION(write_f32(st.ctx, RegId::lds_target_window, 900.0f), 6);
+    DOUBLES_EQUAL(750.0, read_f32(st.ctx, RegId::lds_target_window), 0.0);
+  }
+  // Reboot: the saved values, exactly.
+  Stage rebooted(flash);
+  DOUBLES_EQUAL(2.5, rebooted.config().measurement.lds_target_step_min_um, 0.0);
+  DOUBLES_EQUAL(750.0, rebooted.config().measurement.lds_target_window_um, 0.0);
+}

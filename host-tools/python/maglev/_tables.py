@@ -4,9 +4,9 @@
 # (ctest python_tables_drift fails when this file and the firmware tables differ.)
 """The firmware's tables as Python literals (see maglev.registers for the typed view)."""
 
-SCHEMA_HASH = 0x280D2689
+SCHEMA_HASH = 0x735FE9EA
 ENGINEER_KEY = 0x4e47
-PERSISTED_COUNT = 178
+PERSISTED_COUNT = 180
 BLOCK_WORDS = 124  # registers of a "block" (download window)
 
 # registers.def: (name, address, type, unit, min, max, default, access, writable_when, persisted, kind, description)
@@ -247,6 +247,10 @@ REGISTERS = (
      "servo rate: 2500, 5000, 10000 or 20000 Hz (landed; config.save keeps it)"),
     ("lds.target_repair", 1318, "u16", "", 0.0, 1.0, 1.0, "engineer", "idle", True, "config",
      "1: repair the laser displacement sensors' block steps at the magnet array's edges (default); 0: the loops see them (landed)"),
+    ("lds.target_step_min", 1320, "f32", "um", 0.1, 1e+03, 1.0, "engineer", "idle", True, "config",
+     "smallest change of a laser displacement reading in one tick taken as a target step (default 1 um: 10x the largest real change per tick, 100x the sensor noise); landed"),
+    ("lds.target_window", 1322, "f32", "um", 1.0, 2.5e+04, 1e+03, "engineer", "idle", True, "config",
+     "half-width of the window around a block edge where a jump is taken as a target step (default 1000 um: sensor position tolerance and array placement; below half the block width); landed"),
     ("stage.profile", 1400, "u16", "", 0.0, 15.0, 0.0, "engineer", "idle", True, "stage",
      "active stage profile: index into the built-in database (hil/profiles/database.txt: 0 nk2017-cross, 1 nk2020-square, 2 nk2020-triangle); writing it loads that profile's configuration (gains, limits: the other registers change); landed only; checked at boot"),
     ("filter.x.1.type", 1500, "u16", "", 0.0, 3.0, 0.0, "engineer", "gains", True, "config",

@@ -742,10 +742,15 @@ TEST(SensorsToPose, TargetJumpsAwayFromAnEdgeBelowTheThresholdUnhomedOrWithTheRe
   bad.lds_target_cell_m = -1e-3;
   CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
   bad = cfg;
-  bad.lds_target_window_m = cfg.lds_target_cell_m / 2;
+  bad.lds_target_window_um = static_cast<float>(cfg.lds_target_cell_m / 2 * 1e6);
   CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
   bad = cfg;
-  bad.lds_target_step_min_m = std::nan("");
+  bad.lds_target_step_min_um = std::nanf("");
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
+  bad = cfg;
+  bad.lds_target_step_min_um = 0.05f;  // below 0.1 um
+  CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
+  bad.lds_target_repair = 0;  // refused with the repair off too
   CHECK(ApplySensorsToPoseConfig(bad, &other) == SensorsToPoseError::kBadTargetStepRepair);
   bad = cfg;
   bad.lds_target_repair = 2;

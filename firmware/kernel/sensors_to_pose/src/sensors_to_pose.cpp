@@ -110,8 +110,8 @@ MAGLEV_CONFIG_CODE SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   // of 20 707 counts (12.8 um) in one tick at 2.5 kHz (docs/RELIABILITY.md).
   c.max_acceleration_m_per_s2 = 80.0;
   c.lds_target_cell_m = MagnetBlockWidth_m(stage::kPitch_m);
-  c.lds_target_step_min_m = 1e-6;
-  c.lds_target_window_m = 1e-3;
+  c.lds_target_step_min_um = 1.0f;
+  c.lds_target_window_um = 1000.0f;
   return c;
 }
 
@@ -217,19 +217,24 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
   }
   // Switched off: as with no cell (the cell itself stays checked above).
   const double cell_m = config.lds_target_repair != 0 ? config.lds_target_cell_m : 0.0;
-  if (cell_m > 0.0 &&
-      (!(config.lds_target_step_min_m >= 1e-7 && config.lds_target_step_min_m <= 1e-3) ||
-       !(config.lds_target_window_m > 0.0 && config.lds_target_window_m < 0.5 * cell_m))) {
+  const double step_min_m = static_cast<double>(config.lds_target_step_min_um) / 1e6;
+  const double window_m = static_cast<double>(config.lds_target_window_um) / 1e6;
+  // Checked whether or not the repair is on: a value written while it is
+  // off must not be refused only when it is turned on.
+  if (!(step_min_m >= 1e-7 && step_min_m <= 1e-3) || !(window_m > 0.0 && window_m < 0.5)) {
+    return SensorsToPoseError::kBadTargetStepRepair;
+  }
+  if (cell_m > 0.0 && !(window_m < 0.5 * cell_m)) {
     return SensorsToPoseError::kBadTargetStepRepair;
   }
   s.lds_cell_pm = cell_m * 1e12;
   s.lds_inv_cell_per_pm = cell_m > 0.0 ? 1.0 / s.lds_cell_pm : 0.0;
   // In ADC codes (at least one: the minimum is validated > 0): the tick compares codes.
   s.lds_step_min_codes =
-      cell_m > 0.0 ? static_cast<std::int32_t>(std::ceil(config.lds_target_step_min_m * 1e12 / s.lds_gain_pm)) : 0;
+      cell_m > 0.0 ? static_cast<std::int32_t>(std::ceil(step_min_m * 1e12 / s.lds_gain_pm)) : 0;
   if (s.lds_step_min_codes < 0 || s.lds_step_min_codes > 16384) return SensorsToPoseError::kBadTargetStepRepair;
   s.lds_step_min_pm = static_cast<double>(s.lds_step_min_codes) * s.lds_gain_pm;
-  s.lds_window_pm = config.lds_target_window_m * 1e12;
+  s.lds_window_pm = window_m * 1e12;
   for (int i = 0; i < io::kDisplacementSensors; ++i) {
     s.lds_sensor_x_pm[i] = config.displacement_sensor_x_m[i] * 1e12;
     s.lds_sensor_y_pm[i] = config.displacement_sensor_y_m[i] * 1e12;

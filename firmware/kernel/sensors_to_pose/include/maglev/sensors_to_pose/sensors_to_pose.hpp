@@ -117,8 +117,8 @@ struct SensorsToPoseConfig {
   // z / tilt loops would chase it (a 0.1 mm step is 1.6 mrad of measured tilt
   // at the seed stage's sensor spacing, past the tilt envelope). The platen
   // itself does not move that far in one tick, so a reading whose whole change
-  // over the tick exceeds lds_target_step_min_m, while the sensor's spot
-  // (homed x, y + the sensor's position) is within lds_target_window_m of a
+  // over the tick exceeds lds_target_step_min_um, while the sensor's spot
+  // (homed x, y + the sensor's position) is within lds_target_window_um of a
   // block edge of the lds_target_cell_m grid, is a target step: it is taken as
   // an offset of that sensor (the repaired reading continues the previous one)
   // and reported in PoseMeasurement::lds_target_step. One step is repaired per
@@ -132,9 +132,14 @@ struct SensorsToPoseConfig {
   // tick in the bench's suite outside the target steps (0.10 um,
   // loop_response) and 100x the sensors' 10 nm noise; at 5 um a step left to
   // the loops put the as-built platen's low corner on its stop (docs/KERNEL.md).
+  // The threshold and the window are float um: registers lds.target_step_min
+  // and lds.target_window (F32, um) hold exactly these values, so a value
+  // written, saved and booted is the value the kernel got. They become metres
+  // as value / 1e6 (a correctly rounded quotient: 1 um and 1000 um give the
+  // doubles 1e-6 and 1e-3 themselves).
   double lds_target_cell_m = 0.0;
-  double lds_target_step_min_m = 1e-6;
-  double lds_target_window_m = 1e-3;
+  float lds_target_step_min_um = 1.0f;
+  float lds_target_window_um = 1000.0f;
   // The repair switch (register lds.target_repair): 1 repairs on the stage's
   // cell grid, 0 leaves every step to the loops (a flat target, or the paper's
   // stage) and keeps the cell, so turning it back on needs no stage data.
