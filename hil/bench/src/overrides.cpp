@@ -263,6 +263,23 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       }
       continue;
     }
+    if (k == "lds_target_step_min" || k == "lds_target_window") {
+      // The repair's threshold and window (a length: "2 um", "0.8 mm"), within
+      // the registers lds.target_step_min / lds.target_window's ranges (um).
+      double m = 0;
+      if (!num("controller", k, v, Dim::kLength, &m)) continue;
+      const double um = m * 1e6;
+      const std::string reg = k == "lds_target_step_min" ? "lds.target_step_min" : "lds.target_window";
+      const modbus::RegisterDef* d = modbus::find_by_name(reg.c_str());
+      if (d == nullptr || !(um >= d->min && um <= d->max)) {
+        fail("[controller] " + k + " = " + v + ": outside " + reg + "'s range [" +
+             (d ? std::to_string(d->min) + ", " + std::to_string(d->max) : std::string("?")) + "] um");
+        continue;
+      }
+      (k == "lds_target_step_min" ? c.measurement.lds_target_step_min_um : c.measurement.lds_target_window_um) =
+          static_cast<float>(um);
+      continue;
+    }
     if (k == "payload_kg") {
       double m = 0;
       if (num("controller", k, v, Dim::kMass, &m)) c.payload_mass_kg = static_cast<float>(m);
@@ -272,7 +289,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     Axis p{};
     if (dot == std::string::npos || !parse_axis(k.substr(0, dot), &p)) {
       fail("[controller] unknown key '" + k +
-           "' (preset, payload_kg, servo_rate_Hz, lds_target_steps, AXIS.kp|ki|kd|b|derivative_filter_Hz, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
+           "' (preset, payload_kg, servo_rate_Hz, lds_target_steps, lds_target_step_min, lds_target_window, AXIS.kp|ki|kd|b|derivative_filter_Hz, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
       continue;
     }
     const std::string field = k.substr(dot + 1);
