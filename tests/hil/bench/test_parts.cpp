@@ -131,6 +131,16 @@ TEST(MetricsRegistry, StepAndNoiseOnASyntheticTrace) {
 
 TEST_GROUP(Overrides){};
 
+namespace {
+// A scenario's [controller] lines through apply_overrides: true if all applied.
+bool ApplyControllerLines(const char* lines, Overrides* o, std::vector<ScenarioError>* errs) {
+  auto parsed = scenario::parse_scenario(std::string("[scenario]\nname = t\nduration_s = 1\n[controller]\n") + lines,
+                                         "t.scenario");
+  CHECK_TRUE(parsed.ok());
+  return apply_overrides(*parsed.scenario, o, errs);
+}
+}  // namespace
+
 TEST(Overrides, UnknownKeysAndBadValuesAreReportedFieldByField) {
   auto parsed = scenario::parse_scenario(
       "[scenario]\nname = o\nduration_s = 1\n[plant]\nwobble = 3\n[controller]\nx.kp = 12\nq.kp = 1\nz.kq = 2\n",
@@ -179,32 +189,22 @@ TEST(Overrides, OutputFiltersAreScenarioKeysBoundedByTheirRegisters) {
 }
 
 TEST(Overrides, TheLdsTargetThresholdAndWindowAreLengthsBoundedByTheirRegisters) {
-  auto parsed = scenario::parse_scenario(
-      "[scenario]\nname = l\nduration_s = 1\n[controller]\nlds_target_step_min = 2.5um\n"
-      "lds_target_window = 0.75mm\n",
-      "l.scenario");
-  CHECK_TRUE(parsed.ok());
   Overrides o;
   std::vector<ScenarioError> errs;
-  CHECK_TRUE(apply_overrides(*parsed.scenario, &o, &errs));
+  CHECK_TRUE(ApplyControllerLines("lds_target_step_min = 2.5um\nlds_target_window = 0.75mm\n", &o, &errs));
   DOUBLES_EQUAL(2.5, o.controller.measurement.lds_target_step_min_um, 1e-6);
   DOUBLES_EQUAL(750.0, o.controller.measurement.lds_target_window_um, 1e-4);
   kernel::Controller<float> kernel_under_test;
   CHECK(kernel_under_test.apply_config(o.controller) == kernel::ConfigError::kOk);
-  // Outside the registers' ranges (0.1-1000 um, 1-25000 um).
-  auto bad = scenario::parse_scenario(
-      "[scenario]\nname = m\nduration_s = 1\n[controller]\nlds_target_step_min = 50nm\n"
-      "lds_target_window = 30mm\n",
-      "m.scenario");
-  CHECK_TRUE(bad.ok());
-  Overrides o2;
-  std::vector<ScenarioError> errs2;
-  CHECK_FALSE(apply_overrides(*bad.scenario, &o2, &errs2));
-  LONGS_EQUAL(2, errs2.size());
-  STRCMP_CONTAINS("lds.target_step_min's range", errs2[0].message.c_str());
-  STRCMP_CONTAINS("lds.target_window's range", errs2[1].message.c_str());
-  DOUBLES_EQUAL(1.0, o2.controller.measurement.lds_target_step_min_um, 0.0);
-  DOUBLES_EQUAL(1000.0, o2.controller.measurement.lds_target_window_um, 0.0);
+  // Outside the registers' ranges (0.1-1000 um, 1-25000 um): refused, defaults kept.
+  Overrides bad;
+  std::vector<ScenarioError> bad_errs;
+  CHECK_FALSE(ApplyControllerLines("lds_target_step_min = 50nm\nlds_target_window = 30mm\n", &bad, &bad_errs));
+  LONGS_EQUAL(2, bad_errs.size());
+  STRCMP_CONTAINS("lds.target_step_min's range", bad_errs[0].message.c_str());
+  STRCMP_CONTAINS("lds.target_window's range", bad_errs[1].message.c_str());
+  DOUBLES_EQUAL(1.0, bad.controller.measurement.lds_target_step_min_um, 0.0);
+  DOUBLES_EQUAL(1000.0, bad.controller.measurement.lds_target_window_um, 0.0);
 }
 
 TEST(Overrides, ThePaperPresetIsThePublishedPidsWithoutOurShaping) {
