@@ -9,6 +9,7 @@
 //   maglev-hil check-profile NAME|FILE        what the controller makes of a profile
 //   maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S] [--levitate]
 //   maglev-hil plant NAME|FILE --can IFACE --out DIR [--controller-record FILE] [--mode lockstep|realtime]
+//                    [--lockstep-timeout-ms N]
 //                  [--seed N] [--no-plots] [--quiet]
 #include <algorithm>
 #include <cstdio>
@@ -51,6 +52,7 @@ struct Args {
   double max_time_s = 0.0;
   std::string config;             // controller: scenario whose [controller]/kernel to apply
   std::string controller_record;  // plant: the controller's record file
+  std::uint32_t lockstep_timeout_ms = 200;  // plant, lockstep: wait for actuator frame N
   int seeds = 0;                  // run --seeds N: error seeds 1..N, median and spread
   bool calibrate = false;         // run --calibrate: coupling calibration session first (issue 15)
   std::string error;
@@ -82,7 +84,7 @@ void usage() {
       "  maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S]\n"
       "                 [--levitate]       (runs until a shutdown host command, SIGTERM/SIGINT or --duration)\n"
       "  maglev-hil plant NAME|FILE --can IFACE --out DIR [--controller-record FILE]\n"
-      "                 [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet]\n"
+      "                 [--mode lockstep|realtime] [--lockstep-timeout-ms N] [--seed N] [--no-plots] [--quiet]\n"
       "see docs/BENCH.md\n",
       stderr);
 }
@@ -162,6 +164,15 @@ Args parse_args(int argc, char** argv) {
       value(&a.config);
     } else if (s == "--controller-record") {
       value(&a.controller_record);
+    } else if (s == "--lockstep-timeout-ms") {
+      if (value(&v)) {
+        char* end = nullptr;
+        const long n = std::strtol(v.c_str(), &end, 10);
+        if (end == v.c_str() || *end != '\0' || n < 1 || n > 60000) {
+          a.error = "--lockstep-timeout-ms: an integer 1..60000, got '" + v + "'";
+        }
+        a.lockstep_timeout_ms = static_cast<std::uint32_t>(n);
+      }
     } else if (s == "--no-plots") {
       a.plots = false;
     } else if (s == "--quiet") {
@@ -572,6 +583,7 @@ int main(int argc, char** argv) {
     if (!load(a.positional[0], a.scenarios, &sc)) return 2;
     maglev::bench::PlantProcessOptions po;
     po.controller_record = a.controller_record.empty() ? a.out + "/controller_record.bin" : a.controller_record;
+    po.lockstep_timeout_us = a.lockstep_timeout_ms * 1000u;
     std::printf("== %s: plant process over CAN %s (%s)\n", sc.name().c_str(), a.run.can.c_str(),
                 a.run.mode == maglev::bench::Mode::kLockstep ? "lockstep" : "realtime");
     std::vector<maglev::bench::ScenarioError> errs;
