@@ -9,8 +9,7 @@
 //   maglev-hil check-profile NAME|FILE        what the controller makes of a profile
 //   maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S] [--levitate]
 //   maglev-hil plant NAME|FILE --can IFACE --out DIR [--controller-record FILE] [--mode lockstep|realtime]
-//                    [--lockstep-timeout-ms N]
-//                  [--seed N] [--no-plots] [--quiet]
+//                  [--lockstep-timeout-ms N] [--seed N] [--no-plots] [--quiet]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -57,6 +56,16 @@ struct Args {
   bool calibrate = false;         // run --calibrate: coupling calibration session first (issue 15)
   std::string error;
 };
+
+// An integer option's value within [lo, hi]; otherwise *error says so.
+long int_option(const std::string& name, const std::string& v, long lo, long hi, std::string* error) {
+  char* end = nullptr;
+  const long n = std::strtol(v.c_str(), &end, 10);
+  if (end == v.c_str() || *end != '\0' || n < lo || n > hi) {
+    *error = name + ": an integer " + std::to_string(lo) + ".." + std::to_string(hi) + ", got '" + v + "'";
+  }
+  return n;
+}
 
 void usage() {
   std::fputs(
@@ -152,12 +161,7 @@ Args parse_args(int argc, char** argv) {
         a.run.servo_rate_Hz = r;
       }
     } else if (s == "--seeds") {
-      if (value(&v)) {
-        char* end = nullptr;
-        const long n = std::strtol(v.c_str(), &end, 10);
-        if (end == v.c_str() || *end != '\0' || n < 1 || n > 100) a.error = "--seeds: an integer 1..100, got '" + v + "'";
-        a.seeds = static_cast<int>(n);
-      }
+      if (value(&v)) a.seeds = static_cast<int>(int_option(s, v, 1, 100, &a.error));
     } else if (s == "--max-time" || s == "--duration") {
       if (value(&v)) a.max_time_s = std::atof(v.c_str());
     } else if (s == "--config") {
@@ -165,14 +169,7 @@ Args parse_args(int argc, char** argv) {
     } else if (s == "--controller-record") {
       value(&a.controller_record);
     } else if (s == "--lockstep-timeout-ms") {
-      if (value(&v)) {
-        char* end = nullptr;
-        const long n = std::strtol(v.c_str(), &end, 10);
-        if (end == v.c_str() || *end != '\0' || n < 1 || n > 60000) {
-          a.error = "--lockstep-timeout-ms: an integer 1..60000, got '" + v + "'";
-        }
-        a.lockstep_timeout_ms = static_cast<std::uint32_t>(n);
-      }
+      if (value(&v)) a.lockstep_timeout_ms = static_cast<std::uint32_t>(int_option(s, v, 1, 60000, &a.error));
     } else if (s == "--no-plots") {
       a.plots = false;
     } else if (s == "--quiet") {

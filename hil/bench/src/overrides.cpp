@@ -21,6 +21,18 @@
 
 namespace maglev::bench {
 
+namespace {
+// A scenario key bounded by a register's range (one source: a scenario may
+// not set what Modbus would refuse). Empty when x is within REG's [min, max],
+// else what to report.
+std::string outside_register_range(const std::string& reg, double x) {
+  const modbus::RegisterDef* d = modbus::find_by_name(reg.c_str());
+  if (d != nullptr && x >= d->min && x <= d->max) return {};
+  return "outside " + reg + "'s range [" +
+         (d ? std::to_string(d->min) + ", " + std::to_string(d->max) : std::string("?")) + "]";
+}
+}  // namespace
+
 void apply_paper_controller(kernel::KernelConfig* c) {
   // Paper 000's published PIDs, (27) x and y, (28) theta_z, (32) z, (33)
   // theta_x and theta_y, C(s) = kp + kd s + ki / s on the error r - y: the
@@ -269,11 +281,10 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       double m = 0;
       if (!num("controller", k, v, Dim::kLength, &m)) continue;
       const double um = m * 1e6;
-      const std::string reg = k == "lds_target_step_min" ? "lds.target_step_min" : "lds.target_window";
-      const modbus::RegisterDef* d = modbus::find_by_name(reg.c_str());
-      if (d == nullptr || !(um >= d->min && um <= d->max)) {
-        fail("[controller] " + k + " = " + v + ": outside " + reg + "'s range [" +
-             (d ? std::to_string(d->min) + ", " + std::to_string(d->max) : std::string("?")) + "] um");
+      const std::string why =
+          outside_register_range(k == "lds_target_step_min" ? "lds.target_step_min" : "lds.target_window", um);
+      if (!why.empty()) {
+        fail("[controller] " + k + " = " + v + ": " + why + " um");
         continue;
       }
       (k == "lds_target_step_min" ? c.measurement.lds_target_step_min_um : c.measurement.lds_target_window_um) =
@@ -328,11 +339,9 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       double x = 0;
       const Dim dim = sub == "frequency_Hz" || sub == "pole_Hz" ? Dim::kFrequency : Dim::kNumber;
       if (!num("controller", k, v, dim, &x)) continue;
-      const std::string reg = reg_prefix + reg_field;
-      const modbus::RegisterDef* d = modbus::find_by_name(reg.c_str());
-      if (d == nullptr || !(x >= d->min && x <= d->max)) {
-        fail("[controller] " + k + " = " + v + ": outside " + reg + "'s range [" +
-             (d ? std::to_string(d->min) + ", " + std::to_string(d->max) : std::string("?")) + "]");
+      const std::string why = outside_register_range(reg_prefix + reg_field, x);
+      if (!why.empty()) {
+        fail("[controller] " + k + " = " + v + ": " + why);
         continue;
       }
       const float xf = static_cast<float>(x);

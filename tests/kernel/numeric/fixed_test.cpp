@@ -7,11 +7,13 @@
 #include "maglev/numeric/fixed.hpp"
 #include "maglev/numeric/saturation.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
+#include "test_random.hpp"
 
 using maglev::numeric::Fixed;
 using maglev::numeric::Q31_32;
 using maglev::numeric::Q3_28;
 using maglev::numeric::Q7_24;
+using maglev::numeric::test::NextRandom;
 
 namespace {
 constexpr std::int32_t kMax = INT32_MAX;
@@ -80,15 +82,6 @@ TEST(Fixed, AddSubSaturateAtBoundaries) {
 // clamped, the form they replaced: every pair of edge values and 1 million
 // pseudo-random pairs (half of them small, no saturation); also run on the
 // M7 (kernel-numeric-m7).
-namespace {
-std::uint64_t Next(std::uint64_t* x) {  // splitmix64
-  std::uint64_t z = (*x += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-}  // namespace
-
 TEST(Fixed, SaturatingAddAndSubtractEqualTheWideForms) {
   using maglev::numeric::detail::add_sat32;
   using maglev::numeric::detail::saturate32;
@@ -104,7 +97,7 @@ TEST(Fixed, SaturatingAddAndSubtractEqualTheWideForms) {
   }
   std::uint64_t x = 16;
   for (int i = 0; i < 1000000; ++i) {
-    std::int32_t a = static_cast<std::int32_t>(Next(&x)), b = static_cast<std::int32_t>(Next(&x));
+    std::int32_t a = static_cast<std::int32_t>(NextRandom(&x)), b = static_cast<std::int32_t>(NextRandom(&x));
     if (a == INT32_MIN) a = kMin;  // Fixed's raw range is symmetric
     if (b == INT32_MIN) b = kMin;
     if ((i & 1) != 0) b = static_cast<std::int32_t>(b / 65536);

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "maglev/numeric/int64_double.hpp"
+#include "test_random.hpp"
 
 #include <CppUTest/TestHarness.h>
 
@@ -17,12 +18,7 @@ using maglev::numeric::Int64ToDouble;
 using maglev::numeric::RoundToInt64;
 using maglev::numeric::TruncToInt64;
 
-std::uint64_t next(std::uint64_t* s) {
-  std::uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
+std::uint64_t next(std::uint64_t* s) { return maglev::numeric::test::NextRandom(s); }
 
 // A value of random magnitude: uniform in its bit length, so small and large
 // arguments are both dense.
