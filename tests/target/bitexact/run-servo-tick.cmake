@@ -1,6 +1,6 @@
 # cmake -DRECORDER=<kernel-vector-recorder> -DCOMPARE=<kernel-bitexact-compare>
 #       -DQEMU=<qemu-system-arm> -DELF=<maglev-qemu-servo-tick.elf> -DWORKDIR=<dir> -DTIMEOUT=<s>
-#       -DMAX_READY_INSTRUCTIONS=<n> -P run-servo-tick.cmake
+#       -DMAX_READY_INSTRUCTIONS=<n> -DMAX_READY_DAC_IRQ_INSTRUCTIONS=<n> -P run-servo-tick.cmake
 #
 # The board's whole servo interrupt at 20 kHz (firmware/board/mps2_an500/servo_tick):
 # 1. record a closed-loop session at 20 kHz (kernel-vector-recorder --rate 20000);
@@ -8,8 +8,9 @@
 #    drivers on the fake register bus, under -icount shift=6 (the image exits
 #    non-zero if the drivers' sample or DAC traffic differs from the record);
 # 3. the outputs the drivers drove, both passes, bit for bit against the host kernel;
-# 4. a Ready on_tick() may not exceed MAX_READY_INSTRUCTIONS (the measured
-#    maximum + 10 %: a regression guard, docs/PERFORMANCE.md).
+# 4. a Ready on_tick() may not exceed MAX_READY_INSTRUCTIONS, nor the DAC
+#    chain's four SPI1 interrupt bodies after it MAX_READY_DAC_IRQ_INSTRUCTIONS
+#    (each the measured maximum + 10 %: regression guards, docs/PERFORMANCE.md).
 # A missing image FAILS (the host build builds it: build-replay-image.cmake).
 include(${CMAKE_CURRENT_LIST_DIR}/bitexact-steps.cmake)
 maglev_bitexact_preflight(servo-tick "${QEMU}" "${ELF}"
@@ -37,3 +38,5 @@ if(NOT _qemu_out MATCHES "servo_step_instructions Ready: ticks=[0-9]+ min=[0-9]+
   message(FATAL_ERROR "servo-tick: the image printed no Ready servo_step_instructions line")
 endif()
 maglev_check_ready_instructions(servo-tick "${_qemu_out}" servo_tick_instructions "on_tick()" ${MAX_READY_INSTRUCTIONS})
+maglev_check_ready_instructions(servo-tick "${_qemu_out}" dac_irq_instructions "DAC chain's SPI1 interrupt work"
+                                ${MAX_READY_DAC_IRQ_INSTRUCTIONS})

@@ -66,6 +66,7 @@ void EXTI15_10_IRQHandler();
 void DMA1_Stream0_IRQHandler();
 void TIM3_IRQHandler();
 void TIM2_IRQHandler();
+void SPI1_IRQHandler();
 // Linker script (linker/stm32h743.ld): the two configuration sectors.
 extern std::uint32_t __config_bank_a_start;
 extern std::uint32_t __config_bank_b_start;
@@ -121,6 +122,7 @@ d::Stm32OutputPin<Bus> g_led{g_bus, pins::kLed};
 // shared with the QEMU whole-servo-tick image (amplifier_board_drivers.hpp).
 b::AmplifierBoardDrivers<Bus> g_board{g_bus, g_adc_dma_rx};
 auto& g_sensors = g_board.sensors;
+b::AmplifierBoardIrqActuators* g_dac_actuators = nullptr;  // SPI1_IRQHandler's; set in main()
 #endif
 
 d::AmplifierEnable* g_amp = nullptr;  // constructed in main() after the GPIO is configured
@@ -305,9 +307,10 @@ extern "C" void board_main() {
 #if MAGLEV_BOARD_HIL
   maglev::app::ActuatorSink& actuators = g_can_actuators;
 #else
-  static b::AmplifierBoardActuators board_actuators(g_board.dac, amp);
+  static b::AmplifierBoardIrqActuators board_actuators(g_board.dac_writer, amp);
   maglev::app::ActuatorSink& actuators = board_actuators;
   g_board.init();  // DAC outputs at 0 A before the amplifiers can ever be enabled
+  g_dac_actuators = &board_actuators;
 #endif
   (void)g_can.init();
   g_rs485.init();
@@ -364,6 +367,10 @@ extern "C" void board_main() {
   nvic_enable(r::irq::kExti15_10, 0);
   nvic_enable(r::irq::kDma1Stream0, 0);
   nvic_enable(r::irq::kTim3, 0);
+  // The DAC frames' end-of-transfer: the tick's priority, so it never
+  // preempts a tick; the first frame's comes ~2.4 us after the tick started
+  // it, when the tick has returned.
+  nvic_enable(r::irq::kSpi1, 0);
   // The servo clock: TIM1 CH1 PWM on CONVST (APB2 timer clock 240 MHz).
   d::start_convst_timer(g_bus, r::tim::kTim1, d::convst_timing(b::kApbTimer_Hz, g_servo_rate_Hz, 1000));
 #endif
@@ -429,6 +436,12 @@ extern "C" {
 
 // 16-bit encoder extension points (wrap, 0x4000, 0xC000). Same priority as the tick.
 [[gnu::section(".itcm_text")]] void TIM3_IRQHandler() { g_board.enc2.on_timer_irq(); }
+
+// The AD5764 chain's SYNC frame k is on the wire: check its echo, start
+// frame k + 1; after the fourth, LDAC and the amplifier enable.
+[[gnu::section(".itcm_text")]] void SPI1_IRQHandler() {
+  if (g_dac_actuators != nullptr) (void)g_dac_actuators->on_dac_irq();
+}
 #endif
 
 void SysTick_Handler() {

@@ -28,11 +28,12 @@ void Default_Handler();
 void HardFault_Handler();
 void SysTick_Handler();
 // Servo/encoder interrupts: each image defines the ones it enables
-// (production: EXTI15_10 + DMA1_Stream0 + TIM3, HIL: TIM2); the others stay Default_Handler.
+// (production: EXTI15_10 + DMA1_Stream0 + TIM3 + SPI1, HIL: TIM2); the others stay Default_Handler.
 void EXTI15_10_IRQHandler() __attribute__((weak, alias("Default_Handler")));
 void DMA1_Stream0_IRQHandler() __attribute__((weak, alias("Default_Handler")));
 void TIM3_IRQHandler() __attribute__((weak, alias("Default_Handler")));
 void TIM2_IRQHandler() __attribute__((weak, alias("Default_Handler")));
+void SPI1_IRQHandler() __attribute__((weak, alias("Default_Handler")));
 }
 
 namespace {
@@ -67,6 +68,7 @@ constexpr VectorTable make_vector_table() {
   t.handlers[16 + maglev::stm32h7::irq::kDma1Stream0 - 1] = DMA1_Stream0_IRQHandler;
   t.handlers[16 + maglev::stm32h7::irq::kTim3 - 1] = TIM3_IRQHandler;
   t.handlers[16 + maglev::stm32h7::irq::kTim2 - 1] = TIM2_IRQHandler;
+  t.handlers[16 + maglev::stm32h7::irq::kSpi1 - 1] = SPI1_IRQHandler;
   return t;
 }
 

@@ -239,6 +239,8 @@ inline constexpr std::uint32_t kCfg2Cpha = bit(24);
 inline constexpr std::uint32_t kCfg2Cpol = bit(25);
 inline constexpr std::uint32_t kCfg2Ssm = bit(26);
 inline constexpr std::uint32_t kCfg2Afcntr = bit(31);  // keep driving pins while SPE = 0
+inline constexpr Addr kIer = 0x10;     // §50.11.5
+inline constexpr std::uint32_t kIerEotie = bit(3);  // EOT (and SUSP, TXC) interrupt enable
 inline constexpr Addr kSr = 0x14;
 inline constexpr std::uint32_t kSrRxp = bit(0);
 inline constexpr std::uint32_t kSrTxp = bit(1);
@@ -442,6 +444,7 @@ inline constexpr Addr kDemcr = 0xE000EDFC;   // TRCENA bit 24
 namespace irq {
 inline constexpr int kDma1Stream0 = 11;  // DMA1_Stream0..6 = 11..17, Stream7 = 47
 inline constexpr int kExti9_5 = 23;
+inline constexpr int kSpi1 = 35;
 inline constexpr int kTim2 = 28;
 inline constexpr int kTim3 = 29;
 inline constexpr int kTim4 = 30;

@@ -16,6 +16,17 @@
 // RXDR -> SPE=1 -> CS low -> CSTART, and return. complete(): the stream's
 // TCIF (every frame read out of RXDR, so the wire is done) -> EOT checked,
 // OVR checked -> IFCR -> SPE=0 -> CS high. The CPU never waits on the wire.
+//
+// Start/complete mode with TX words (t.tx set; no DMA): a transaction that
+// fits the FIFO (the AD5764 chain's 48-bit SYNC frame: two 24-bit data
+// frames) is loaded whole before it starts: SPE=0 -> CFG1 / CFG2 (full
+// duplex, written only when the device or word size changed) -> CR2.TSIZE
+// -> SPE=1 -> CS low -> every word into TXDR (RM0433 §50.4.9: the TxFIFO may
+// be filled before CSTART) -> IER.EOTIE -> CSTART, and return. complete(),
+// from the SPI's interrupt: EOT not yet -> kBusy; EOT -> OVR checked, the
+// RX words read out of the RxFIFO, IER = 0 -> IFCR -> SPE=0 -> CS high. The
+// CPU never waits on the wire here either, and never polls TXP / RXP: the
+// whole transaction fits the FIFO (fifo_frames()).
 #pragma once
 
 #include <cstddef>
@@ -49,6 +60,7 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     namespace s = stm32h7::spi;
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi);
     bus_.write32(base_ + s::kCfg2, s::kCfg2Master | s::kCfg2Ssm | s::kCfg2Afcntr);
+    fifo_config_ = 0;
     for (std::size_t i = 0; i < kDevices; ++i) devices_[i].chip_select->write(true);
   }
 
@@ -82,12 +94,16 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     return status;
   }
 
-  // Receive-only by DMA: t.tx must be null, t.rx the DMA-reachable buffer.
+  // t.tx null: receive-only by DMA (t.rx the DMA-reachable buffer).
+  // t.tx set: the words through the FIFO, completion by EOT (no DMA); at
+  // most fifo_frames(t.word_bits) of them.
   BusStatus start(const SpiTransfer& t) override {
     namespace s = stm32h7::spi;
-    if (!valid(t) || t.tx != nullptr || t.rx == nullptr || rx_dma_ == nullptr) return BusStatus::kBadArgument;
+    if (t.tx != nullptr) return start_fifo(t);
+    if (!valid(t) || t.rx == nullptr || rx_dma_ == nullptr) return BusStatus::kBadArgument;
     if (in_flight_) return BusStatus::kBusy;
     const SpiDeviceSettings& d = devices_[t.device];
+    fifo_config_ = 0;
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
     bus_.write32(base_ + s::kCfg1, cfg1(d, t) | s::kCfg1Rxdmaen);
     bus_.write32(base_ + s::kCfg2, cfg2(d) | stm32h7::field(s::kCommSimplexReceiver, s::kCfg2CommShift));
@@ -102,6 +118,7 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     d.chip_select->write(false);
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
     in_flight_ = true;
+    fifo_mode_ = false;
     device_ = t.device;
     return BusStatus::kOk;
   }
@@ -109,6 +126,7 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
   BusStatus complete() override {
     namespace s = stm32h7::spi;
     if (!in_flight_) return BusStatus::kNotStarted;
+    if (fifo_mode_) return complete_fifo();
     const dma::Status st = rx_dma_->poll();
     if (st == dma::Status::kBusy) return BusStatus::kBusy;
     BusStatus status = st == dma::Status::kComplete ? BusStatus::kOk : BusStatus::kTransferError;
@@ -124,8 +142,19 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
 
   void cancel() override {
     if (!in_flight_) return;
-    rx_dma_->abort();
+    if (fifo_mode_) {
+      bus_.write32(base_ + stm32h7::spi::kIer, 0u);
+    } else {
+      rx_dma_->abort();
+    }
     end_dma_frame();
+  }
+
+  // Data frames one transaction may hold in the FIFO at once: 8 bytes (the
+  // smallest FIFO of the part, SPI4-6; SPI1-3 have 16), a data frame taking
+  // 1, 2 or 4 bytes by its size (RM0433 "SPI FIFOs and data packing").
+  static constexpr std::size_t fifo_frames(std::uint8_t word_bits) {
+    return word_bits <= 8 ? 8u : (word_bits <= 16 ? 4u : 2u);
   }
 
   bool busy() const { return in_flight_; }
@@ -142,9 +171,55 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     namespace s = stm32h7::spi;
     return s::kCfg2Master | s::kCfg2Ssm | s::kCfg2Afcntr | (d.cpol ? s::kCfg2Cpol : 0u) | (d.cpha ? s::kCfg2Cpha : 0u);
   }
+  BusStatus start_fifo(const SpiTransfer& t) {
+    namespace s = stm32h7::spi;
+    if (!valid(t) || t.words > fifo_frames(t.word_bits)) return BusStatus::kBadArgument;
+    if (in_flight_) return BusStatus::kBusy;
+    const SpiDeviceSettings& d = devices_[t.device];
+    // CFG1 / CFG2 keep their values: written when the device or word size
+    // differs from the last FIFO transaction's (every transaction ends with
+    // SPE = 0, so they are writable here; transfer() and the DMA mode write
+    // them too and forget this one).
+    const std::uint32_t key = 0x10000u | (static_cast<std::uint32_t>(t.device) << 8) | t.word_bits;
+    if (key != fifo_config_) {
+      bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
+      bus_.write32(base_ + s::kCfg1, cfg1(d, t));
+      bus_.write32(base_ + s::kCfg2, cfg2(d));
+      fifo_config_ = key;
+    }
+    bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(t.words));
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
+    d.chip_select->write(false);
+    // No TXP wait: SPE = 0 flushed the FIFO, and the transaction fits it.
+    for (std::size_t i = 0; i < t.words; ++i) bus_.write32(base_ + s::kTxdr, t.tx[i]);
+    bus_.write32(base_ + s::kIer, s::kIerEotie);
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
+    in_flight_ = true;
+    fifo_mode_ = true;
+    device_ = t.device;
+    fifo_rx_ = t.rx;
+    fifo_words_ = static_cast<std::uint8_t>(t.words);
+    return BusStatus::kOk;
+  }
+  BusStatus complete_fifo() {
+    namespace s = stm32h7::spi;
+    const std::uint32_t sr = bus_.read32(base_ + s::kSr);
+    if ((sr & s::kSrEot) == 0u) return BusStatus::kBusy;
+    BusStatus status = (sr & s::kSrOvr) != 0u ? BusStatus::kTransferError : BusStatus::kOk;
+    // EOT: every frame has been received into the RxFIFO (the transaction
+    // fits it), so no RXP wait.
+    for (std::size_t i = 0; i < fifo_words_; ++i) {
+      const std::uint32_t word = bus_.read32(base_ + s::kRxdr);
+      if (fifo_rx_ != nullptr) fifo_rx_[i] = word;
+    }
+    bus_.write32(base_ + s::kIer, 0u);
+    end_dma_frame();
+    return status;
+  }
   const SpiDeviceSettings& begin_frame(const SpiTransfer& t) {
     namespace s = stm32h7::spi;
     const SpiDeviceSettings& d = devices_[t.device];
+    fifo_config_ = 0;
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
     bus_.write32(base_ + s::kCfg1, cfg1(d, t));
     bus_.write32(base_ + s::kCfg2, cfg2(d));
@@ -173,7 +248,11 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
   SpiDeviceSettings devices_[kDevices]{};
   dma::Stream<Bus>* rx_dma_ = nullptr;
   bool in_flight_ = false;
+  bool fifo_mode_ = false;  // the started transaction: TX words through the FIFO (else RX by DMA)
   std::uint8_t device_ = 0;
+  std::uint8_t fifo_words_ = 0;
+  std::uint32_t* fifo_rx_ = nullptr;
+  std::uint32_t fifo_config_ = 0;  // CFG1 / CFG2 written for (1, device, word_bits); 0: unknown
 };
 
 }  // namespace maglev::drivers

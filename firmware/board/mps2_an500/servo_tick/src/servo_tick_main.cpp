@@ -2,8 +2,8 @@
 // app::ServoLoop<Controller<float>>::on_tick() composed as
 // firmware/board/stm32h743/src/main.cpp composes it for the production
 // (non-HIL) board: AmplifierBoardSensors (AD7606 pair + three quadrature
-// counters) in, AmplifierBoardActuators (AD5764 chain + amplifier enable)
-// out, the real drivers over Stm32SpiMaster / Stm32OutputPin /
+// counters) in, AmplifierBoardIrqActuators (AD5764 chain written from
+// SPI1's end-of-transfer interrupt + amplifier enable) out, the real drivers over Stm32SpiMaster / Stm32OutputPin /
 // Stm32InputPin, the tick recorder + LabTick record hook, the LabTick
 // before_step hook, the watchdog FeedGate, the cycle-counter and
 // next-tick-pending hooks -- with the register bus replaced by
@@ -25,6 +25,11 @@
 //      adc_dma_isr_instructions <state>. The fake completes each device's
 //      DMA transfer at CSTART (the wire time is not in either count);
 //      main.cpp's handlers call the same on_busy_fell() / on_adc_dma();
+//      and around the DAC chain's interrupt work after it (SPI1 EOT of each
+//      of the four SYNC frames: echo checked, next frame started; the
+//      fourth pulses LDAC and requests the enable) -> dac_irq_instructions
+//      <state>, main.cpp's SPI1_IRQHandler (the fake sets EOT at once: no
+//      wire time in it either);
 //   B: the same composition with timing wrappers around the sensor source,
 //      kernel step() and actuator sink -> servo_step_instructions,
 //      servo_sensors_instructions, servo_actuators_instructions,
@@ -175,7 +180,7 @@ struct Board {
   b::AmplifierBoardDrivers<Bus> parts{bus, adc_dma_rx};  // main.cpp's g_board
   decltype(b::AmplifierBoardDrivers<Bus>::sensors)& board_sensors = parts.sensors;
   d::AmplifierEnable amp{amp_enable_pin};
-  b::AmplifierBoardActuators board_actuators{parts.dac, amp};
+  b::AmplifierBoardIrqActuators board_actuators{parts.dac_writer, amp};
   b::ServoKernel controller;
   TimedSensors timed_sensors{board_sensors};
   TimedActuators timed_actuators{board_actuators};
@@ -226,6 +231,15 @@ struct Board {
     if (parts.on_busy_fell()) return true;
     for (std::size_t device = 0; device < 2; ++device) {
       if (parts.on_adc_dma()) return true;
+    }
+    return false;
+  }
+
+  // main.cpp's SPI1_IRQHandler, once per SYNC frame, until the write
+  // finished: true when it did (four frames, or an error).
+  bool dac_irq_chain() {
+    for (int frame = 0; frame < 4; ++frame) {
+      if (board_actuators.on_dac_irq()) return true;
     }
     return false;
   }
@@ -286,7 +300,7 @@ void measure_drivers_on_memory_bus(const Calibration& cal) {
   // of DMA1 stream 0 sees TCIF, as it does when the wire is done.
   const r::Addr lisr = r::dma::kDma1 + r::dma::kLisr;
   const r::Addr s0cr = r::dma::stream(r::dma::kDma1, 0) + r::dma::kSxCr;
-  Stats chain, sensors, actuators;
+  Stats chain, sensors, actuators, dac_irq;
   io::ActuatorCommand c{{100, -200, 300, -400, 500, -600, 700, -800}, true};
   for (std::uint32_t i = 0; i < 1000; ++i) {
     // The DMA read's three interrupt bodies, each timed alone: between them
@@ -317,10 +331,20 @@ void measure_drivers_on_memory_bus(const Calibration& cal) {
     g_board_d.board_actuators.write(c);
     t1 = systick_now();
     actuators.add(systick_elapsed(t0, t1), i);
+    // The four SPI1 interrupt bodies, each timed alone (EOT preset above).
+    pieces = 0;
+    for (int frame = 0; frame < 4; ++frame) {
+      t0 = systick_now();
+      (void)g_board_d.board_actuators.on_dac_irq();
+      t1 = systick_now();
+      pieces += systick_elapsed(t0, t1);
+    }
+    dac_irq.add(pieces - 3u * static_cast<std::uint32_t>(cal.empty_counts), i);
   }
   print_tick_stats("drivers_on_memory_bus", "adc_dma_isr", chain, cal);
   print_tick_stats("drivers_on_memory_bus", "sensors", sensors, cal);
   print_tick_stats("drivers_on_memory_bus", "actuators", actuators, cal);
+  print_tick_stats("drivers_on_memory_bus", "dac_irq", dac_irq, cal);
 }
 
 char g_command_line[1024];
@@ -354,7 +378,7 @@ bool same_sample(const io::SensorSample& a, const io::SensorSample& b) {
 }
 
 struct PassResult {
-  StateStats tick, step, sensors, actuators, outside, adc_dma;
+  StateStats tick, step, sensors, actuators, outside, adc_dma, dac_irq;
   std::uint64_t ready_reads = 0, ready_writes = 0, ready_ticks = 0;
   std::uint32_t max_cycles = 0;
   std::uint32_t ticks = 0;
@@ -417,9 +441,19 @@ int run_pass(Board<kTimed, kCount>& board, const char* vectors_path, const char*
       const std::uint32_t t1 = systick_now();
       const std::uint32_t counts = systick_elapsed(t0, t1);
 
+      const std::uint32_t d0 = systick_now();
+      const bool dac_written = board.dac_irq_chain();
+      const std::uint32_t d1 = systick_now();
+      if (!dac_written) {
+        hw::semihost_write("servo-tick: tick ");
+        hw::semihost_write_unsigned(tick);
+        return fail("the AD5764 chain's interrupt-driven write did not finish in four frames", kDriverMismatch);
+      }
+
       if (state_before >= 0 && state_before < kStates) {
         res.tick.s[state_before].add(counts, tick);
         res.adc_dma.s[state_before].add(systick_elapsed(c0, c1), tick);
+        res.dac_irq.s[state_before].add(systick_elapsed(d0, d1), tick);
         if constexpr (kTimed) {
           res.step.s[state_before].add(g_step_counts, tick);
           res.sensors.s[state_before].add(g_read_counts, tick);
@@ -496,6 +530,7 @@ int main() {
   hw::semihost_write(" counts\n");
   print_all("servo_tick_instructions", g_result[0].tick, cal);
   print_all("adc_dma_isr_instructions", g_result[0].adc_dma, cal);
+  print_all("dac_irq_instructions", g_result[0].dac_irq, cal);
   hw::semihost_write("servo_loop max_cycles (ServoState, its own cycle_counter hook; SysTick here): ");
   hw::semihost_write_unsigned(cal.instructions(g_result[0].max_cycles >> 8));
   hw::semihost_write(" instructions\n");

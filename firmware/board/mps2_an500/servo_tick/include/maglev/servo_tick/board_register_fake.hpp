@@ -19,7 +19,9 @@
 //     V4..V7 Hall, V8 0; ADC1 V1..V8 the coil current monitors
 //     (amplifier_board_io.hpp's map_to_sample, inverted);
 //   * SPI1 RXDR: the AD5764 chain's SDO, i.e. the word written two TXDR
-//     writes earlier (48-bit chain: the driver's link check sees its echo);
+//     writes earlier (48-bit chain: the driver's link check sees its echo),
+//     through an RxFIFO (each TXDR write queues the word it shifts out, each
+//     RXDR read takes the oldest), so a driver may read after writing all;
 //   * TIM2 / TIM5 CNT: interferometer counts 0 / 1 (32-bit counters), TIM3
 //     CNT: the low 16 bits of counts 2 (the driver extends them);
 //   * GPIOE IDR: BUSY (PE11) low = conversion done; GPIOF IDR: the three
@@ -79,7 +81,7 @@ class BoardRegisterFake final : public drivers::dma::WordSource {
     if constexpr (kCountAccesses) ++reads_;
     if (a == r::spi::kSpi1 + r::spi::kSr) return r::spi::kSrTxp | r::spi::kSrRxp | r::spi::kSrEot;
     if (a == r::spi::kSpi3 + r::spi::kRxdr) return next_word();
-    if (a == r::spi::kSpi1 + r::spi::kRxdr) return dac_sdo_;
+    if (a == r::spi::kSpi1 + r::spi::kRxdr) return dac_rx_fifo_[dac_rx_read_++ % kDacRxFifo];
     if (a == r::tim::kTim2 + r::tim::kCnt) return counts_[0];
     if (a == r::tim::kTim5 + r::tim::kCnt) return counts_[1];
     if (a == r::tim::kTim3 + r::tim::kCnt) return counts_[2] & 0xFFFFu;
@@ -91,7 +93,7 @@ class BoardRegisterFake final : public drivers::dma::WordSource {
   void write32(r::Addr a, std::uint32_t v) {
     if constexpr (kCountAccesses) ++writes_;
     if (a == r::spi::kSpi1 + r::spi::kTxdr) {
-      dac_sdo_ = dac_chain_[0];
+      dac_rx_fifo_[dac_rx_write_++ % kDacRxFifo] = dac_chain_[0];
       dac_chain_[0] = dac_chain_[1];
       dac_chain_[1] = v;
       if (dac_words_ < kDacWords) dac_word_[dac_words_] = v;
@@ -146,7 +148,10 @@ class BoardRegisterFake final : public drivers::dma::WordSource {
   std::uint32_t adc_selected_ = 0;
   std::uint32_t adc_word_ = 0;
   std::uint32_t dac_chain_[2]{};
-  std::uint32_t dac_sdo_ = 0;
+  static constexpr std::uint32_t kDacRxFifo = 4;  // SPI1's 16-byte FIFO, 4-byte frames
+  std::uint32_t dac_rx_fifo_[kDacRxFifo]{};
+  std::uint32_t dac_rx_write_ = 0;
+  std::uint32_t dac_rx_read_ = 0;
   std::uint32_t dac_word_[kDacWords]{};
   std::size_t dac_words_ = 0;
   bool amplifier_enable_ = false;

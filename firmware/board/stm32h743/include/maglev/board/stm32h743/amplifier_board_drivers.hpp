@@ -11,7 +11,11 @@
 // drivers/ad7606_adc/README.md): the image calls on_busy_fell() from the BUSY
 // interrupt and on_adc_dma() from the DMA stream's, and runs the servo tick
 // when either says so.
-// The amplifier-enable line and AmplifierBoardActuators stay with the board
+// The DAC chain is written from SPI1's end-of-transfer interrupt
+// (ad5764::IrqWriter `dac_writer`; the image calls AmplifierBoardIrqActuators::
+// on_dac_irq() from SPI1_IRQHandler); `dac`, the polled chain on the same
+// SPI, zeroes the outputs at boot.
+// The amplifier-enable line and the actuator sink stay with the board
 // (the HIL image shares the enable pin).
 #pragma once
 
@@ -59,6 +63,7 @@ struct AmplifierBoardDrivers {
   static constexpr drivers::dma::StreamConfig kAdcRxDma{stm32h7::dma::kDma1, 0, stm32h7::dma::kReqSpi3Rx, true};
   drivers::dma::Stream<Bus> adc_rx_dma{bus, kAdcRxDma};
   drivers::ad5764::Chain<2> dac{spi_dac, 0, dac_ldac};
+  drivers::ad5764::IrqWriter<2> dac_writer{spi_dac, 0, dac_ldac};
   drivers::ad7606::DmaReader adc;
   Encoder enc0{bus, {stm32h7::tim::kTim2, true, 1, false}, loss0};
   Encoder enc1{bus, {stm32h7::tim::kTim5, true, 1, false}, loss1};
@@ -110,6 +115,7 @@ struct AmplifierBoardDrivers {
     spi_adc.attach_rx_dma(&adc_rx_dma);
     dac.init();
     (void)dac.write_zero();
+    dac_writer.init();
     enc0.init();
     enc1.init();
     enc2.init();

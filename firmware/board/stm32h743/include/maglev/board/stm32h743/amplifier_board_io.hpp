@@ -82,4 +82,51 @@ class AmplifierBoardActuators final : public app::ActuatorSink {
   drivers::AmplifierEnable& enable_;
 };
 
+// The production board's sink: the same rules as AmplifierBoardActuators,
+// with the DAC chain written from SPI1's end-of-transfer interrupt
+// (ad5764::IrqWriter), so the rules split where the write now ends.
+// Switching off: disable before the first frame (write(), in the tick).
+// Switching on: request the enable only when the fourth frame's LDAC pulse
+// has put the currents out with every echo matching (on_dac_irq()). A write
+// that cannot start (the previous one never finished), fails, or whose link
+// cannot be trusted trips the (latched) amplifier enable.
+class AmplifierBoardIrqActuators final : public app::ActuatorSink {
+ public:
+  AmplifierBoardIrqActuators(drivers::ad5764::IrqWriter<2>& dac, drivers::AmplifierEnable& enable)
+      : dac_(dac), enable_(enable) {}
+
+  void write(const io::ActuatorCommand& c) override {
+    if (!c.amplifier_enable) enable_.request(false);
+    enable_when_written_ = c.amplifier_enable;
+    if (dac_.begin(c.dac_code) != drivers::ad5764::Status::kOk) {
+      enable_when_written_ = false;
+      enable_.trip();
+    }
+  }
+
+  // SPI1's interrupt. True when the write has finished (either way).
+  bool on_dac_irq() {
+    using Step = drivers::ad5764::IrqWriter<2>::Step;
+    const Step step = dac_.advance();
+    if (step == Step::kComplete) {
+      if (dac_.result() != drivers::ad5764::Status::kOk) {
+        enable_.trip();
+      } else if (enable_when_written_) {
+        enable_.request(true);
+      }
+      return true;
+    }
+    if (step == Step::kError) {
+      enable_.trip();
+      return true;
+    }
+    return false;
+  }
+
+ private:
+  drivers::ad5764::IrqWriter<2>& dac_;
+  drivers::AmplifierEnable& enable_;
+  bool enable_when_written_ = false;
+};
+
 }  // namespace maglev::board::stm32h743
