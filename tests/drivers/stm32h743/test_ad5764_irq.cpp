@@ -227,3 +227,16 @@ TEST(Ad5764Irq, AFailedFrameNeverPulsesLdac) {
   LONGS_EQUAL(0, model.ldac_pulses());
   CHECK_TRUE(enable.fault_latched());
 }
+
+TEST(Ad5764Irq, AStrayInterruptEndsTheTransactionInsteadOfReentering) {
+  // A frame on the wire that no write owns (its begin() was abandoned by a
+  // higher-priority one): the interrupt ends it, EOTIE off, SYNC released.
+  const std::uint32_t tx[2] = {1, 2};
+  std::uint32_t rx[2] = {};
+  CHECK(spi.start(SpiTransfer{0, 24, tx, rx, 2}) == BusStatus::kOk);
+  CHECK(writer.advance() == ad5764::IrqWriter<2>::Step::kIdle);
+  UNSIGNED_LONGS_EQUAL(0u, bus.peek(kSpi + r::spi::kIer));
+  CHECK_TRUE(sync.level());
+  CHECK(spi.complete() == BusStatus::kNotStarted);
+  LONGS_EQUAL(0, model.ldac_pulses());
+}

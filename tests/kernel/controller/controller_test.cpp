@@ -144,6 +144,43 @@ TEST(Controller, LockedFieldsWhileLevitated) {
   DOUBLES_EQUAL(30000.0, r.c.config().axis[0].pid.kp, 0.0);
 }
 
+// Homing's Hall solve handed to background() (the board's main loop) gives
+// the same bits as the tick doing it itself, on every tick through start-up;
+// a request nobody took is withdrawn and solved in the tick.
+TEST(Controller, TheHallSolveInBackgroundGivesTheSameBitsAsInTheTick) {
+  static Rig<float> in_tick, in_background, late;
+  for (Rig<float>* r : {&in_tick, &in_background, &late}) {
+    CHECK(r->c.command(MotionCommand{MotionType::kLevitate}) == CommandResult::kAccepted);
+  }
+  int background_solves = 0;
+  bool homed = false;
+  for (int n = 0; n < 3000 && !homed; ++n) {
+    const io::ActuatorCommand a = in_tick.tick();
+    const io::ActuatorCommand b = in_background.tick();
+    const io::ActuatorCommand c = late.tick();
+    background_solves += in_background.c.background() ? 1 : 0;
+    for (int j = 0; j < io::kCoils; ++j) {
+      LONGS_EQUAL(a.dac_code[j], b.dac_code[j]);
+      LONGS_EQUAL(a.dac_code[j], c.dac_code[j]);
+    }
+    CHECK_EQUAL(a.amplifier_enable, b.amplifier_enable);
+    for (int k = 0; k < kAxisCount; ++k) {
+      CHECK(in_tick.c.status().pose.pico[k] == in_background.c.status().pose.pico[k]);
+      CHECK(in_tick.c.status().pose.pico[k] == late.c.status().pose.pico[k]);
+    }
+    homed = in_tick.c.status().state == SequencerState::kInPlaneLock;
+  }
+  CHECK_TRUE(homed);
+  CHECK(in_background.c.status().state == SequencerState::kInPlaneLock);
+  LONGS_EQUAL(1, background_solves);
+  LONGS_EQUAL(0, static_cast<long>(in_background.c.hall_solves_in_tick()));
+  LONGS_EQUAL(1, static_cast<long>(in_tick.c.hall_solves_in_tick()));
+  // `late` never ran background() during homing: its request was withdrawn.
+  LONGS_EQUAL(1, static_cast<long>(late.c.hall_solves_in_tick()));
+  CHECK_FALSE(late.c.background());
+  CHECK_FALSE(in_background.c.background());  // nothing left to do
+}
+
 namespace {
 template <typename Scalar>
 bool same_pid(const Pid2DofCoefficients<Scalar>& a, const Pid2DofCoefficients<Scalar>& b) {

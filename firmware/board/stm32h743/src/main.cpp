@@ -386,6 +386,9 @@ extern "C" void board_main() {
     const std::uint32_t ticks = s.ticks;
     // Modbus reply, CAN telemetry, recorder drain, watchdog feed policy.
     application.service(now_us(), ticks);
+    // Kernel work that need not run in the servo tick (homing's Hall solve;
+    // the tick does it itself if this has not, same bits).
+    (void)g_kernel.background();
     if (const std::uint32_t rate = configured_servo_rate_Hz(); rate != g_servo_rate_Hz) {
       // servo.rate written (landed): the kernel already re-designed its loops
       // for `rate`; stop the tick source, re-time the loop, restart it.

@@ -3,6 +3,7 @@
 
 #include "maglev/axis_loops/loop_check.hpp"
 
+#include <atomic>  // std::atomic_signal_fence: a compiler barrier, no library code
 #include <cmath>
 #include <cstring>
 
@@ -672,26 +673,45 @@ void Controller<Scalar>::home(const io::SensorSample& sample, Tick& t) {
   }
   if (homing_ticks_ == 0) ReseedInterferometers(&s2p_);
   ++homing_ticks_;
-  // The Hall solve runs in kHallSolveSteps steps, one per tick, over the
-  // window's last ticks, on the sample and the unhomed pose of the tick it
-  // starts on: offset = Hall - interferometer of the SAME sample, so motion
-  // in between cannot bias it. (It used to run whole on the last tick:
-  // 25 000 M7 instructions, three times a Ready tick.) A window too short to
-  // spread it over does it all on its last tick.
+  // The Hall solve's sample is the one kHallSolveSteps ticks before the end
+  // of the window, with its unhomed pose: offset = Hall - interferometer of
+  // the SAME sample, so motion in between cannot bias it. The solve itself
+  // runs in background() meanwhile (it used to take one step per tick here,
+  // ~1 300 instructions each; before that, 25 000 on the last tick); if
+  // background() has not delivered it by the last tick, it runs here. The
+  // same inputs and functions either way: the same bits.
   const std::uint32_t first = homing_needed_ticks_ > static_cast<std::uint32_t>(kHallSolveSteps) + 1u
                                   ? homing_needed_ticks_ - static_cast<std::uint32_t>(kHallSolveSteps)
                                   : homing_needed_ticks_;
   if (homing_ticks_ < first) return;
   if (homing_ticks_ == first) {
-    HallSolveBegin(sample, s2p_, &hall_solve_);
+    hall_inputs_ = HallSolveInputsOf(sample, s2p_);
     hall_pose_unhomed_ = t.m.pose_unhomed;
-  } else {
-    HallSolveStep(&hall_solve_);
+    ++hall_generation_;
+    if (hall_job_ != HallJob::kRunning) {  // (a job still running is an old one: it keeps its inputs)
+      hall_job_inputs_ = hall_inputs_;
+      hall_job_pose_unhomed_ = hall_pose_unhomed_;
+      hall_job_generation_ = hall_generation_;
+      std::atomic_signal_fence(std::memory_order_seq_cst);
+      hall_job_ = HallJob::kRequested;
+    }
   }
   if (homing_ticks_ < homing_needed_ticks_) return;
-  const HallPhase h = HallSolveFinish(&hall_solve_);
+  std::atomic_signal_fence(std::memory_order_seq_cst);
+  HallPhase h;
+  HomingOffsets offsets{};
+  if (hall_job_ == HallJob::kDone && hall_job_result_generation_ == hall_generation_) {
+    h = hall_job_result_;
+    offsets = hall_job_offsets_;
+    hall_job_ = HallJob::kIdle;
+  } else {
+    if (hall_job_ == HallJob::kRequested) hall_job_ = HallJob::kIdle;  // not taken: withdrawn
+    h = HallSolveRun(hall_inputs_);
+    offsets = h.plausible ? ComputeHomingOffsets(h, hall_pose_unhomed_, hall_inputs_) : HomingOffsets{};
+    ++hall_solves_in_tick_;
+  }
   if (h.plausible) {
-    SetHomingOffsets(ComputeHomingOffsets(h, hall_pose_unhomed_, s2p_), &s2p_);
+    SetHomingOffsets(offsets, &s2p_);
     // This tick's pose with the new zero, so that references start from the
     // homed pose. (It used to run the whole sensors_to_pose step again on the
     // same sample, which also fed the glitch check a zero step.)
@@ -701,6 +721,23 @@ void Controller<Scalar>::home(const io::SensorSample& sample, Tick& t) {
   } else {
     t.qi.homing_failed = true;
   }
+}
+
+template <typename Scalar>
+MAGLEV_CONFIG_CODE bool Controller<Scalar>::background() {
+  if (hall_job_ != HallJob::kRequested) return false;
+  hall_job_ = HallJob::kRunning;  // from here on step() leaves the inputs alone
+  std::atomic_signal_fence(std::memory_order_seq_cst);
+  const HallSolveInputs in = hall_job_inputs_;
+  const Pose64 pose_unhomed = hall_job_pose_unhomed_;
+  const std::uint32_t generation = hall_job_generation_;
+  const HallPhase h = HallSolveRun(in);
+  hall_job_offsets_ = h.plausible ? ComputeHomingOffsets(h, pose_unhomed, in) : HomingOffsets{};
+  hall_job_result_ = h;
+  hall_job_result_generation_ = generation;
+  std::atomic_signal_fence(std::memory_order_seq_cst);
+  hall_job_ = HallJob::kDone;
+  return true;
 }
 
 // 4. sequencer.

@@ -558,13 +558,27 @@ void HallSolveStep(HallSolve* solve) {
   ++h.steps;
 }
 
-void HallSolveBegin(const io::SensorSample& sample, const SensorsToPoseState& state, HallSolve* solve) {
+HallSolveInputs HallSolveInputsOf(const io::SensorSample& sample, const SensorsToPoseState& state) {
+  HallSolveInputs in{};
+  for (int i = 0; i < io::kHallChannels; ++i) in.hall_adc[i] = sample.hall_adc[i];
+  in.status_flags = sample.status_flags;
+  in.adc_rail_code = state.adc_rail_code;
+  in.eps = state.hall_fifth_harmonic_ratio;
+  in.min_amplitude_codes = state.hall_min_amplitude_codes;
+  in.max_amplitude_codes = state.hall_max_amplitude_codes;
+  in.pitch_pm = state.pitch_pm;
+  in.hall_a_x_pm = state.hall_a_x_pm;
+  in.hall_a_y_pm = state.hall_a_y_pm;
+  return in;
+}
+
+void HallSolveBegin(const HallSolveInputs& in, HallSolve* solve) {
   HallSolve h{};
-  const double a_x = sample.hall_adc[0];
-  const double a_y = sample.hall_adc[1];
-  const double b_x = sample.hall_adc[2];
-  const double b_y = sample.hall_adc[3];
-  h.eps = state.hall_fifth_harmonic_ratio;
+  const double a_x = in.hall_adc[0];
+  const double a_y = in.hall_adc[1];
+  const double b_x = in.hall_adc[2];
+  const double b_y = in.hall_adc[3];
+  h.eps = in.eps;
   h.phi[0] = numeric::datan2(a_x, b_x);
   h.phi[1] = numeric::datan2(a_y, b_y);
   h.theta[0] = h.phi[0];
@@ -575,15 +589,19 @@ void HallSolveBegin(const io::SensorSample& sample, const SensorsToPoseState& st
   out.amplitude_y_codes = std::sqrt(a_y * a_y + b_y * b_y);
   bool railed = false;
   for (int i = 0; i < io::kHallChannels; ++i) {
-    const std::int16_t c = sample.hall_adc[i];
-    railed = railed || c >= state.adc_rail_code || c <= -state.adc_rail_code - 1;
+    const std::int16_t c = in.hall_adc[i];
+    railed = railed || c >= in.adc_rail_code || c <= -in.adc_rail_code - 1;
   }
-  const auto in_range = [&state](double amp) {
-    return amp >= state.hall_min_amplitude_codes && amp <= state.hall_max_amplitude_codes;
+  const auto in_range = [&in](double amp) {
+    return amp >= in.min_amplitude_codes && amp <= in.max_amplitude_codes;
   };
-  out.plausible = !railed && (sample.status_flags & io::kAdcFault) == 0 &&
+  out.plausible = !railed && (in.status_flags & io::kAdcFault) == 0 &&
                   in_range(out.amplitude_x_codes) && in_range(out.amplitude_y_codes);
   *solve = h;
+}
+
+void HallSolveBegin(const io::SensorSample& sample, const SensorsToPoseState& state, HallSolve* solve) {
+  HallSolveBegin(HallSolveInputsOf(sample, state), solve);
 }
 
 HallPhase HallSolveFinish(HallSolve* solve) {
@@ -592,6 +610,12 @@ HallPhase HallSolveFinish(HallSolve* solve) {
   out.phase_x_turn = RadToTurn(solve->theta[0]);
   out.phase_y_turn = RadToTurn(solve->theta[1]);
   return out;
+}
+
+HallPhase HallSolveRun(const HallSolveInputs& in) {
+  HallSolve h;
+  HallSolveBegin(in, &h);
+  return HallSolveFinish(&h);
 }
 
 MAGLEV_CONFIG_CODE HallPhase HallToPhase(const io::SensorSample& sample, const SensorsToPoseState& state) {
@@ -608,14 +632,22 @@ std::int64_t HallCoarsePosition_pm(std::uint32_t phase_turn, std::int64_t sensor
   return wide::FloorMod(along - sensor_offset_pm, pitch_pm);
 }
 
-HomingOffsets ComputeHomingOffsets(const HallPhase& hall, const Pose64& pose_unhomed,
-                                   const SensorsToPoseState& state) {
-  const std::int64_t p = state.pitch_pm;
-  const std::int64_t hx = HallCoarsePosition_pm(hall.phase_x_turn, state.hall_a_x_pm, p);
-  const std::int64_t hy = HallCoarsePosition_pm(hall.phase_y_turn, state.hall_a_y_pm, p);
+HomingOffsets ComputeHomingOffsets(const HallPhase& hall, const Pose64& pose_unhomed, const HallSolveInputs& in) {
+  const std::int64_t p = in.pitch_pm;
+  const std::int64_t hx = HallCoarsePosition_pm(hall.phase_x_turn, in.hall_a_x_pm, p);
+  const std::int64_t hy = HallCoarsePosition_pm(hall.phase_y_turn, in.hall_a_y_pm, p);
   // offset = hall - ifm (mod p), represented in [-p/2, p/2).
   const auto wrap = [p](std::int64_t v) { return wide::FloorMod(v + p / 2, p) - p / 2; };
   return HomingOffsets{wrap(hx - pose_unhomed[Axis::kX]), wrap(hy - pose_unhomed[Axis::kY])};
+}
+
+HomingOffsets ComputeHomingOffsets(const HallPhase& hall, const Pose64& pose_unhomed,
+                                   const SensorsToPoseState& state) {
+  HallSolveInputs in{};
+  in.pitch_pm = state.pitch_pm;
+  in.hall_a_x_pm = state.hall_a_x_pm;
+  in.hall_a_y_pm = state.hall_a_y_pm;
+  return ComputeHomingOffsets(hall, pose_unhomed, in);
 }
 
 void ApplyHomingOffsets(const SensorsToPoseState& state, PoseMeasurement* m) {

@@ -186,9 +186,15 @@ class IrqWriter {
     return start_frame();
   }
 
-  // The SPI's interrupt (or a poll).
+  // The SPI's interrupt (or a poll). With no write under way the interrupt
+  // is a stray (a frame started by a write that a higher-priority begin()
+  // abandoned meanwhile): the transaction is ended, so EOT with EOTIE set
+  // cannot re-enter this interrupt for ever.
   Step advance() {
-    if (phase_ != Phase::kWriting) return Step::kIdle;
+    if (phase_ != Phase::kWriting) {
+      spi_.cancel();  // nothing if no transaction is in flight
+      return Step::kIdle;
+    }
     const BusStatus bs = spi_.complete();
     if (bs == BusStatus::kBusy) return Step::kBusy;
     if (bs != BusStatus::kOk) {

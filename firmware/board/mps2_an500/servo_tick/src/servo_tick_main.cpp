@@ -444,6 +444,7 @@ int run_pass(Board<kTimed, kCount>& board, const char* vectors_path, const char*
       const std::uint32_t d0 = systick_now();
       const bool dac_written = board.dac_irq_chain();
       const std::uint32_t d1 = systick_now();
+      (void)controller.background();  // main.cpp's main loop (thread mode), not timed
       if (!dac_written) {
         hw::semihost_write("servo-tick: tick ");
         hw::semihost_write_unsigned(tick);

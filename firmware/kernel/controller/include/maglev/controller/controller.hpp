@@ -293,6 +293,18 @@ class Controller {
   MAGLEV_CONFIG_CODE ConfigError apply_config(const KernelConfig& config);
   MAGLEV_CONFIG_CODE CommandResult command(const MotionCommand& cmd);
   io::ActuatorCommand step(const io::SensorSample& sample, bool tick_overrun);
+  // Work that need not run in the servo tick: homing's Hall solve (two
+  // atan2 and 14 Newton steps, ~10 000 M7 instructions) and the homing
+  // offsets from it (128-bit products), handed over by
+  // step() seven ticks before homing needs it. Call it from thread mode on
+  // the same core, below step()'s priority (the board's main loop), as often
+  // as convenient: step() never waits for it. A solve that background() has
+  // not finished when homing needs it is done in step() itself from the same
+  // inputs, so the result bits do not depend on whether or when this runs.
+  // True if it ran the solve.
+  bool background();
+  // Homing Hall solves step() had to do itself (background() had not run).
+  std::uint32_t hall_solves_in_tick() const { return hall_solves_in_tick_; }
 
   const ControllerStatus& status() const { return status_; }
   const KernelConfig& config() const { return config_; }
@@ -447,8 +459,24 @@ class Controller {
   std::int64_t tilt_max_pico_[2] = {};
   std::int64_t tilt_level_step_pico_ = 1;
   bool tilt_references_in_range_ = false;
-  HallSolve hall_solve_{};          // homing's Hall solve, one step per tick
-  Pose64 hall_pose_unhomed_{};      // the unhomed pose of the solve's sample
+  // Homing's Hall solve: the inputs and unhomed pose of the sample seven
+  // ticks before the end of the homing window (step()'s own copy), and the
+  // job handed to background(). Single core, step() above background():
+  // step() writes the job's inputs only while the job is not kRunning, and
+  // background() reads them only after setting kRunning, so each sees the
+  // other's writes whole; the generation ties a result to its request.
+  enum class HallJob : std::uint8_t { kIdle = 0, kRequested = 1, kRunning = 2, kDone = 3 };
+  HallSolveInputs hall_inputs_{};
+  Pose64 hall_pose_unhomed_{};
+  std::uint32_t hall_generation_ = 0;
+  volatile HallJob hall_job_ = HallJob::kIdle;
+  HallSolveInputs hall_job_inputs_{};
+  Pose64 hall_job_pose_unhomed_{};
+  std::uint32_t hall_job_generation_ = 0;
+  HallPhase hall_job_result_{};
+  HomingOffsets hall_job_offsets_{};  // from the result (plausible or not)
+  std::uint32_t hall_job_result_generation_ = 0;
+  std::uint32_t hall_solves_in_tick_ = 0;
   ControllerStatus status_{};
   CouplingCalibrationConfig calibration_config_{};
   Calibration cal_{};

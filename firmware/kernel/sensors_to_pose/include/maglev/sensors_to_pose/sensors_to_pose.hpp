@@ -315,9 +315,28 @@ struct HallSolve {
   int steps;        // steps done
   HallPhase result;  // amplitudes and plausibility (phases: HallSolveFinish)
 };
+// What the solve reads: the sample's Hall channels and flags and four
+// configuration values, copied so that it can run outside the tick
+// (Controller::background()) on values the tick no longer touches.
+struct HallSolveInputs {
+  std::int16_t hall_adc[io::kHallChannels];
+  std::uint16_t status_flags;
+  std::int16_t adc_rail_code;
+  double eps;  // hall_fifth_harmonic_ratio
+  double min_amplitude_codes;
+  double max_amplitude_codes;
+  // And what ComputeHomingOffsets reads of the geometry.
+  std::int64_t pitch_pm;
+  std::int64_t hall_a_x_pm;
+  std::int64_t hall_a_y_pm;
+};
+HallSolveInputs HallSolveInputsOf(const io::SensorSample& sample, const SensorsToPoseState& state);
+void HallSolveBegin(const HallSolveInputs& in, HallSolve* solve);
 void HallSolveBegin(const io::SensorSample& sample, const SensorsToPoseState& state, HallSolve* solve);
 void HallSolveStep(HallSolve* solve);
 HallPhase HallSolveFinish(HallSolve* solve);
+// Begin, every step and Finish: the same bits as spreading them over ticks.
+HallPhase HallSolveRun(const HallSolveInputs& in);
 // All of it at once (tests, tools).
 HallPhase HallToPhase(const io::SensorSample& sample, const SensorsToPoseState& state);
 
@@ -335,6 +354,8 @@ struct HomingOffsets {
 // chosen in [-pitch/2, pitch/2): the smallest correction.
 HomingOffsets ComputeHomingOffsets(const HallPhase& hall, const Pose64& pose_unhomed,
                                    const SensorsToPoseState& state);
+// The same from the solve's copied inputs (Controller::background()).
+HomingOffsets ComputeHomingOffsets(const HallPhase& hall, const Pose64& pose_unhomed, const HallSolveInputs& in);
 // pose = pose_unhomed with the homing offsets added to x and y (the last
 // part of SensorsToPoseStep; also used right after homing on that tick).
 void ApplyHomingOffsets(const SensorsToPoseState& state, PoseMeasurement* measurement);
