@@ -685,33 +685,27 @@ void Controller<Scalar>::home(const io::SensorSample& sample, Tick& t) {
                                   : homing_needed_ticks_;
   if (homing_ticks_ < first) return;
   if (homing_ticks_ == first) {
-    hall_inputs_ = HallSolveInputsOf(sample, s2p_);
-    hall_pose_unhomed_ = t.m.pose_unhomed;
-    ++hall_generation_;
-    if (hall_job_ != HallJob::kRunning) {  // (a job still running is an old one: it keeps its inputs)
-      hall_job_inputs_ = hall_inputs_;
-      hall_job_pose_unhomed_ = hall_pose_unhomed_;
-      hall_job_generation_ = hall_generation_;
+    hall_request_ = HallRequest{HallSolveInputsOf(sample, s2p_), t.m.pose_unhomed, hall_request_.generation + 1u};
+    if (hall_job_ != HallJob::kRunning) {  // (a job still running is an old one: it keeps its request)
+      hall_job_request_ = hall_request_;
       std::atomic_signal_fence(std::memory_order_seq_cst);
       hall_job_ = HallJob::kRequested;
     }
   }
   if (homing_ticks_ < homing_needed_ticks_) return;
   std::atomic_signal_fence(std::memory_order_seq_cst);
-  HallPhase h;
-  HomingOffsets offsets{};
-  if (hall_job_ == HallJob::kDone && hall_job_result_generation_ == hall_generation_) {
-    h = hall_job_result_;
-    offsets = hall_job_offsets_;
+  HallResult result;
+  if (hall_job_ == HallJob::kDone && hall_job_result_.generation == hall_request_.generation) {
+    result = hall_job_result_;
     hall_job_ = HallJob::kIdle;
   } else {
     if (hall_job_ == HallJob::kRequested) hall_job_ = HallJob::kIdle;  // not taken: withdrawn
-    h = HallSolveRun(hall_inputs_);
-    offsets = h.plausible ? ComputeHomingOffsets(h, hall_pose_unhomed_, hall_inputs_) : HomingOffsets{};
+    result = SolveHoming(hall_request_);
     ++hall_solves_in_tick_;
   }
+  const HallPhase& h = result.phase;
   if (h.plausible) {
-    SetHomingOffsets(offsets, &s2p_);
+    SetHomingOffsets(result.offsets, &s2p_);
     // This tick's pose with the new zero, so that references start from the
     // homed pose. (It used to run the whole sensors_to_pose step again on the
     // same sample, which also fed the glitch check a zero step.)
@@ -724,17 +718,20 @@ void Controller<Scalar>::home(const io::SensorSample& sample, Tick& t) {
 }
 
 template <typename Scalar>
+typename Controller<Scalar>::HallResult Controller<Scalar>::SolveHoming(const HallRequest& request) {
+  const HallPhase phase = HallSolveRun(request.inputs);
+  const HomingOffsets offsets =
+      phase.plausible ? ComputeHomingOffsets(phase, request.pose_unhomed, request.inputs) : HomingOffsets{};
+  return HallResult{phase, offsets, request.generation};
+}
+
+template <typename Scalar>
 MAGLEV_CONFIG_CODE bool Controller<Scalar>::background() {
   if (hall_job_ != HallJob::kRequested) return false;
-  hall_job_ = HallJob::kRunning;  // from here on step() leaves the inputs alone
+  hall_job_ = HallJob::kRunning;  // from here on step() leaves the request alone
   std::atomic_signal_fence(std::memory_order_seq_cst);
-  const HallSolveInputs in = hall_job_inputs_;
-  const Pose64 pose_unhomed = hall_job_pose_unhomed_;
-  const std::uint32_t generation = hall_job_generation_;
-  const HallPhase h = HallSolveRun(in);
-  hall_job_offsets_ = h.plausible ? ComputeHomingOffsets(h, pose_unhomed, in) : HomingOffsets{};
-  hall_job_result_ = h;
-  hall_job_result_generation_ = generation;
+  const HallRequest request = hall_job_request_;
+  hall_job_result_ = SolveHoming(request);
   std::atomic_signal_fence(std::memory_order_seq_cst);
   hall_job_ = HallJob::kDone;
   return true;

@@ -600,10 +600,6 @@ void HallSolveBegin(const HallSolveInputs& in, HallSolve* solve) {
   *solve = h;
 }
 
-void HallSolveBegin(const io::SensorSample& sample, const SensorsToPoseState& state, HallSolve* solve) {
-  HallSolveBegin(HallSolveInputsOf(sample, state), solve);
-}
-
 HallPhase HallSolveFinish(HallSolve* solve) {
   while (solve->steps < kHallSolveSteps) HallSolveStep(solve);
   HallPhase out = solve->result;
@@ -619,9 +615,7 @@ HallPhase HallSolveRun(const HallSolveInputs& in) {
 }
 
 MAGLEV_CONFIG_CODE HallPhase HallToPhase(const io::SensorSample& sample, const SensorsToPoseState& state) {
-  HallSolve h;
-  HallSolveBegin(sample, state, &h);
-  return HallSolveFinish(&h);
+  return HallSolveRun(HallSolveInputsOf(sample, state));
 }
 
 std::int64_t HallCoarsePosition_pm(std::uint32_t phase_turn, std::int64_t sensor_offset_pm,

@@ -170,10 +170,7 @@ class IrqWriter {
   Status begin(const std::int16_t (&codes)[kChannels]) {
     if (phase_ == Phase::kWriting) {
       spi_.cancel();
-      ++state_.bus_errors;
-      have_previous_ = false;
-      phase_ = Phase::kIdle;
-      return Status::kBusError;
+      return fail();
     }
     for (std::size_t ch = 0; ch < kChannelsPerDevice; ++ch) {
       for (std::size_t d = 0; d < kDevices; ++d) {
@@ -198,10 +195,7 @@ class IrqWriter {
     const BusStatus bs = spi_.complete();
     if (bs == BusStatus::kBusy) return Step::kBusy;
     if (bs != BusStatus::kOk) {
-      ++state_.bus_errors;
-      have_previous_ = false;
-      phase_ = Phase::kIdle;
-      result_ = Status::kBusError;
+      (void)fail();
       return Step::kError;  // LDAC not pulsed: never a partial update
     }
     const std::uint32_t* sent_before = frame_ == 0 ? previous_ : tx_[frame_ - 1];
@@ -239,14 +233,15 @@ class IrqWriter {
     phase_ = Phase::kWriting;
     std::atomic_signal_fence(std::memory_order_seq_cst);
     const BusStatus bs = spi_.start(SpiTransfer{device_, kWordBits, tx_[frame_], rx_, kDevices});
-    if (bs != BusStatus::kOk) {
-      ++state_.bus_errors;
-      have_previous_ = false;
-      phase_ = Phase::kIdle;
-      result_ = Status::kBusError;
-      return Status::kBusError;
-    }
-    return Status::kOk;
+    return bs == BusStatus::kOk ? Status::kOk : fail();
+  }
+  // The write ends without LDAC; the next one has no echo to compare.
+  Status fail() {
+    ++state_.bus_errors;
+    have_previous_ = false;
+    phase_ = Phase::kIdle;
+    result_ = Status::kBusError;
+    return Status::kBusError;
   }
 
   AsyncSpiMaster& spi_;

@@ -459,23 +459,29 @@ class Controller {
   std::int64_t tilt_max_pico_[2] = {};
   std::int64_t tilt_level_step_pico_ = 1;
   bool tilt_references_in_range_ = false;
-  // Homing's Hall solve: the inputs and unhomed pose of the sample seven
-  // ticks before the end of the homing window (step()'s own copy), and the
-  // job handed to background(). Single core, step() above background():
-  // step() writes the job's inputs only while the job is not kRunning, and
-  // background() reads them only after setting kRunning, so each sees the
-  // other's writes whole; the generation ties a result to its request.
+  // Homing's Hall solve: what it reads of the sample seven ticks before the
+  // end of the homing window, with that sample's unhomed pose, and what it
+  // gives; the generation ties a result to its request.
+  struct HallRequest {
+    HallSolveInputs inputs;
+    Pose64 pose_unhomed;
+    std::uint32_t generation;
+  };
+  struct HallResult {
+    HallPhase phase;
+    HomingOffsets offsets;  // zero when the phase is not plausible
+    std::uint32_t generation;
+  };
+  static HallResult SolveHoming(const HallRequest& request);
+  // step()'s own request, and the job handed to background(). Single core,
+  // step() above background(): step() writes the job's request only while
+  // the job is not kRunning, and background() reads it only after setting
+  // kRunning, so each sees the other's writes whole.
   enum class HallJob : std::uint8_t { kIdle = 0, kRequested = 1, kRunning = 2, kDone = 3 };
-  HallSolveInputs hall_inputs_{};
-  Pose64 hall_pose_unhomed_{};
-  std::uint32_t hall_generation_ = 0;
+  HallRequest hall_request_{};
   volatile HallJob hall_job_ = HallJob::kIdle;
-  HallSolveInputs hall_job_inputs_{};
-  Pose64 hall_job_pose_unhomed_{};
-  std::uint32_t hall_job_generation_ = 0;
-  HallPhase hall_job_result_{};
-  HomingOffsets hall_job_offsets_{};  // from the result (plausible or not)
-  std::uint32_t hall_job_result_generation_ = 0;
+  HallRequest hall_job_request_{};
+  HallResult hall_job_result_{};
   std::uint32_t hall_solves_in_tick_ = 0;
   ControllerStatus status_{};
   CouplingCalibrationConfig calibration_config_{};

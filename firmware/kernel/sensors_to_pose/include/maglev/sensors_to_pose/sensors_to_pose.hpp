@@ -300,13 +300,13 @@ struct HallPhase {
 };
 
 // phase = atan2(A, B) of each axis, with the 5th harmonic removed. Homing
-// only (double, the kernel's own atan2/sin/cos). The solve is split into
-// kHallSolveSteps bounded steps so that the controller can spread it over
-// the last ticks of the homing window, one step per tick (issue 16: the
-// one-off solve no longer lands on a single tick):
+// only (double, the kernel's own atan2/sin/cos), ~10 000 M7 instructions:
+// the controller runs it outside the servo tick (Controller::background()),
+// from a copy of what it reads (HallSolveInputs). In bounded steps:
 //   HallSolveBegin (the sample's atan2s, amplitudes, plausibility),
 //   HallSolveStep x kHallSolveSteps (one fixed-point pass, then Newton),
-//   HallSolveFinish (any steps left, then the phases in turns).
+//   HallSolveFinish (any steps left, then the phases in turns);
+// HallSolveRun does them all.
 inline constexpr int kHallSolveSteps = 7;
 struct HallSolve {
   double phi[2];    // atan2(A, B) of x and y
@@ -332,7 +332,6 @@ struct HallSolveInputs {
 };
 HallSolveInputs HallSolveInputsOf(const io::SensorSample& sample, const SensorsToPoseState& state);
 void HallSolveBegin(const HallSolveInputs& in, HallSolve* solve);
-void HallSolveBegin(const io::SensorSample& sample, const SensorsToPoseState& state, HallSolve* solve);
 void HallSolveStep(HallSolve* solve);
 HallPhase HallSolveFinish(HallSolve* solve);
 // Begin, every step and Finish: the same bits as spreading them over ticks.
