@@ -240,3 +240,34 @@ TEST(Ad5764Irq, AStrayInterruptEndsTheTransactionInsteadOfReentering) {
   CHECK(spi.complete() == BusStatus::kNotStarted);
   LONGS_EQUAL(0, model.ldac_pulses());
 }
+
+TEST(Ad5764Irq, TheMissedDeadlinePathOnlyDropsTheEnableAndATickResumingOverItDoesNotTrip) {
+  // ServoLoop::check_deadline (SysTick, below the tick and SPI1) calls
+  // force_safe(). It must start no DAC frame: the tick resuming at that
+  // moment preempts it, and a half-started frame would be abandoned by the
+  // tick's begin() with a latched trip.
+  io::ActuatorCommand c{{10, 20, 30, 40, 50, 60, 70, 80}, true};
+  actuators.write(c);
+  LONGS_EQUAL(4, run_interrupts());
+  CHECK_TRUE(enable_pin.level());
+  const int ldac_before = model.ldac_pulses();
+  bus.clear_log();
+  actuators.force_safe();  // the tick source stopped
+  CHECK_FALSE(enable_pin.level());
+  LONGS_EQUAL(0, static_cast<long>(bus.log_size()));  // no SPI1 register touched
+  LONGS_EQUAL(ldac_before, model.ldac_pulses());
+  CHECK_FALSE(enable.fault_latched());
+  // A write already on the wire when the deadline fires completes without
+  // enabling; the next tick's command enables again after its LDAC.
+  actuators.write(c);
+  CHECK_FALSE(actuators.on_dac_irq());
+  actuators.force_safe();
+  LONGS_EQUAL(3, run_interrupts());
+  CHECK_FALSE(enable_pin.level());
+  CHECK_FALSE(enable.fault_latched());
+  actuators.write(c);
+  LONGS_EQUAL(4, run_interrupts());
+  CHECK_TRUE(enable_pin.level());
+  CHECK_FALSE(enable.fault_latched());
+  LONGS_EQUAL(0, static_cast<long>(enable.trips()));
+}

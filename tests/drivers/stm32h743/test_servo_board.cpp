@@ -125,6 +125,23 @@ TEST(ServoLoop, StalledTicksForceSafeOutputs) {
   CHECK_FALSE(loop.check_deadline(g_cycles + 100));
 }
 
+TEST(ServoLoop, TheDeadlinePathUsesForceSafeNotAWrite) {
+  // The board's sinks override force_safe() with the enable line alone
+  // (amplifier_board_io.hpp): check_deadline must not call write() on them.
+  struct EnableOnlySink final : app::ActuatorSink {
+    int writes = 0, forced = 0;
+    void write(const io::ActuatorCommand&) override { ++writes; }
+    void force_safe() override { ++forced; }
+  } enable_only;
+  app::ServoLoop<FakeKernel> loop(sensors, enable_only, kernel, {0, 1000, 3}, hooks);
+  loop.on_tick();
+  LONGS_EQUAL(1, enable_only.writes);
+  CHECK_FALSE(loop.check_deadline(2000));
+  CHECK_TRUE(loop.check_deadline(4500));
+  LONGS_EQUAL(1, enable_only.forced);
+  LONGS_EQUAL(1, enable_only.writes);  // no write from the deadline path
+}
+
 TEST(ServoLoop, RecorderKeepsTheNewestEntries) {
   app::Recorder<4> rec;
   io::SensorSample s{};

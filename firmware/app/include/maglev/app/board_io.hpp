@@ -34,6 +34,13 @@ class SensorSource {
 class ActuatorSink {
  public:
   virtual void write(const io::ActuatorCommand& command) = 0;
+  // The missed-deadline path (ServoLoop::check_deadline), called from an
+  // interrupt BELOW the tick's priority: make the outputs safe without
+  // starting anything the tick could preempt half-way. A sink whose write()
+  // is a multi-step bus transaction (the board's DAC chain) overrides this
+  // with one atomic action (the amplifier-enable line low); the default,
+  // for sinks whose write is one store or one frame, writes the safe command.
+  virtual void force_safe() { write(io::kSafeActuatorCommand); }
 
  protected:
   ActuatorSink() = default;

@@ -8,8 +8,12 @@
 //     if the inputs are bad the kernel still runs (so its supervisor sees
 //     kAdcFault and latches) but the outputs written are the safe ones;
 //   * missed ticks: check_deadline(), called from a lower-priority periodic
-//     interrupt, writes kSafeActuatorCommand when no tick has completed for
-//     `deadline_ticks` periods (ADC/timer dead: nothing else would);
+//     interrupt, makes the outputs safe (ActuatorSink::force_safe) when no
+//     tick has completed for `deadline_ticks` periods (ADC/timer dead:
+//     nothing else would). force_safe, not write: a tick that resumes at
+//     that moment preempts it, and must not find a DAC transfer half-started
+//     by the lower-priority path (that abandoned write tripped the latched
+//     enable: safe, but a spurious trip);
 //   * overruns: a tick that used more than `cycle_budget` cycles, or after
 //     which the next tick is already pending, or that is re-entered, sets
 //     State::overruns and passes tick_overrun = true to the NEXT step();
@@ -107,7 +111,7 @@ class ServoLoop {
     const std::uint32_t ticks = state_.ticks;
     const std::uint32_t since = now_cycles - state_.last_tick_start;
     if (ticks == deadline_ticks_seen_ && since > config_.deadline_ticks * config_.period_cycles) {
-      actuators_.write(io::kSafeActuatorCommand);
+      actuators_.force_safe();
       ++state_.missed_deadlines;
       state_.last_tick_start = now_cycles;  // re-arm: repeat once per deadline while stalled
       return true;

@@ -76,6 +76,10 @@ class AmplifierBoardActuators final : public app::ActuatorSink {
     }
     if (c.amplifier_enable) enable_.request(true);
   }
+  // Missed deadline (SysTick, below the tick): the enable line low, one BSRR
+  // store; no DAC frame a resuming tick could interleave with. Not latched:
+  // a resumed tick's command enables again, as after write(kSafe...).
+  void force_safe() override { enable_.request(false); }
 
  private:
   drivers::ad5764::Chain<2>& dac_;
@@ -102,6 +106,16 @@ class AmplifierBoardIrqActuators final : public app::ActuatorSink {
       enable_when_written_ = false;
       enable_.trip();
     }
+  }
+
+  // Missed deadline (SysTick, below the tick and SPI1): the enable line low,
+  // one BSRR store, and no enable when a write still running completes.
+  // No DAC frame: a resuming tick's begin() would find it half-started and
+  // abandon it with a (latched) trip. Not latched itself: a resumed tick's
+  // command enables again after its LDAC, as after write(kSafe...).
+  void force_safe() override {
+    enable_when_written_ = false;
+    enable_.request(false);
   }
 
   // SPI1's interrupt. True when the write has finished (either way).
