@@ -52,7 +52,11 @@ TEST(Int64Double, ToDoubleEqualsTheCastForEveryInt64) {
 
 TEST(Int64Double, RoundAndTruncateEqualTheLibraryBelow2To51) {
   const double edge[] = {0.0, -0.0, 0.5, -0.5, 1.5, 2.5, -2.5, 0.49999999999999994, 1e15 + 0.5, -1e15 - 0.5,
-                         2251799813685247.0, -2251799813685247.0, 2251799813685246.5};
+                         2251799813685247.0, -2251799813685247.0, 2251799813685246.5,
+                         // TruncToInt64 splits at 2^32: both sides of each multiple, and tiny values.
+                         4294967296.0, -4294967296.0, 4294967295.75, -4294967295.75, 4294967296.5,
+                         -4294967296.5, 8589934591.5, -8589934592.25, 1e-300, -1e-300, 5e-324, -5e-324,
+                         0.9999999999999999, -0.9999999999999999};
   for (double v : edge) {
     CHECK_EQUAL(static_cast<std::int64_t>(std::nearbyint(v)), RoundToInt64(v));
     CHECK_EQUAL(static_cast<std::int64_t>(v), TruncToInt64(v));

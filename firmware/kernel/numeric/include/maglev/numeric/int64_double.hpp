@@ -33,11 +33,18 @@ constexpr std::int64_t RoundToInt64(double v) {
 }
 
 // The same value as static_cast<std::int64_t>(v) (truncation toward zero)
-// for |v| < 2^51.
+// for |v| < 2^51. v = q 2^32 + r with q = trunc(v 2^-32) (|q| < 2^19: one
+// 32-bit VCVT, which truncates) and r = v - q 2^32: exact, because q 2^32 is
+// a multiple of v's ulp and |r| <= |v|; r has v's sign and |r| < 2^32, so
+// trunc(v) = q 2^32 + trunc(r), the last one unsigned 32-bit VCVT. About 12
+// M7 instructions; the round-and-compare form this replaced took ~45 (it
+// is on the tick's path through si_to_pico and Fixed::from_double).
 constexpr std::int64_t TruncToInt64(double v) {
-  const std::int64_t nearest = RoundToInt64(v);
-  const double back = Int64ToDouble(nearest);
-  return nearest - (v >= 0.0 ? (back > v ? 1 : 0) : (back < v ? -1 : 0));
+  const std::int32_t q = static_cast<std::int32_t>(v * 0x1.0p-32);
+  const double r = v - static_cast<double>(q) * 0x1.0p32;
+  const std::int64_t low = v >= 0.0 ? std::int64_t{static_cast<std::uint32_t>(r)}
+                                    : -std::int64_t{static_cast<std::uint32_t>(-r)};
+  return std::int64_t{q} * (std::int64_t{1} << 32) + low;
 }
 
 // floor(a / d) exactly, for d > 0 and |a / d| < 2^50, given inv_d = 1.0 / d:
