@@ -1,0 +1,119 @@
+#!/usr/bin/python3
+"""Per-tick Cortex-M7 instruction counts by function, from a QEMU block log (issue 16).
+
+m7_function_profile.py averages over the whole run. This one splits the run at
+every entry of the tick function (by default Controller<float>::step), so a
+tick's cost can be read function by function: which work makes the largest
+Ready ticks larger than the median one (that is how the circle reference's
+libgcc conversions were found, docs/PERFORMANCE.md "On-target").
+
+  qemu-system-arm -M mps2-an500 -nographic -monitor none -serial null \\
+      -semihosting-config enable=on,target=native \\
+      -kernel build/qemu-m7/firmware/board/mps2_an500/kernel_replay/maglev-qemu-kernel-replay.elf \\
+      -append "VECTORS.bin /tmp/out.bin" -d in_asm,exec,nochain -D /tmp/m7trace.log
+  /usr/bin/python3 tests/target/bitexact/m7_tick_profile.py /tmp/m7trace.log \\
+      build/qemu-m7/firmware/board/mps2_an500/kernel_replay/maglev-qemu-kernel-replay.elf \\
+      [--symbol _ZN6maglev6kernel10ControllerIfE4stepE] [--last 4999] [--top 5]
+
+An interval runs from one entry of the tick function to the next, so it also
+holds what the harness does between calls (decode/encode, the icount
+bookkeeping, command() between ticks): those functions are listed apart and
+left out of the kernel totals; library functions (memset, memcpy) count
+whoever calls them, the harness included. --last N keeps the last N complete intervals
+(the replay's Ready ticks are its last 4 999). Printed: the kernel's mean per
+tick by function, then the --top largest intervals with the functions that
+exceed the median interval's.
+"""
+import argparse
+import collections
+import subprocess
+import sys
+
+HARNESS = ('kernel_replay', '_Z6replay', 'TickStats', 'semihost', 'icount')
+
+
+def entry_address(elf, symbol):
+    out = subprocess.run(['arm-none-eabi-nm', elf], capture_output=True, text=True, check=True).stdout
+    hits = [line.split()[0] for line in out.splitlines() if symbol in line and line.split()[1] in 'TtWw']
+    if len(hits) != 1:
+        sys.exit('m7_tick_profile: %d symbols match %r in %s (need exactly one)' % (len(hits), symbol, elf))
+    return int(hits[0], 16)
+
+
+def intervals(log, entry):
+    ninsn = {}
+    fn_of = {}
+    ticks = []
+    cur = collections.Counter()
+    cur_pc = None
+    cur_n = 0
+    with open(log, 'r', errors='replace') as f:
+        for line in f:
+            if line.startswith('Trace 0:'):
+                i = line.index('[')
+                pc = int(line[i + 1:line.index(']')].split('/')[1], 16)
+                if pc == entry:
+                    ticks.append(cur)
+                    cur = collections.Counter()
+                fn_of.setdefault(pc, line[line.index(']') + 2:].strip())
+                cur[pc] += 1
+            elif line.startswith('0x'):
+                if cur_pc is None:
+                    cur_pc = int(line[2:10], 16)
+                    cur_n = 0
+                cur_n += 1
+            elif line.startswith('IN:') or line.strip() == '' or line.startswith('----'):
+                if cur_pc is not None:
+                    ninsn[cur_pc] = cur_n
+                    cur_pc = None
+    # ticks[0] is everything before the first entry; the open one after the
+    # last entry runs to the end of the program: drop both.
+    out = []
+    for c in ticks[1:]:
+        by_fn = collections.Counter()
+        for pc, n in c.items():
+            by_fn[fn_of[pc]] += n * ninsn.get(pc, 0)
+        out.append(by_fn)
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    ap.add_argument('log')
+    ap.add_argument('elf')
+    ap.add_argument('--symbol', default='_ZN6maglev6kernel10ControllerIfE4stepE')
+    ap.add_argument('--last', type=int, default=0, help='keep the last N intervals (0: all)')
+    ap.add_argument('--top', type=int, default=5)
+    a = ap.parse_args()
+    ticks = intervals(a.log, entry_address(a.elf, a.symbol))
+    if a.last > 0:
+        ticks = ticks[-a.last:]
+    if not ticks:
+        sys.exit('m7_tick_profile: no complete interval (is --symbol the tick function?)')
+
+    def kernel(by_fn):
+        return {f: v for f, v in by_fn.items() if not any(h in f for h in HARNESS)}
+
+    totals = [(sum(kernel(b).values()), k, b) for k, b in enumerate(ticks)]
+    order = sorted(totals, key=lambda t: t[0])
+    median = order[len(order) // 2]
+    n = len(ticks)
+    mean = collections.Counter()
+    for _, _, b in totals:
+        for f, v in kernel(b).items():
+            mean[f] += v
+    print('%d intervals; kernel instructions per interval: min %d, median %d, max %d, mean %.1f' %
+          (n, order[0][0], median[0], order[-1][0], sum(mean.values()) / n))
+    for f, v in mean.most_common(30):
+        print('%9.1f  %s' % (v / n, f))
+    for total, k, b in order[::-1][:a.top]:
+        print('interval %d (of the kept ones): %d, median %d' % (k, total, median[0]))
+        kb, km = kernel(b), kernel(median[2])
+        diffs = sorted(((kb.get(f, 0) - km.get(f, 0), f) for f in set(kb) | set(km)), reverse=True)
+        for d, f in diffs:
+            if d >= 10:
+                print('   %+6d  %s' % (d, f))
+
+
+if __name__ == '__main__':
+    main()
