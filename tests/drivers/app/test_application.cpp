@@ -297,6 +297,25 @@ TEST(Application, ServoTimingRegistersReadTheLoopsOwnCounters) {
   LONGS_EQUAL(0, g_critical_depth);
 }
 
+TEST(Application, InterruptChainCyclesReadOverModbusOnceAttached) {
+  Fixture fx;
+  App application(fx.kernel, &fx.store, fx.node.get(), &fx.uart, &fx.recorder, fx.gate, fx.dog,
+                  app::ApplicationConfig{}, fx.hooks);
+  app::InterruptMeter meter;
+  // Not attached (the bench, the host server, the HIL board): they read 0.
+  LONGS_EQUAL(0, read_i32(application.registers(), modbus::RegId::servo_max_interrupt_cycles));
+  application.attach_interrupt_meter(&meter.state());
+  meter.begin_tick();
+  meter.add(0, 7000);
+  meter.begin_tick();
+  meter.add(0, 6500);
+  meter.begin_tick();
+  LONGS_EQUAL(7000, read_i32(application.registers(), modbus::RegId::servo_max_interrupt_cycles));
+  LONGS_EQUAL(6500, read_i32(application.registers(), modbus::RegId::servo_last_interrupt_cycles));
+  // The servo registers stay unattached (they read 0) and independent.
+  LONGS_EQUAL(0, read_i32(application.registers(), modbus::RegId::servo_max_cycles));
+}
+
 TEST(Application, RecorderIsDrainedOldestFirstAndLossCounted) {
   Fixture fx;
   App application(fx.kernel, nullptr, nullptr, nullptr, &fx.recorder, fx.gate, fx.dog,

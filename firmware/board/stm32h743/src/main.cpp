@@ -27,6 +27,7 @@
 #include <cstdint>
 
 #include "maglev/app/application.hpp"
+#include "maglev/app/interrupt_meter.hpp"
 #include "maglev/app/recorder.hpp"
 #include "maglev/app/servo_loop.hpp"
 #include "maglev/board/stm32h743/board_flash.hpp"
@@ -123,6 +124,9 @@ d::Stm32OutputPin<Bus> g_led{g_bus, pins::kLed};
 b::AmplifierBoardDrivers<Bus> g_board{g_bus, g_adc_dma_rx};
 auto& g_sensors = g_board.sensors;
 b::AmplifierBoardIrqActuators* g_dac_actuators = nullptr;  // SPI1_IRQHandler's; set in main()
+// The tick's whole interrupt chain in cycles (EXTI + 2 DMA bodies with
+// on_tick() + 4 SPI1 bodies): servo.max_interrupt_cycles / last_interrupt_cycles.
+maglev::app::InterruptMeter g_interrupt_meter;
 #endif
 
 d::AmplifierEnable* g_amp = nullptr;  // constructed in main() after the GPIO is configured
@@ -354,6 +358,9 @@ extern "C" void board_main() {
                                                       hooks);
   g_servo = &servo;
   application.attach_servo_state(&servo.state());  // servo.max_cycles / last_cycles / overruns over Modbus
+#if !MAGLEV_BOARD_HIL
+  application.attach_interrupt_meter(&g_interrupt_meter.state());  // servo.*_interrupt_cycles
+#endif
 
   g_bus.write32(r::scb::kBase + r::scb::kShpr3, 1u << 28);  // SysTick priority 1
   g_bus.write32(r::systick::kRvr, b::kCpu_Hz / 1000u - 1u);
@@ -427,14 +434,19 @@ extern "C" {
 // cannot start (still busy, previous read never completed) runs the tick at
 // once, which reports the sensor loss. ITCM-resident.
 [[gnu::section(".itcm_text")]] void EXTI15_10_IRQHandler() {
+  const std::uint32_t start = cycle_counter();
+  g_interrupt_meter.begin_tick();
   g_bus.write32(r::exti::kBase + r::exti::kCpupr1, r::bit(11));
   if (g_board.on_busy_fell() && g_servo != nullptr) g_servo->on_tick();
+  g_interrupt_meter.add(start, cycle_counter());
 }
 
 // Servo tick: the SPI3 RX DMA finished a device. ADC0 -> ADC1 started; ADC1
 // (or an error) -> the tick, which takes the completed buffer.
 [[gnu::section(".itcm_text")]] void DMA1_Stream0_IRQHandler() {
+  const std::uint32_t start = cycle_counter();
   if (g_board.on_adc_dma() && g_servo != nullptr) g_servo->on_tick();
+  g_interrupt_meter.add(start, cycle_counter());
 }
 
 // 16-bit encoder extension points (wrap, 0x4000, 0xC000). Same priority as the tick.
@@ -443,7 +455,9 @@ extern "C" {
 // The AD5764 chain's SYNC frame k is on the wire: check its echo, start
 // frame k + 1; after the fourth, LDAC and the amplifier enable.
 [[gnu::section(".itcm_text")]] void SPI1_IRQHandler() {
+  const std::uint32_t start = cycle_counter();
   if (g_dac_actuators != nullptr) (void)g_dac_actuators->on_dac_irq();
+  g_interrupt_meter.add(start, cycle_counter());
 }
 #endif
 

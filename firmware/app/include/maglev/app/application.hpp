@@ -45,6 +45,7 @@
 
 #include "maglev/motion_commands/to_motion_command.hpp"
 #include "maglev/app/host_command_queue.hpp"
+#include "maglev/app/interrupt_meter.hpp"
 #include "maglev/app/recorder.hpp"
 #include "maglev/app/servo_loop.hpp"
 #include "maglev/app/telemetry.hpp"
@@ -139,7 +140,7 @@ class GuardedDevice final : public modbus::Device {
   double read_status(modbus::RegId id) const override {
     enter();
     double v = 0.0;
-    if (servo_ != nullptr && servo_status(id, &v)) {
+    if (servo_status(id, &v)) {
       exit();
       return v;
     }
@@ -149,6 +150,8 @@ class GuardedDevice final : public modbus::Device {
   }
   // The servo loop's own timing (servo.* registers); null: they read 0.
   void set_servo_state(const ServoState* servo) { servo_ = servo; }
+  // The board's whole interrupt chain per tick (servo.*_interrupt_cycles); null: 0.
+  void set_interrupt_meter(const InterruptMeterState* meter) { meter_ = meter; }
   ApplyResult apply_config(modbus::ConfigImage& config, bool live_tuning) override {
     enter();
     const ApplyResult r = inner_.apply_config(config, live_tuning);
@@ -185,16 +188,27 @@ class GuardedDevice final : public modbus::Device {
     if (hooks_.critical_exit != nullptr) hooks_.critical_exit();
   }
   bool servo_status(modbus::RegId id, double* v) const {
-    switch (id) {
-      case modbus::RegId::servo_max_cycles: *v = servo_->max_cycles; return true;
-      case modbus::RegId::servo_last_cycles: *v = servo_->last_cycles; return true;
-      case modbus::RegId::servo_overruns: *v = servo_->overruns; return true;
-      default: return false;
+    if (servo_ != nullptr) {
+      switch (id) {
+        case modbus::RegId::servo_max_cycles: *v = servo_->max_cycles; return true;
+        case modbus::RegId::servo_last_cycles: *v = servo_->last_cycles; return true;
+        case modbus::RegId::servo_overruns: *v = servo_->overruns; return true;
+        default: break;
+      }
     }
+    if (meter_ != nullptr) {
+      switch (id) {
+        case modbus::RegId::servo_max_interrupt_cycles: *v = meter_->max_cycles; return true;
+        case modbus::RegId::servo_last_interrupt_cycles: *v = meter_->last_cycles; return true;
+        default: break;
+      }
+    }
+    return false;
   }
   modbus::Device& inner_;
   const ApplicationHooks& hooks_;
   const ServoState* servo_ = nullptr;
+  const InterruptMeterState* meter_ = nullptr;
 };
 
 template <typename T>
@@ -256,6 +270,7 @@ class Application {
   // The board's ServoLoop state behind servo.max_cycles / last_cycles /
   // overruns (read with the tick masked, like every kernel status read).
   void attach_servo_state(const ServoState* servo) { guarded_.set_servo_state(servo); }
+  void attach_interrupt_meter(const InterruptMeterState* meter) { guarded_.set_interrupt_meter(meter); }
   const modbus::RegisterServer& registers() const { return registers_; }
   const modbus::RtuServer& rtu() const { return rtu_; }
   const can::LinkReceiver& receiver() const { return receiver_; }
