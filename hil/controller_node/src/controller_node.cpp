@@ -179,6 +179,12 @@ class RememberingSink final : public app::ActuatorSink {
     last = command;
     inner_.write(command);
   }
+  // A forwarding sink forwards the missed-deadline path too (the inner sink
+  // decides what "safe" takes; ServoLoop::check_deadline).
+  void force_safe() override {
+    last = io::kSafeActuatorCommand;
+    inner_.force_safe();
+  }
   io::ActuatorCommand last = io::kSafeActuatorCommand;
 
  private:

@@ -160,6 +160,7 @@ struct TimedActuators final : app::ActuatorSink {
     const std::uint32_t t1 = systick_now();
     g_write_counts = systick_elapsed(t0, t1);
   }
+  void force_safe() override { out.force_safe(); }  // forwarded, untimed (no deadline path runs here)
   app::ActuatorSink& out;
 };
 
