@@ -327,7 +327,7 @@ AxisReference SinusoidReference::sample(std::int64_t tick) const {
   AxisReference r;
   if (tick < 0) tick = 0;
   const bool finished = total_ticks_ > 0 && tick >= total_ticks_;
-  const double t = (finished ? numeric::Int64ToDouble(total_ticks_) : numeric::Int64ToDouble(tick)) * period_s_;
+  const double t = numeric::Int64ToDouble(finished ? total_ticks_ : tick) * period_s_;
   const double ph = omega_ * t + phase_;
   // One reduction for sin and cos of ph; sin of the start phase is planned.
   double s = 0.0, c = 0.0;
