@@ -603,8 +603,10 @@ AxisLoop<Scalar> Controller<Scalar>::loop(int a) {
 template <typename Scalar>
 io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, bool tick_overrun) {
   ++status_.tick;
-  Tick t;
-  measure_pose(sample, t);
+  // 1. sensors -> pose (integer, constant work).
+  PoseMeasurement pose = SensorsToPoseStep(sample, &s2p_);
+  measured_ = pose.pose;
+  Tick t(pose);
   supervise(sample, tick_overrun, t);
   home(sample, t);
   sequence(t);
@@ -617,13 +619,6 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   const io::ActuatorCommand cmd = coil_currents_to_dac(t);
   publish_status(t, cmd.amplifier_enable);
   return cmd;
-}
-
-// 1. sensors -> pose (integer, constant work).
-template <typename Scalar>
-void Controller<Scalar>::measure_pose(const io::SensorSample& sample, Tick& t) {
-  t.m = SensorsToPoseStep(sample, &s2p_);
-  measured_ = t.m.pose;
 }
 
 // 2. supervisor: checks on this sample and last tick's commands.
@@ -851,22 +846,23 @@ void Controller<Scalar>::advance_references(Tick& t) {
                               tx <= tilt_max_pico_[0] && ty >= tilt_min_pico_[1] && ty <= tilt_max_pico_[1];
 }
 
-// 5b. excitation d (constant work: every harmonic slot runs).
+// 5b. excitation d (while one runs, every harmonic slot runs).
 template <typename Scalar>
 void Controller<Scalar>::excite(Tick& t) {
   Excitation& ex = excitation_;
   if (ex.active && (!t.so->motion_allowed || (ex.duration_ticks != 0 && ex.tick >= ex.duration_ticks))) {
     ex.active = false;
   }
-  // The harmonic sum only while an excitation runs (its output is zero
-  // otherwise); the phases advance on every tick either way.
+  // The harmonic sum and the phase advance only while an excitation runs:
+  // its output is zero otherwise, and start_excitation() sets every phase
+  // afresh, so phases advanced while idle were never read.
   Scalar d_sum = Traits::zero();
   if (ex.active) {
     for (int k = 0; k < kMaxExcitationHarmonics; ++k) {
       d_sum += ex.amplitude[k] * Traits::sin_cos(ex.phase[k]).sin;  // the kernel's table
     }
+    for (int k = 0; k < kMaxExcitationHarmonics; ++k) ex.phase[k] += ex.increment[k];  // uint32 wrap = one turn
   }
-  for (int k = 0; k < kMaxExcitationHarmonics; ++k) ex.phase[k] += ex.increment[k];  // uint32 wrap = one turn
   for (int a = 0; a < kAxisCount; ++a) t.excitation[a] = (ex.active && a == ex.axis) ? d_sum : Traits::zero();
   ex.tick += ex.active ? 1u : 0u;
   // External injection (lab wave generator): same rule as kExcite (motion
