@@ -430,15 +430,18 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   s.stale_gap = static_cast<std::uint8_t>(stale && !seed ? (s.stale_gap < 255 ? s.stale_gap + 1 : 255) : 0);
   s.seeded = true;
 
-  // --- beam solve: linear inverse, then four fixed Abbe/cosine corrections ---
+  // --- beam solve: linear inverse, then three fixed Abbe/cosine corrections ---
   // (fixed count: no data-dependent exit). The non-linear terms are
   //   X beam:  + y*theta + d*theta^2/2      Y beam:  - x*theta + d*theta^2/2
   // so m_lin = m - nonlin(estimate); each pass shrinks the residual by about
   // |theta| (< 4e-3 at the 3.72 mrad travel): 65 um worst-case Abbe term ->
-  // 260 nm -> 1 nm -> 4 pm -> 0.02 pm. In double (pm, prad) the arithmetic
-  // adds < 1e-3 pm; the result is rounded to whole pm / prad once, at the
-  // end (docs/PERFORMANCE.md, "Servo tick": the bound against the exact
-  // solve).
+  // 260 nm -> 1 nm -> 5 pm. Three passes leave at most 5.4 pm in x / y at the
+  // corners of the travel (x +-28 mm, y +-17.5 mm, theta_z +-3.72 mrad; 18 pm
+  // at the supervisor's 5 mrad), 1/100 of the 618 pm LSB, and theta_z exact
+  // (the Abbe terms are common to the two y beams); a fourth pass (0.02 pm)
+  // cost ~32 M7 instructions a tick for nothing measurable. In double (pm,
+  // prad) the arithmetic adds < 1e-3 pm; the result is rounded to whole pm /
+  // prad once, at the end (docs/PERFORMANCE.md, "Servo tick").
   // Pass 0 is the linear inverse of the measurement itself (no correction:
   // theta = 0 makes the subtracted term exactly zero).
   const double correct = s.abbe_cosine_correction ? 1.0 : 0.0;
@@ -447,7 +450,7 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   for (int r = 0; r < 3; ++r) {
     est[r] = s.inv_beam[r][0] * meas_pm[0] + s.inv_beam[r][1] * meas_pm[1] + s.inv_beam[r][2] * meas_pm[2];
   }
-  for (int pass = 1; pass < 5; ++pass) {
+  for (int pass = 1; pass < 4; ++pass) {
     const double theta_rad = est[2] * 1e-12 * correct;
     const double half_theta2 = 0.5 * theta_rad * theta_rad;
     double lin[3];
