@@ -441,7 +441,8 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   // (the Abbe terms are common to the two y beams); a fourth pass (0.02 pm)
   // cost ~32 M7 instructions a tick for nothing measurable. In double (pm,
   // prad) the arithmetic adds < 1e-3 pm; the result is rounded to whole pm /
-  // prad once, at the end (docs/PERFORMANCE.md, "Servo tick").
+  // prad once, at the end (docs/PERFORMANCE.md, "On-target": the three-pass
+  // bound and how it was computed).
   // Pass 0 is the linear inverse of the measurement itself (no correction:
   // theta = 0 makes the subtracted term exactly zero).
   const double correct = s.abbe_cosine_correction ? 1.0 : 0.0;
