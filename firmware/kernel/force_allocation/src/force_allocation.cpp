@@ -209,6 +209,15 @@ MAGLEV_CONFIG_CODE ForceAllocationError ComputeForceAllocationTables(const Force
     }
   t.max_abs_ab_minus_i = worst;
   if (!(worst <= 1e-9)) return ForceAllocationError::kPseudoInverseCheck;
+  // The block structure AllocateCurrents relies on (kHorizontalEfforts):
+  // exact by construction (the elimination's factors across the blocks are
+  // exactly 0), checked so that no layout added later can break it silently.
+  for (int k = 0; k < kForcerForces; ++k) {
+    const int other = (k & 1) == 0 ? kHorizontalEfforts : 0;
+    for (int r = other; r < other + kHorizontalEfforts; ++r) {
+      if (t.b[k][r] != 0.0) return ForceAllocationError::kPseudoInverseCheck;
+    }
+  }
 
   // Coil pairs must be in quadrature (orthogonal 2x2 commutation blocks).
   for (int k = 0; k < kForcers; ++k) {

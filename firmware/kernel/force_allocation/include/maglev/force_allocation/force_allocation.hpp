@@ -23,6 +23,13 @@ namespace maglev::kernel {
 inline constexpr int kEfforts = 6;                 // U order = maglev::kernel::Axis order
 inline constexpr int kForcers = 4;                 // two coils each; forcer k = coils 2k, 2k+1
 inline constexpr int kForcerForces = 2 * kForcers;  // [F_h, F_z] per forcer, eq (21) order
+// U's first three efforts (x, y, theta_z) are the in-plane ones, the last
+// three (z, theta_x, theta_y) the out-of-plane ones. A forcer's F_h enters
+// only the first three rows of A and its F_z only the last three (BuildA),
+// so A A^T and B = A^T (A A^T)^-1 are block-structured: an F_h row of B is
+// zero in efforts 3-5, an F_z row in efforts 0-2. AllocateCurrents sums
+// only the non-zero block; ComputeForceAllocationTables checks the zeros.
+inline constexpr int kHorizontalEfforts = 3;
 
 enum class ForceLayout : std::uint8_t {
   kCross = 0,       // paper 000 eq (18) (the seed stage); paper 003 Fig. 7
