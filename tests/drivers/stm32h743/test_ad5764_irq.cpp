@@ -173,6 +173,34 @@ TEST(Ad5764Irq, FourInterruptsLoadEveryCoilAndLdacComesAfterTheLast) {
   LONGS_EQUAL(2, static_cast<long>(writer.state().writes));
 }
 
+TEST(Ad5764Irq, FramesOneToThreeRestartFromTheInterruptWithoutReconfiguring) {
+  // complete_and_restart(): the next frame of the same shape straight from
+  // the frame-end interrupt. Per write: TSIZE and CSTART once per frame,
+  // EOTIE set by the first start and cleared by the last completion only,
+  // CFG1 / CFG2 untouched (the same device and word size as the write before).
+  const std::int16_t first[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+  CHECK(writer.begin(first) == ad5764::Status::kOk);
+  LONGS_EQUAL(4, run_interrupts());
+  const std::int16_t codes[8] = {-5, 6000, -7, 8, 32767, -32768, 0, 12};
+  bus.clear_log();
+  const int frames_before = model.frames();
+  CHECK(writer.begin(codes) == ad5764::Status::kOk);
+  LONGS_EQUAL(4, run_interrupts());
+  CHECK(writer.result() == ad5764::Status::kOk);
+  LONGS_EQUAL(4, model.frames() - frames_before);
+  LONGS_EQUAL(0, model.malformed_frames());
+  for (std::size_t j = 0; j < 8; ++j) LONGS_EQUAL(codes[j], model.dac_register(j / 4, j % 4));
+  LONGS_EQUAL(0, bus.writes_to(kSpi + r::spi::kCfg1));
+  LONGS_EQUAL(0, bus.writes_to(kSpi + r::spi::kCfg2));
+  LONGS_EQUAL(4, bus.writes_to(kSpi + r::spi::kCr2));
+  LONGS_EQUAL(8, bus.writes_to(kSpi + r::spi::kTxdr));
+  LONGS_EQUAL(2, bus.writes_to(kSpi + r::spi::kIer));
+  UNSIGNED_LONGS_EQUAL(0u, bus.peek(kSpi + r::spi::kIer));
+  UNSIGNED_LONGS_EQUAL(r::spi::kCr1Ssi, bus.peek(kSpi + r::spi::kCr1));  // SPE = 0 at the end
+  CHECK_TRUE(sync.level());
+  LONGS_EQUAL(0, static_cast<long>(writer.state().link_mismatches));
+}
+
 TEST(Ad5764Irq, ActuatorsEnableOnlyAfterTheFourthFrameAndDisableAtOnce) {
   io::ActuatorCommand c{{100, 200, 300, 400, -100, -200, -300, -400}, true};
   actuators.write(c);
@@ -226,6 +254,11 @@ TEST(Ad5764Irq, AFailedFrameNeverPulsesLdac) {
   CHECK(writer.result() == ad5764::Status::kBusError);
   LONGS_EQUAL(0, model.ldac_pulses());
   CHECK_TRUE(enable.fault_latched());
+  // The failed frame ended cleanly: EOTIE off, SPE = 0, SYNC released.
+  UNSIGNED_LONGS_EQUAL(0u, bus.peek(kSpi + r::spi::kIer));
+  UNSIGNED_LONGS_EQUAL(r::spi::kCr1Ssi, bus.peek(kSpi + r::spi::kCr1));
+  CHECK_TRUE(sync.level());
+  CHECK(spi.complete() == BusStatus::kNotStarted);
 }
 
 TEST(Ad5764Irq, AStrayInterruptEndsTheTransactionInsteadOfReentering) {

@@ -192,12 +192,17 @@ class IrqWriter {
       spi_.cancel();  // nothing if no transaction is in flight
       return Step::kIdle;
     }
-    const BusStatus bs = spi_.complete();
+    // Frames 0-2: the next frame started in the same call (it does not
+    // depend on this one's echo, which only decides the result at the end).
+    const bool last = frame_ + 1 == kChannelsPerDevice;
+    const BusStatus bs = last ? spi_.complete() : spi_.complete_and_restart(tx_[frame_ + 1]);
     if (bs == BusStatus::kBusy) return Step::kBusy;
     if (bs != BusStatus::kOk) {
       (void)fail();
       return Step::kError;  // LDAC not pulsed: never a partial update
     }
+    // rx_ holds the frame that just ended (the next one's words are read
+    // only when it ends).
     const std::uint32_t* sent_before = frame_ == 0 ? previous_ : tx_[frame_ - 1];
     if (frame_ != 0 || have_previous_) {
       bool same = true;
@@ -207,7 +212,7 @@ class IrqWriter {
         result_ = Status::kLinkMismatch;
       }
     }
-    if (++frame_ < kChannelsPerDevice) return start_frame() == Status::kOk ? Step::kNextFrame : Step::kError;
+    if (++frame_ < kChannelsPerDevice) return Step::kNextFrame;
     for (std::size_t d = 0; d < kDevices; ++d) previous_[d] = tx_[kChannelsPerDevice - 1][d];
     have_previous_ = true;
     ldac_.write(false);

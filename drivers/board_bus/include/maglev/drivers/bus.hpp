@@ -53,6 +53,13 @@ class AsyncSpiMaster {
   virtual BusStatus start(const SpiTransfer& t) = 0;
   virtual BusStatus complete() = 0;
   virtual void cancel() = 0;
+  // complete() and, when it says kOk, the next transaction of the same
+  // device, word size and word count (the same rx) started at once with the
+  // TX words `tx`: a chain of frames (the AD5764's four SYNC frames) from
+  // the frame-end interrupt without re-validating or re-configuring what
+  // cannot have changed. kOk: the next one is on the wire; anything else is
+  // complete()'s answer and nothing was started.
+  virtual BusStatus complete_and_restart(const std::uint32_t* tx) = 0;
 
  protected:
   AsyncSpiMaster() = default;
