@@ -155,6 +155,9 @@ struct ForceAllocationState {
   CorrectionScalar coil_torque_arm[2][io::kCoils];
   CorrectionScalar b_tilt_columns[2][kForcerForces];  // B's theta_x, theta_y columns
   bool coil_centres_active;  // any offset non-zero: AllocateCurrents corrects
+  // Per row, the forcers with a non-zero arm on either coil: the only ones
+  // whose terms the correction sums.
+  bool arm_active[2][kForcers];
   Scalar peak_current_A;
   Scalar half_peak_current_A;
   Scalar gravity_effort_A;  // (m + payload) g / (2 b*)

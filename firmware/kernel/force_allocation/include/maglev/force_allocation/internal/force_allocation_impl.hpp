@@ -56,6 +56,11 @@ MAGLEV_CONFIG_CODE ForceAllocationError ApplyForceAllocationConfig(const ForceAl
     s.coil_torque_arm[1][j] = static_cast<C>(-dx);  // tau_y = -dx F_z
     s.coil_centres_active = s.coil_centres_active || dx != 0.0 || dy != 0.0;
   }
+  for (int row = 0; row < 2; ++row) {
+    for (int k = 0; k < kForcers; ++k) {
+      s.arm_active[row][k] = s.coil_torque_arm[row][2 * k] != C(0) || s.coil_torque_arm[row][2 * k + 1] != C(0);
+    }
+  }
   // B's theta_x / theta_y columns as the correction reads them: the Scalar
   // value itself for float, the exact table for Q7.24.
   for (int r = 0; r < kForcerForces; ++r) {
@@ -148,38 +153,37 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
         return v;
       }
     };
-    C qh[2][kForcers], qz[2][kForcers];
-#pragma GCC unroll 4
-    for (int k = 0; k < kForcers; ++k) {
-      const C s = to_c(sin_psi[2 * k]), c = to_c(cos_psi[2 * k]);
-      const C sc = s * c, cc = c * c, ss = s * s;
-      for (int row = 0; row < 2; ++row) {
-        const C arm_a = state.coil_torque_arm[row][2 * k], arm_b = state.coil_torque_arm[row][2 * k + 1];
-        qh[row][k] = (arm_a - arm_b) * sc;
-        qz[row][k] = arm_a * cc + arm_b * ss;
-      }
-    }
-    const auto torque = [&](int row, const C* column) {
-      C acc = C(0);
-#pragma GCC unroll 4
-      for (int k = 0; k < kForcers; ++k) acc += qh[row][k] * column[2 * k] + qz[row][k] * column[2 * k + 1];
-      return acc;
-    };
-    // B45's F_h entries are zero (the block structure above): only the qz
-    // terms. Per forcer the dropped term made qh * (+-0) + qz * b = qz * b
-    // (or +-0 where that is +-0), added to a sum that started at +0: the
-    // same bits with half the multiply-adds.
-    const auto torque_z = [&](int row, const C* column) {
-      C acc = C(0);
-#pragma GCC unroll 4
-      for (int k = 0; k < kForcers; ++k) acc += qz[row][k] * column[2 * k + 1];
-      return acc;
-    };
+    // Per row (theta_x, theta_y), only the forcers with a non-zero arm
+    // (state.arm_active): a forcer whose two arms are exactly 0
+    // has qh = 0 * sc and qz = 0 * cc + 0 * ss, +-0, so its terms add +-0 to
+    // sums that start at +0 -- the same bits as summing all four. (Coil
+    // offsets along the thrust: each forcer turns about one axis only, so
+    // two of four per row.) B45's F_h entries are zero (the block structure
+    // above): the tilt-column torques take only the qz terms.
     C gc[kForcerForces];
     for (int r = 0; r < kForcerForces; ++r) gc[r] = to_c(g[r]);
-    const C p0x = torque(0, gc), p0y = torque(1, gc);
-    const C a = C(1) + torque_z(0, state.b_tilt_columns[0]), d01 = torque_z(0, state.b_tilt_columns[1]);
-    const C d10 = torque_z(1, state.b_tilt_columns[0]), d = C(1) + torque_z(1, state.b_tilt_columns[1]);
+    C p0[2], tilt0[2], tilt1[2];
+#pragma GCC unroll 2
+    for (int row = 0; row < 2; ++row) {
+      C p = C(0), t0 = C(0), t1 = C(0);
+#pragma GCC unroll 4
+      for (int k = 0; k < kForcers; ++k) {
+        if (!state.arm_active[row][k]) continue;
+        const C s = to_c(sin_psi[2 * k]), c = to_c(cos_psi[2 * k]);
+        const C arm_a = state.coil_torque_arm[row][2 * k], arm_b = state.coil_torque_arm[row][2 * k + 1];
+        const C qh = (arm_a - arm_b) * (s * c);
+        const C qz = arm_a * (c * c) + arm_b * (s * s);
+        p += qh * gc[2 * k] + qz * gc[2 * k + 1];
+        t0 += qz * state.b_tilt_columns[0][2 * k + 1];
+        t1 += qz * state.b_tilt_columns[1][2 * k + 1];
+      }
+      p0[row] = p;
+      tilt0[row] = t0;
+      tilt1[row] = t1;
+    }
+    const C p0x = p0[0], p0y = p0[1];
+    const C a = C(1) + tilt0[0], d01 = tilt1[0];
+    const C d10 = tilt0[1], d = C(1) + tilt1[1];
     const C inv_det = C(1) / (a * d - d01 * d10);
     C pxc = (d * p0x - d01 * p0y) * inv_det;
     C pyc = (a * p0y - d10 * p0x) * inv_det;
