@@ -57,3 +57,29 @@ TEST(SinCos, ErrorBoundOverDenseSweepAndAllKnots) {
   LONGS_EQUAL(-(1 << 24), ScalarTraits<Q7_24>::sin_cos(0xC0000000u).sin.raw());
   LONGS_EQUAL(0, ScalarTraits<Q7_24>::sin_cos(0x80000000u).sin.raw());
 }
+
+TEST(SinCos, PairIsSinQ30AndCosQ30BitForBit) {
+  // sin_cos_q30 decodes the quadrant once; it must give exactly the two
+  // single lookups: every knot and midpoint of every quadrant, the
+  // quadrant edges +-1, and a dense pseudo-random sweep.
+  using maglev::numeric::cos_q30;
+  using maglev::numeric::sin_cos_q30;
+  using maglev::numeric::sin_q30;
+  long mismatches = 0;
+  auto check = [&](std::uint32_t phase) {
+    const auto p = sin_cos_q30(phase);
+    if (p.sin != sin_q30(phase) || p.cos != cos_q30(phase)) ++mismatches;
+  };
+  for (std::uint32_t k = 0; k < 4096u; ++k) {
+    check(k << 20);
+    check((k << 20) + (1u << 19));
+    check((k << 20) - 1u);
+    check((k << 20) + 1u);
+  }
+  std::uint32_t x = 7u;
+  for (int i = 0; i < 2000000; ++i) {
+    x = x * 1664525u + 1013904223u;
+    check(x);
+  }
+  LONGS_EQUAL(0, mismatches);
+}

@@ -55,7 +55,8 @@ struct ScalarTraits<float> {
 
   static constexpr SinCos<Scalar> sin_cos(std::uint32_t phase) {
     constexpr float kQ30 = 1.0f / 1073741824.0f;
-    return {static_cast<float>(sin_q30(phase)) * kQ30, static_cast<float>(cos_q30(phase)) * kQ30};
+    const SinCosQ30 q = sin_cos_q30(phase);
+    return {static_cast<float>(q.sin) * kQ30, static_cast<float>(q.cos) * kQ30};
   }
 };
 
@@ -91,8 +92,9 @@ struct ScalarTraits<Fixed<F>> {
 
   static constexpr SinCos<Scalar> sin_cos(std::uint32_t phase) {
     static_assert(F <= 30);
-    return {Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(sin_q30(phase), 30 - F))),
-            Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(cos_q30(phase), 30 - F)))};
+    const SinCosQ30 q = sin_cos_q30(phase);
+    return {Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(q.sin, 30 - F))),
+            Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(q.cos, 30 - F)))};
   }
 };
 

@@ -67,6 +67,41 @@ constexpr std::int32_t sin_q30(std::uint32_t phase) {
 
 constexpr std::int32_t cos_q30(std::uint32_t phase) { return sin_q30(phase + 0x40000000u); }
 
+namespace detail {
+// The quarter wave at x in [0, 2^30] (x = 2^30: the last knot), interpolated
+// exactly as sin_q30 does.
+constexpr std::int32_t quarter_wave_q30(std::uint32_t x) {
+  const std::uint32_t index = x >> (30 - kSinTableBits);
+  const std::uint32_t frac = x & ((1u << (30 - kSinTableBits)) - 1u);
+  std::int64_t v = kQuarterSineTable[index];
+  if (frac != 0) {
+    const std::int64_t d = std::int64_t{kQuarterSineTable[index + 1]} - v;
+    v += (d * frac + (std::int64_t{1} << (29 - kSinTableBits))) >> (30 - kSinTableBits);
+  }
+  return static_cast<std::int32_t>(v);
+}
+}  // namespace detail
+
+// sin_q30(phase) and cos_q30(phase), the same bits, with the quadrant
+// decoded once: a quarter turn added changes only the quadrant bits, so the
+// two read the quarter wave at p and at 2^30 - p (p = phase within its
+// quadrant), which one by the quadrant's parity.
+struct SinCosQ30 {
+  std::int32_t sin;
+  std::int32_t cos;
+};
+constexpr SinCosQ30 sin_cos_q30(std::uint32_t phase) {
+  const std::uint32_t quadrant = phase >> 30;
+  const std::uint32_t p = phase & 0x3FFFFFFFu;
+  const std::int32_t at_p = detail::quarter_wave_q30(p);
+  const std::int32_t at_mirror = detail::quarter_wave_q30(0x40000000u - p);
+  const bool odd = (quadrant & 1u) != 0;
+  const std::int32_t s = odd ? at_mirror : at_p;
+  const std::int32_t c = odd ? at_p : at_mirror;
+  // sin < 0 in quadrants 2, 3; cos (= sin one quadrant on) in 1, 2.
+  return {quadrant >= 2 ? -s : s, (quadrant == 1 || quadrant == 2) ? -c : c};
+}
+
 template <typename Scalar>
 struct SinCos {
   Scalar sin;
