@@ -136,6 +136,29 @@ TEST(Ad7606Dma, RegisterSequenceFollowsTheDmaProcedure) {
                        bus.peek(kS0 + r::dma::kSxM0ar));
 }
 
+TEST(Ad7606Dma, TheSecondDeviceAndTheNextTicksKeepTheSpiConfiguration) {
+  // CFG1 / CFG2 (and the stream's PAR / FCR) are written by the first
+  // transaction only: the pair shares its settings, SPE is 0 between them.
+  CHECK(adc.begin() == ad7606::Status::kOk);
+  bus.clear_log();
+  CHECK(adc.advance() == ad7606::DmaReader::Step::kNextDevice);
+  CHECK(adc.advance() == ad7606::DmaReader::Step::kComplete);
+  ad7606::Codes codes{};
+  CHECK(adc.read(codes) == ad7606::Status::kOk);
+  CHECK(adc.begin() == ad7606::Status::kOk);
+  CHECK(adc.advance() == ad7606::DmaReader::Step::kNextDevice);
+  CHECK(adc.advance() == ad7606::DmaReader::Step::kComplete);
+  CHECK(adc.read(codes) == ad7606::Status::kOk);
+  check_codes(codes);
+  LONGS_EQUAL(0, bus.writes_to(kSpi + r::spi::kCfg1));
+  LONGS_EQUAL(0, bus.writes_to(kSpi + r::spi::kCfg2));
+  LONGS_EQUAL(0, bus.writes_to(kS0 + r::dma::kSxPar));
+  LONGS_EQUAL(3, bus.writes_to(kS0 + r::dma::kSxNdtr));  // ADC1, then ADC0 and ADC1 of the next conversion
+  // RXDMAEN still set from the first transaction, every frame complete.
+  CHECK((bus.peek(kSpi + r::spi::kCfg1) & r::bit(14)) != 0u);
+  LONGS_EQUAL(4, model.transfers());
+}
+
 TEST(Ad7606Dma, ACompletedPairIsTakenOnlyOnce) {
   CHECK(adc.begin() == ad7606::Status::kOk);
   while (adc.advance() == ad7606::DmaReader::Step::kNextDevice) {

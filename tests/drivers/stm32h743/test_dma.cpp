@@ -38,6 +38,37 @@ TEST(DmaStream, InitRoutesTheDmamuxChannel) {
   CHECK(s.poll() == dma::Status::kIdle);
 }
 
+TEST(DmaStream, PeripheralAddressAndDirectModeAreWrittenOncePerPeripheral) {
+  // PAR and FCR keep their values while EN = 0: the next transfer of the
+  // same peripheral writes only the flags, M0AR, NDTR and CR.
+  Bus bus;
+  dma::Stream<Bus> s(bus, {r::dma::kDma1, 0, r::dma::kReqSpi3Rx, true});
+  s.init();
+  const r::Addr st = r::dma::stream(r::dma::kDma1, 0);
+  CHECK(s.start_peripheral_to_memory(0x40003C30u, 0x30000100u, 4) == dma::Status::kBusy);
+  bus.write32(r::dma::kDma1 + r::dma::kLisr, r::dma::kFlagTc);  // transfer complete
+  bus.write32(st + r::dma::kSxCr, 0u);                           // the hardware clears EN
+  CHECK(s.poll() == dma::Status::kComplete);
+  bus.clear_log();
+  CHECK(s.start_peripheral_to_memory(0x40003C30u, 0x30000110u, 4) == dma::Status::kBusy);
+  LONGS_EQUAL(0, bus.writes_to(st + r::dma::kSxPar));
+  LONGS_EQUAL(0, bus.writes_to(st + r::dma::kSxFcr));
+  UNSIGNED_LONGS_EQUAL(0x30000110u, bus.peek(st + r::dma::kSxM0ar));
+  LONGS_EQUAL(1, bus.writes_to(st + r::dma::kSxNdtr));
+  LONGS_EQUAL(static_cast<long>(bus.log_size()) - 1, bus.index_of_write(st + r::dma::kSxCr));
+  // Another peripheral: PAR (and FCR) again; after init() too.
+  s.abort();
+  bus.clear_log();
+  CHECK(s.start_peripheral_to_memory(0x40013030u, 0x30000100u, 4) == dma::Status::kBusy);
+  UNSIGNED_LONGS_EQUAL(0x40013030u, bus.peek(st + r::dma::kSxPar));
+  LONGS_EQUAL(1, bus.writes_to(st + r::dma::kSxFcr));
+  s.abort();
+  s.init();
+  bus.clear_log();
+  CHECK(s.start_peripheral_to_memory(0x40013030u, 0x30000100u, 4) == dma::Status::kBusy);
+  LONGS_EQUAL(1, bus.writes_to(st + r::dma::kSxPar));
+}
+
 TEST(DmaStream, StartArmsPeripheralToMemoryEnableLast) {
   Bus bus;
   dma::Stream<Bus> s(bus, {r::dma::kDma1, 0, r::dma::kReqSpi3Rx, true});

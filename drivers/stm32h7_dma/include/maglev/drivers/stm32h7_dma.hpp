@@ -53,6 +53,7 @@ class Stream {
     clear_flags();
     bus_.write32(r::dmamux_channel(config_.controller, config_.stream), config_.request & 0x7Fu);
     started_ = false;
+    par_written_ = 0;
   }
 
   // Arms a peripheral -> memory transfer of `items` 32-bit words from the
@@ -66,10 +67,16 @@ class Stream {
     if (items == 0 || (memory & 3u) != 0u) return Status::kBadArgument;
     if ((bus_.read32(regs_ + r::kSxCr) & r::kCrEn) != 0u) return Status::kStillRunning;
     clear_flags();
-    bus_.write32(regs_ + r::kSxPar, static_cast<std::uint32_t>(peripheral));
+    // PAR and FCR hold their values while EN = 0 (only M0AR / NDTR change
+    // between the transfers of one peripheral): written when PAR changes.
+    const bool new_peripheral = static_cast<std::uint32_t>(peripheral) != par_written_;
+    if (new_peripheral) bus_.write32(regs_ + r::kSxPar, static_cast<std::uint32_t>(peripheral));
     bus_.write32(regs_ + r::kSxM0ar, static_cast<std::uint32_t>(memory));
     bus_.write32(regs_ + r::kSxNdtr, items);
-    bus_.write32(regs_ + r::kSxFcr, 0u);  // direct mode
+    if (new_peripheral) {
+      bus_.write32(regs_ + r::kSxFcr, 0u);  // direct mode
+      par_written_ = static_cast<std::uint32_t>(peripheral);
+    }
     const std::uint32_t irq = config_.interrupt ? (r::kCrTcie | r::kCrTeie | r::kCrDmeie) : 0u;
     bus_.write32(regs_ + r::kSxCr, stm32h7::field(r::kDirPeripheralToMemory, r::kCrDirShift) | r::kCrMinc |
                                        stm32h7::field(r::kSizeWord, r::kCrPsizeShift) |
@@ -116,6 +123,7 @@ class Stream {
   stm32h7::Addr regs_;
   unsigned flag_shift_;
   bool started_ = false;
+  std::uint32_t par_written_ = 0;  // PAR (and FCR) as last written; 0: not since init()
 };
 
 }  // namespace maglev::drivers::dma

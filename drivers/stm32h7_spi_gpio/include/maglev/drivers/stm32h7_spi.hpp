@@ -61,6 +61,7 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi);
     bus_.write32(base_ + s::kCfg2, s::kCfg2Master | s::kCfg2Ssm | s::kCfg2Afcntr);
     fifo_config_ = 0;
+    dma_cfg1_ = 0;
     for (std::size_t i = 0; i < kDevices; ++i) devices_[i].chip_select->write(true);
   }
 
@@ -104,14 +105,25 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     if (in_flight_) return BusStatus::kBusy;
     const SpiDeviceSettings& d = devices_[t.device];
     fifo_config_ = 0;
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
-    bus_.write32(base_ + s::kCfg1, cfg1(d, t) | s::kCfg1Rxdmaen);
-    bus_.write32(base_ + s::kCfg2, cfg2(d) | stm32h7::field(s::kCommSimplexReceiver, s::kCfg2CommShift));
+    // CFG1 / CFG2 written only when they differ from the last DMA
+    // transaction's (the AD7606 pair: the same settings for both devices, so
+    // once after boot). SPE is 0 here (every transaction ends with it), and
+    // RXDMAEN left set since then raises no request before SPE = 1.
+    const std::uint32_t c1 = cfg1(d, t) | s::kCfg1Rxdmaen;
+    const std::uint32_t c2 = cfg2(d) | stm32h7::field(s::kCommSimplexReceiver, s::kCfg2CommShift);
+    if (c1 != dma_cfg1_ || c2 != dma_cfg2_) {
+      bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
+      bus_.write32(base_ + s::kCfg1, c1);
+      bus_.write32(base_ + s::kCfg2, c2);
+      dma_cfg1_ = c1;
+      dma_cfg2_ = c2;
+    }
     bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(t.words));
     const dma::Status armed = rx_dma_->start_peripheral_to_memory(
         base_ + s::kRxdr, reinterpret_cast<stm32h7::Addr>(t.rx), static_cast<std::uint16_t>(t.words));
     if (armed != dma::Status::kBusy) {
       bus_.write32(base_ + s::kCfg1, cfg1(d, t));
+      dma_cfg1_ = 0;
       return armed == dma::Status::kStillRunning ? BusStatus::kBusy : BusStatus::kBadArgument;
     }
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
@@ -224,6 +236,7 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
       bus_.write32(base_ + s::kCfg1, cfg1(d, t));
       bus_.write32(base_ + s::kCfg2, cfg2(d));
       fifo_config_ = key;
+      dma_cfg1_ = 0;
     }
     bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(t.words));
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
@@ -258,6 +271,7 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     namespace s = stm32h7::spi;
     const SpiDeviceSettings& d = devices_[t.device];
     fifo_config_ = 0;
+    dma_cfg1_ = 0;
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
     bus_.write32(base_ + s::kCfg1, cfg1(d, t));
     bus_.write32(base_ + s::kCfg2, cfg2(d));
@@ -291,6 +305,8 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
   std::uint8_t fifo_words_ = 0;
   std::uint32_t* fifo_rx_ = nullptr;
   std::uint32_t fifo_config_ = 0;  // CFG1 / CFG2 written for (1, device, word_bits); 0: unknown
+  std::uint32_t dma_cfg1_ = 0;     // CFG1 / CFG2 the last DMA transaction wrote; 0: unknown
+  std::uint32_t dma_cfg2_ = 0;
 };
 
 }  // namespace maglev::drivers
