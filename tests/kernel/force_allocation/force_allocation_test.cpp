@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <random>
 
 #include "CppUTest/TestHarness.h"
@@ -24,6 +25,10 @@ using maglev::kernel::ForceAllocationError;
 using maglev::kernel::ForceAllocationState;
 using maglev::kernel::ForceLayout;
 using maglev::numeric::Q7_24;
+using maglev::kernel::ForcerPhases;
+using maglev::kernel::kEfforts;
+using maglev::kernel::kForcers;
+namespace io = maglev::io;
 namespace stage = maglev::io::stage;
 
 constexpr double kPi = stage::kPi;
@@ -282,6 +287,60 @@ TEST(ForceAllocation, CoilPhasesReproduceEq19AndKernelReproducesEq23) {
       DOUBLES_EQUAL(expect, static_cast<double>(out.current_A[j]), 5e-6);
     }
   }
+}
+
+// Forcers that share a thrust direction and sit whole quarter turns apart
+// (the cross layout: 1 with 3, 2 with 4) take the earlier one's phase and
+// table values: the same bits as computing each forcer on its own.
+TEST(ForceAllocation, ForcersWithTheSamePhaseUpToQuarterTurnsGiveTheSameBits) {
+  static ForceAllocationState<float> shared;
+  static ForceAllocationState<Q7_24> shared_q;
+  const ForceAllocationConfig cfg = DefaultForceAllocationConfig();
+  CHECK(ApplyForceAllocationConfig<float>(cfg, &shared) == ForceAllocationError::kOk);
+  CHECK(ApplyForceAllocationConfig<Q7_24>(cfg, &shared_q) == ForceAllocationError::kOk);
+  LONGS_EQUAL(-1, shared.commutation.same_as[0]);
+  LONGS_EQUAL(-1, shared.commutation.same_as[1]);
+  LONGS_EQUAL(0, shared.commutation.same_as[2]);
+  LONGS_EQUAL(1, shared.commutation.same_as[3]);
+  LONGS_EQUAL(1, shared.commutation.quarter_turns[2]);
+  LONGS_EQUAL(1, shared.commutation.quarter_turns[3]);
+  // The same tables with every forcer computed on its own.
+  static ForceAllocationState<float> alone;
+  static ForceAllocationState<Q7_24> alone_q;
+  alone = shared;
+  alone_q = shared_q;
+  for (int k = 0; k < kForcers; ++k) {
+    alone.commutation.same_as[k] = -1;
+    alone_q.commutation.same_as[k] = -1;
+  }
+  std::mt19937 rng(23);
+  std::uniform_int_distribution<std::int64_t> pos(-60'000'000'000, 60'000'000'000);  // +-60 mm in pm
+  std::uniform_real_distribution<float> eff(-2.0f, 2.0f);
+  long differ = 0;
+  for (int n = 0; n < 20000; ++n) {
+    const std::int64_t x = pos(rng), y = pos(rng);
+    std::uint32_t a[kForcers], b[kForcers];
+    ForcerPhases(x, y, shared.commutation, a);
+    ForcerPhases(x, y, alone.commutation, b);
+    for (int k = 0; k < kForcers; ++k) differ += a[k] != b[k] ? 1 : 0;
+    float u[kEfforts];
+    Q7_24 uq[kEfforts];
+    for (int c = 0; c < kEfforts; ++c) {
+      u[c] = eff(rng);
+      uq[c] = Q7_24::from_double(static_cast<double>(u[c]));
+    }
+    AllocationOutput<float> o1{}, o2{};
+    AllocateCurrents<float>(u, x, y, shared, &o1);
+    AllocateCurrents<float>(u, x, y, alone, &o2);
+    AllocationOutput<Q7_24> q1{}, q2{};
+    AllocateCurrents<Q7_24>(uq, x, y, shared_q, &q1);
+    AllocateCurrents<Q7_24>(uq, x, y, alone_q, &q2);
+    for (int j = 0; j < io::kCoils; ++j) {
+      differ += std::memcmp(&o1.current_A[j], &o2.current_A[j], sizeof(float)) != 0 ? 1 : 0;
+      differ += q1.current_A[j].raw() != q2.current_A[j].raw() ? 1 : 0;
+    }
+  }
+  LONGS_EQUAL(0, differ);
 }
 
 // The seed layout's coil centres, as the kernel holds them, are the ones the

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdint>
+#include <cstring>
 
 #include "CppUTest/TestHarness.h"
 #include "maglev/numeric/scalar_traits.hpp"
@@ -80,6 +81,48 @@ TEST(SinCos, PairIsSinQ30AndCosQ30BitForBit) {
   for (int i = 0; i < 2000000; ++i) {
     x = x * 1664525u + 1013904223u;
     check(x);
+  }
+  LONGS_EQUAL(0, mismatches);
+}
+
+TEST(SinCos, QuarterTurnRotationIsTheTableAtThePhasePlusQuarters) {
+  // rotate_quarters(sin_cos_q30(p), n) == sin_cos_q30(p + n 2^30) bit for
+  // bit: AllocateCurrents relies on it for forcers whose phases are whole
+  // quarter turns apart.
+  using maglev::numeric::rotate_quarters;
+  using maglev::numeric::sin_cos_q30;
+  long mismatches = 0;
+  auto check = [&](std::uint32_t phase) {
+    const auto base = sin_cos_q30(phase);
+    for (unsigned n = 0; n < 8u; ++n) {
+      const auto want = sin_cos_q30(phase + n * 0x40000000u);
+      const auto got = rotate_quarters(base, n);
+      if (got.sin != want.sin || got.cos != want.cos) ++mismatches;
+    }
+  };
+  for (std::uint32_t k = 0; k < 4096u; ++k) {
+    check(k << 20);
+    check((k << 20) + (1u << 19));
+    check((k << 20) - 1u);
+  }
+  std::uint32_t x = 11u;
+  for (int i = 0; i < 500000; ++i) {
+    x = x * 1664525u + 1013904223u;
+    check(x);
+  }
+  LONGS_EQUAL(0, mismatches);
+}
+
+TEST(SinCos, SineAloneIsThePairsSine) {
+  // excite() reads only the sine: ScalarTraits::sin (one quarter-wave read)
+  // must be the pair's .sin bit for bit, float and Q7.24.
+  long mismatches = 0;
+  std::uint32_t x = 5u;
+  for (int i = 0; i < 500000; ++i) {
+    x = x * 1664525u + 1013904223u;
+    const float f = ScalarTraits<float>::sin(x), fp = ScalarTraits<float>::sin_cos(x).sin;
+    if (std::memcmp(&f, &fp, sizeof f) != 0) ++mismatches;
+    if (ScalarTraits<Q7_24>::sin(x).raw() != ScalarTraits<Q7_24>::sin_cos(x).sin.raw()) ++mismatches;
   }
   LONGS_EQUAL(0, mismatches);
 }

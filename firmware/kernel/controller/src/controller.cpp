@@ -859,7 +859,7 @@ void Controller<Scalar>::excite(Tick& t) {
   Scalar d_sum = Traits::zero();
   if (ex.active) {
     for (int k = 0; k < kMaxExcitationHarmonics; ++k) {
-      d_sum += ex.amplitude[k] * Traits::sin_cos(ex.phase[k]).sin;  // the kernel's table
+      d_sum += ex.amplitude[k] * Traits::sin(ex.phase[k]);  // the kernel's table
     }
     for (int k = 0; k < kMaxExcitationHarmonics; ++k) ex.phase[k] += ex.increment[k];  // uint32 wrap = one turn
   }

@@ -292,6 +292,19 @@ MAGLEV_CONFIG_CODE ForceAllocationError FillCommon(const ForceAllocationConfig& 
     ct->coil_offset_turn[2 * k + 1] = first + (leads ? 0x40000000u : 0xC0000000u);
     ct->second_coil_leads[k] = leads;
   }
+  for (int k = 0; k < kForcers; ++k) {
+    ct->same_as[k] = -1;
+    ct->quarter_turns[k] = 0;
+    for (int j = 0; j < k; ++j) {
+      const std::uint32_t apart = ct->coil_offset_turn[2 * k] - ct->coil_offset_turn[2 * j];
+      if (ct->same_as[j] < 0 && ct->h_dir[k][0] == ct->h_dir[j][0] && ct->h_dir[k][1] == ct->h_dir[j][1] &&
+          (apart & 0x3FFFFFFFu) == 0u) {
+        ct->same_as[k] = static_cast<std::int8_t>(j);
+        ct->quarter_turns[k] = static_cast<std::uint8_t>(apart >> 30);
+        break;
+      }
+    }
+  }
   if (!(c.peak_current_A > 0.0 && c.peak_current_A < 100.0) || !(c.mass_kg > 0.0) || !(c.payload_kg >= 0.0) ||
       !(c.amplifier_gain_A_per_V > 0.0) || !(c.dac_full_scale_V > 0.0) ||
       !(c.current_monitor_gain_V_per_A > 0.0) || !(c.adc_full_scale_V > 0.0)) {

@@ -123,6 +123,14 @@ struct CommutationTables {
   // sin(p + 2^30) = cos(p), cos(p + 2^30) = -sin(p) with the same table entries.
   std::uint32_t coil_offset_turn[io::kCoils];
   bool second_coil_leads[kForcers];
+  // Forcer k's phase is forcer same_as[k]'s (an earlier one, or -1) plus
+  // quarter_turns[k] quarter turns, exactly: the same thrust direction (the
+  // same turns, bit for bit) and coil offsets a whole number of quarter
+  // turns apart. The cross layout's forcers pair up so (1 with 3 along x, 2
+  // with 4 along y); the tick then takes their table values rotated instead
+  // of looking them up (AllocateCurrents: numeric::rotate_quarters).
+  std::int8_t same_as[kForcers];
+  std::uint8_t quarter_turns[kForcers];
 };
 
 // x, y (pm, magnet frame) -> per-coil phase psi_j (uint32, 2^32 = one turn):

@@ -54,9 +54,17 @@ struct ScalarTraits<float> {
   static constexpr Acc acc_mul(Acc a, Coeff c) { return a * static_cast<double>(c); }
 
   static constexpr SinCos<Scalar> sin_cos(std::uint32_t phase) {
+    return from_q30(sin_cos_q30(phase));
+  }
+  static constexpr SinCos<Scalar> from_q30(SinCosQ30 q) {
     constexpr float kQ30 = 1.0f / 1073741824.0f;
-    const SinCosQ30 q = sin_cos_q30(phase);
     return {static_cast<float>(q.sin) * kQ30, static_cast<float>(q.cos) * kQ30};
+  }
+  // The sine alone (one quarter-wave read, not the pair's two): from_q30's
+  // .sin for the same phase, bit for bit.
+  static constexpr Scalar sin(std::uint32_t phase) {
+    constexpr float kQ30 = 1.0f / 1073741824.0f;
+    return static_cast<float>(sin_q30(phase)) * kQ30;
   }
 };
 
@@ -92,7 +100,14 @@ struct ScalarTraits<Fixed<F>> {
 
   static constexpr SinCos<Scalar> sin_cos(std::uint32_t phase) {
     static_assert(F <= 30);
-    const SinCosQ30 q = sin_cos_q30(phase);
+    return from_q30(sin_cos_q30(phase));
+  }
+  static constexpr Scalar sin(std::uint32_t phase) {
+    static_assert(F <= 30);
+    return Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(sin_q30(phase), 30 - F)));
+  }
+  static constexpr SinCos<Scalar> from_q30(SinCosQ30 q) {
+    static_assert(F <= 30);
     return {Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(q.sin, 30 - F))),
             Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(q.cos, 30 - F)))};
   }

@@ -102,6 +102,23 @@ constexpr SinCosQ30 sin_cos_q30(std::uint32_t phase) {
   return {quadrant >= 2 ? -s : s, (quadrant == 1 || quadrant == 2) ? -c : c};
 }
 
+// sin_cos_q30(phase + quarters * 2^30) from sin_cos_q30(phase), exactly: a
+// whole quarter turn changes only the quadrant bits, so the same two table
+// values come back swapped and negated (sin(p + 1/4) = cos p,
+// cos(p + 1/4) = -sin p).
+constexpr SinCosQ30 rotate_quarters(SinCosQ30 v, unsigned quarters) {
+  switch (quarters & 3u) {
+    case 1u:
+      return {v.cos, -v.sin};
+    case 2u:
+      return {-v.sin, -v.cos};
+    case 3u:
+      return {-v.cos, v.sin};
+    default:
+      return v;
+  }
+}
+
 template <typename Scalar>
 struct SinCos {
   Scalar sin;

@@ -123,10 +123,16 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
   std::uint32_t phase[kForcers];
   ForcerPhases(x_pm, y_pm, state.commutation, phase);
   // Per coil (sin psi_j, cos psi_j): one table lookup per forcer.
+  // A forcer with the phase of an earlier one plus whole quarter turns
+  // (CommutationTables::same_as) takes its table values rotated, exactly.
   Scalar sin_psi[io::kCoils], cos_psi[io::kCoils];
+  numeric::SinCosQ30 table[kForcers];
 #pragma GCC unroll 4
   for (int k = 0; k < kForcers; ++k) {
-    const auto sc = Traits::sin_cos(phase[k]);
+    const int j = state.commutation.same_as[k];
+    table[k] = j < 0 ? numeric::sin_cos_q30(phase[k])
+                     : numeric::rotate_quarters(table[j], state.commutation.quarter_turns[k]);
+    const auto sc = Traits::from_q30(table[k]);
     const bool leads = state.commutation.second_coil_leads[k];
     sin_psi[2 * k] = sc.sin;
     cos_psi[2 * k] = sc.cos;
