@@ -59,29 +59,35 @@ TEST(SinCos, ErrorBoundOverDenseSweepAndAllKnots) {
   LONGS_EQUAL(0, ScalarTraits<Q7_24>::sin_cos(0x80000000u).sin.raw());
 }
 
-TEST(SinCos, PairIsSinQ30AndCosQ30BitForBit) {
-  // sin_cos_q30 decodes the quadrant once; it must give exactly the two
-  // single lookups: every knot and midpoint of every quadrant, the
-  // quadrant edges +-1, and a dense pseudo-random sweep.
-  using maglev::numeric::cos_q30;
-  using maglev::numeric::sin_cos_q30;
-  using maglev::numeric::sin_q30;
-  long mismatches = 0;
-  auto check = [&](std::uint32_t phase) {
-    const auto p = sin_cos_q30(phase);
-    if (p.sin != sin_q30(phase) || p.cos != cos_q30(phase)) ++mismatches;
-  };
+// Every knot and midpoint of every quadrant, the knots +-1, then `random`
+// pseudo-random phases (an LCG from `seed`): the phases the bit-for-bit
+// tests below sweep.
+template <typename F>
+void for_each_test_phase(std::uint32_t seed, int random, F&& check) {
   for (std::uint32_t k = 0; k < 4096u; ++k) {
     check(k << 20);
     check((k << 20) + (1u << 19));
     check((k << 20) - 1u);
     check((k << 20) + 1u);
   }
-  std::uint32_t x = 7u;
-  for (int i = 0; i < 2000000; ++i) {
+  std::uint32_t x = seed;
+  for (int i = 0; i < random; ++i) {
     x = x * 1664525u + 1013904223u;
     check(x);
   }
+}
+
+TEST(SinCos, PairIsSinQ30AndCosQ30BitForBit) {
+  // sin_cos_q30 decodes the quadrant once; it must give exactly the two
+  // single lookups.
+  using maglev::numeric::cos_q30;
+  using maglev::numeric::sin_cos_q30;
+  using maglev::numeric::sin_q30;
+  long mismatches = 0;
+  for_each_test_phase(7u, 2000000, [&](std::uint32_t phase) {
+    const auto p = sin_cos_q30(phase);
+    if (p.sin != sin_q30(phase) || p.cos != cos_q30(phase)) ++mismatches;
+  });
   LONGS_EQUAL(0, mismatches);
 }
 
@@ -92,24 +98,14 @@ TEST(SinCos, QuarterTurnRotationIsTheTableAtThePhasePlusQuarters) {
   using maglev::numeric::rotate_quarters;
   using maglev::numeric::sin_cos_q30;
   long mismatches = 0;
-  auto check = [&](std::uint32_t phase) {
+  for_each_test_phase(11u, 500000, [&](std::uint32_t phase) {
     const auto base = sin_cos_q30(phase);
     for (unsigned n = 0; n < 8u; ++n) {
       const auto want = sin_cos_q30(phase + n * 0x40000000u);
       const auto got = rotate_quarters(base, n);
       if (got.sin != want.sin || got.cos != want.cos) ++mismatches;
     }
-  };
-  for (std::uint32_t k = 0; k < 4096u; ++k) {
-    check(k << 20);
-    check((k << 20) + (1u << 19));
-    check((k << 20) - 1u);
-  }
-  std::uint32_t x = 11u;
-  for (int i = 0; i < 500000; ++i) {
-    x = x * 1664525u + 1013904223u;
-    check(x);
-  }
+  });
   LONGS_EQUAL(0, mismatches);
 }
 
@@ -117,12 +113,10 @@ TEST(SinCos, SineAloneIsThePairsSine) {
   // excite() reads only the sine: ScalarTraits::sin (one quarter-wave read)
   // must be the pair's .sin bit for bit, float and Q7.24.
   long mismatches = 0;
-  std::uint32_t x = 5u;
-  for (int i = 0; i < 500000; ++i) {
-    x = x * 1664525u + 1013904223u;
-    const float f = ScalarTraits<float>::sin(x), fp = ScalarTraits<float>::sin_cos(x).sin;
+  for_each_test_phase(5u, 500000, [&](std::uint32_t phase) {
+    const float f = ScalarTraits<float>::sin(phase), fp = ScalarTraits<float>::sin_cos(phase).sin;
     if (std::memcmp(&f, &fp, sizeof f) != 0) ++mismatches;
-    if (ScalarTraits<Q7_24>::sin(x).raw() != ScalarTraits<Q7_24>::sin_cos(x).sin.raw()) ++mismatches;
-  }
+    if (ScalarTraits<Q7_24>::sin(phase).raw() != ScalarTraits<Q7_24>::sin_cos(phase).sin.raw()) ++mismatches;
+  });
   LONGS_EQUAL(0, mismatches);
 }
