@@ -56,16 +56,11 @@ struct ScalarTraits<float> {
   static constexpr SinCos<Scalar> sin_cos(std::uint32_t phase) {
     return from_q30(sin_cos_q30(phase));
   }
-  static constexpr SinCos<Scalar> from_q30(SinCosQ30 q) {
-    constexpr float kQ30 = 1.0f / 1073741824.0f;
-    return {static_cast<float>(q.sin) * kQ30, static_cast<float>(q.cos) * kQ30};
-  }
+  static constexpr Scalar from_q30(std::int32_t v) { return static_cast<float>(v) * (1.0f / 1073741824.0f); }
+  static constexpr SinCos<Scalar> from_q30(SinCosQ30 q) { return {from_q30(q.sin), from_q30(q.cos)}; }
   // The sine alone (one quarter-wave read, not the pair's two): from_q30's
   // .sin for the same phase, bit for bit.
-  static constexpr Scalar sin(std::uint32_t phase) {
-    constexpr float kQ30 = 1.0f / 1073741824.0f;
-    return static_cast<float>(sin_q30(phase)) * kQ30;
-  }
+  static constexpr Scalar sin(std::uint32_t phase) { return from_q30(sin_q30(phase)); }
 };
 
 template <int F>
@@ -102,15 +97,12 @@ struct ScalarTraits<Fixed<F>> {
     static_assert(F <= 30);
     return from_q30(sin_cos_q30(phase));
   }
-  static constexpr Scalar sin(std::uint32_t phase) {
+  static constexpr Scalar sin(std::uint32_t phase) { return from_q30(sin_q30(phase)); }
+  static constexpr Scalar from_q30(std::int32_t v) {
     static_assert(F <= 30);
-    return Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(sin_q30(phase), 30 - F)));
+    return Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(v, 30 - F)));
   }
-  static constexpr SinCos<Scalar> from_q30(SinCosQ30 q) {
-    static_assert(F <= 30);
-    return {Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(q.sin, 30 - F))),
-            Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(q.cos, 30 - F)))};
-  }
+  static constexpr SinCos<Scalar> from_q30(SinCosQ30 q) { return {from_q30(q.sin), from_q30(q.cos)}; }
 };
 
 }  // namespace maglev::numeric

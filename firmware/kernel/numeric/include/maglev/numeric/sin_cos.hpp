@@ -50,26 +50,10 @@ constexpr std::array<std::int32_t, kSinTableSize + 1> make_sin_table() {
 
 inline constexpr std::array<std::int32_t, kSinTableSize + 1> kQuarterSineTable = detail::make_sin_table();
 
-// sin(2*pi*phase/2^32) as Q1.30 (exactly +-2^30 at the peaks).
-constexpr std::int32_t sin_q30(std::uint32_t phase) {
-  const std::uint32_t quadrant = phase >> 30;
-  std::uint32_t p = phase & 0x3FFFFFFFu;               // position within the quadrant
-  if (quadrant & 1u) p = 0x40000000u - p;              // mirror: 1..2^30
-  const std::uint32_t index = p >> (30 - kSinTableBits);
-  const std::uint32_t frac = p & ((1u << (30 - kSinTableBits)) - 1u);
-  std::int64_t v = kQuarterSineTable[index];
-  if (frac != 0) {  // index < 1024 here
-    const std::int64_t d = std::int64_t{kQuarterSineTable[index + 1]} - v;
-    v += (d * frac + (std::int64_t{1} << (29 - kSinTableBits))) >> (30 - kSinTableBits);
-  }
-  return static_cast<std::int32_t>(quadrant >= 2 ? -v : v);
-}
-
-constexpr std::int32_t cos_q30(std::uint32_t phase) { return sin_q30(phase + 0x40000000u); }
-
 namespace detail {
-// The quarter wave at x in [0, 2^30] (x = 2^30: the last knot), interpolated
-// exactly as sin_q30 does.
+// The quarter wave at x in [0, 2^30] (x = 2^30: the last knot): 10 index
+// bits, 20 interpolation bits, linear interpolation in int64 (frac != 0
+// implies index < 1024).
 constexpr std::int32_t quarter_wave_q30(std::uint32_t x) {
   const std::uint32_t index = x >> (30 - kSinTableBits);
   const std::uint32_t frac = x & ((1u << (30 - kSinTableBits)) - 1u);
@@ -81,6 +65,18 @@ constexpr std::int32_t quarter_wave_q30(std::uint32_t x) {
   return static_cast<std::int32_t>(v);
 }
 }  // namespace detail
+
+// sin(2*pi*phase/2^32) as Q1.30 (exactly +-2^30 at the peaks).
+constexpr std::int32_t sin_q30(std::uint32_t phase) {
+  const std::uint32_t quadrant = phase >> 30;
+  std::uint32_t p = phase & 0x3FFFFFFFu;   // position within the quadrant
+  if (quadrant & 1u) p = 0x40000000u - p;  // mirror: 1..2^30
+  const std::int32_t v = detail::quarter_wave_q30(p);
+  return quadrant >= 2 ? -v : v;
+}
+
+constexpr std::int32_t cos_q30(std::uint32_t phase) { return sin_q30(phase + 0x40000000u); }
+
 
 // sin_q30(phase) and cos_q30(phase), the same bits, with the quadrant
 // decoded once: a quarter turn added changes only the quadrant bits, so the
