@@ -20,7 +20,7 @@
 // Start/complete mode with TX words (t.tx set; no DMA): a transaction that
 // fits the FIFO (the AD5764 chain's 48-bit SYNC frame: two 24-bit data
 // frames) is loaded whole before it starts: SPE=0 -> CFG1 / CFG2 (full
-// duplex, written only when the device or word size changed) -> CR2.TSIZE
+// duplex, written only when they differ from the last start's) -> CR2.TSIZE
 // -> SPE=1 -> CS low -> every word into TXDR (RM0433 §50.4.9: the TxFIFO may
 // be filled before CSTART) -> IER.EOTIE -> CSTART, and return. complete(),
 // from the SPI's interrupt: EOT not yet -> kBusy; EOT -> OVR checked, the
@@ -60,8 +60,7 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     namespace s = stm32h7::spi;
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi);
     bus_.write32(base_ + s::kCfg2, s::kCfg2Master | s::kCfg2Ssm | s::kCfg2Afcntr);
-    fifo_config_ = 0;
-    dma_cfg1_ = 0;
+    forget_configuration();
     for (std::size_t i = 0; i < kDevices; ++i) devices_[i].chip_select->write(true);
   }
 
@@ -104,26 +103,16 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     if (!valid(t) || t.rx == nullptr || rx_dma_ == nullptr) return BusStatus::kBadArgument;
     if (in_flight_) return BusStatus::kBusy;
     const SpiDeviceSettings& d = devices_[t.device];
-    fifo_config_ = 0;
-    // CFG1 / CFG2 written only when they differ from the last DMA
-    // transaction's (the AD7606 pair: the same settings for both devices, so
-    // once after boot). SPE is 0 here (every transaction ends with it), and
-    // RXDMAEN left set since then raises no request before SPE = 1.
-    const std::uint32_t c1 = cfg1(d, t) | s::kCfg1Rxdmaen;
-    const std::uint32_t c2 = cfg2(d) | stm32h7::field(s::kCommSimplexReceiver, s::kCfg2CommShift);
-    if (c1 != dma_cfg1_ || c2 != dma_cfg2_) {
-      bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
-      bus_.write32(base_ + s::kCfg1, c1);
-      bus_.write32(base_ + s::kCfg2, c2);
-      dma_cfg1_ = c1;
-      dma_cfg2_ = c2;
-    }
+    // The AD7606 pair shares its settings, so CFG1 / CFG2 are written once
+    // after boot; RXDMAEN left set since then raises no request before SPE = 1.
+    configure(cfg1(d, t) | s::kCfg1Rxdmaen,
+              cfg2(d) | stm32h7::field(s::kCommSimplexReceiver, s::kCfg2CommShift));
     bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(t.words));
     const dma::Status armed = rx_dma_->start_peripheral_to_memory(
         base_ + s::kRxdr, reinterpret_cast<stm32h7::Addr>(t.rx), static_cast<std::uint16_t>(t.words));
     if (armed != dma::Status::kBusy) {
       bus_.write32(base_ + s::kCfg1, cfg1(d, t));
-      dma_cfg1_ = 0;
+      forget_configuration();
       return armed == dma::Status::kStillRunning ? BusStatus::kBusy : BusStatus::kBadArgument;
     }
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
@@ -169,23 +158,15 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     }
     const std::uint32_t sr = bus_.read32(base_ + s::kSr);
     if ((sr & s::kSrEot) == 0u) return BusStatus::kBusy;
-    for (std::size_t i = 0; i < fifo_words_; ++i) {
-      const std::uint32_t word = bus_.read32(base_ + s::kRxdr);
-      if (fifo_rx_ != nullptr) fifo_rx_[i] = word;
-    }
+    read_fifo_rx();
     if ((sr & s::kSrOvr) != 0u) {
       bus_.write32(base_ + s::kIer, 0u);
       end_dma_frame();
       return BusStatus::kTransferError;
     }
     const SpiDeviceSettings& d = devices_[device_];
-    bus_.write32(base_ + s::kIfcr, s::kIfcrEotc | s::kIfcrTxtfc | s::kIfcrOvrc);
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi);
-    d.chip_select->write(true);
-    bus_.write32(base_ + s::kCr2, fifo_words_);
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
-    d.chip_select->write(false);
-    for (std::size_t i = 0; i < fifo_words_; ++i) bus_.write32(base_ + s::kTxdr, tx[i]);
+    end_frame(d, s::kIfcrEotc | s::kIfcrTxtfc | s::kIfcrOvrc);
+    load_fifo(d, tx, fifo_words_);
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
     return BusStatus::kOk;
   }
@@ -226,23 +207,8 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     if (!valid(t) || t.words > fifo_frames(t.word_bits)) return BusStatus::kBadArgument;
     if (in_flight_) return BusStatus::kBusy;
     const SpiDeviceSettings& d = devices_[t.device];
-    // CFG1 / CFG2 keep their values: written when the device or word size
-    // differs from the last FIFO transaction's (every transaction ends with
-    // SPE = 0, so they are writable here; transfer() and the DMA mode write
-    // them too and forget this one).
-    const std::uint32_t key = 0x10000u | (static_cast<std::uint32_t>(t.device) << 8) | t.word_bits;
-    if (key != fifo_config_) {
-      bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
-      bus_.write32(base_ + s::kCfg1, cfg1(d, t));
-      bus_.write32(base_ + s::kCfg2, cfg2(d));
-      fifo_config_ = key;
-      dma_cfg1_ = 0;
-    }
-    bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(t.words));
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
-    d.chip_select->write(false);
-    // No TXP wait: SPE = 0 flushed the FIFO, and the transaction fits it.
-    for (std::size_t i = 0; i < t.words; ++i) bus_.write32(base_ + s::kTxdr, t.tx[i]);
+    configure(cfg1(d, t), cfg2(d));
+    load_fifo(d, t.tx, t.words);
     bus_.write32(base_ + s::kIer, s::kIerEotie);
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
     in_flight_ = true;
@@ -257,12 +223,7 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     const std::uint32_t sr = bus_.read32(base_ + s::kSr);
     if ((sr & s::kSrEot) == 0u) return BusStatus::kBusy;
     BusStatus status = (sr & s::kSrOvr) != 0u ? BusStatus::kTransferError : BusStatus::kOk;
-    // EOT: every frame has been received into the RxFIFO (the transaction
-    // fits it), so no RXP wait.
-    for (std::size_t i = 0; i < fifo_words_; ++i) {
-      const std::uint32_t word = bus_.read32(base_ + s::kRxdr);
-      if (fifo_rx_ != nullptr) fifo_rx_[i] = word;
-    }
+    read_fifo_rx();
     bus_.write32(base_ + s::kIer, 0u);
     end_dma_frame();
     return status;
@@ -270,8 +231,7 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
   const SpiDeviceSettings& begin_frame(const SpiTransfer& t) {
     namespace s = stm32h7::spi;
     const SpiDeviceSettings& d = devices_[t.device];
-    fifo_config_ = 0;
-    dma_cfg1_ = 0;
+    forget_configuration();
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
     bus_.write32(base_ + s::kCfg1, cfg1(d, t));
     bus_.write32(base_ + s::kCfg2, cfg2(d));
@@ -280,6 +240,39 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     d.chip_select->write(false);
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
     return d;
+  }
+  // CFG1 / CFG2 written only when they differ from what the last start of
+  // either mode wrote (every transaction ends with SPE = 0, so they are
+  // writable here).
+  void configure(std::uint32_t c1, std::uint32_t c2) {
+    namespace s = stm32h7::spi;
+    if (c1 == cfg1_written_ && c2 == cfg2_written_) return;
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
+    bus_.write32(base_ + s::kCfg1, c1);
+    bus_.write32(base_ + s::kCfg2, c2);
+    cfg1_written_ = c1;
+    cfg2_written_ = c2;
+  }
+  // The polled transfer() writes them every time, and a refused DMA start
+  // leaves CFG1 as neither: the next start writes both.
+  void forget_configuration() { cfg1_written_ = 0; }
+  // FIFO mode: TSIZE, SPE = 1, CS low, the TX words (no TXP wait: SPE = 0
+  // flushed the FIFO, and the transaction fits it). CSTART is the caller's.
+  void load_fifo(const SpiDeviceSettings& d, const std::uint32_t* tx, std::size_t words) {
+    namespace s = stm32h7::spi;
+    bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(words));
+    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
+    d.chip_select->write(false);
+    for (std::size_t i = 0; i < words; ++i) bus_.write32(base_ + s::kTxdr, tx[i]);
+  }
+  // EOT: every frame has been received into the RxFIFO (the transaction fits
+  // it), so no RXP wait.
+  void read_fifo_rx() {
+    namespace s = stm32h7::spi;
+    for (std::size_t i = 0; i < fifo_words_; ++i) {
+      const std::uint32_t word = bus_.read32(base_ + s::kRxdr);
+      if (fifo_rx_ != nullptr) fifo_rx_[i] = word;
+    }
   }
   void end_frame(const SpiDeviceSettings& d, std::uint32_t clear) {
     namespace s = stm32h7::spi;
@@ -304,9 +297,8 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
   std::uint8_t device_ = 0;
   std::uint8_t fifo_words_ = 0;
   std::uint32_t* fifo_rx_ = nullptr;
-  std::uint32_t fifo_config_ = 0;  // CFG1 / CFG2 written for (1, device, word_bits); 0: unknown
-  std::uint32_t dma_cfg1_ = 0;     // CFG1 / CFG2 the last DMA transaction wrote; 0: unknown
-  std::uint32_t dma_cfg2_ = 0;
+  std::uint32_t cfg1_written_ = 0;  // CFG1 / CFG2 as the last start wrote them; 0: unknown
+  std::uint32_t cfg2_written_ = 0;
 };
 
 }  // namespace maglev::drivers
