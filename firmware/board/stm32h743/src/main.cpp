@@ -123,7 +123,8 @@ d::Stm32OutputPin<Bus> g_led{g_bus, pins::kLed};
 // shared with the QEMU whole-servo-tick image (amplifier_board_drivers.hpp).
 b::AmplifierBoardDrivers<Bus> g_board{g_bus, g_adc_dma_rx};
 auto& g_sensors = g_board.sensors;
-b::AmplifierBoardIrqActuators* g_dac_actuators = nullptr;  // SPI1_IRQHandler's; set in main()
+using DacActuators = b::AmplifierBoardIrqActuators<b::AmplifierBoardDrivers<Bus>::DacWriter>;
+DacActuators* g_dac_actuators = nullptr;  // SPI1_IRQHandler's; set in main()
 // The tick's whole interrupt chain in cycles (EXTI + 2 DMA bodies with
 // on_tick() + 4 SPI1 bodies): servo.max_interrupt_cycles / last_interrupt_cycles.
 maglev::app::InterruptMeter g_interrupt_meter;
@@ -311,7 +312,7 @@ extern "C" void board_main() {
 #if MAGLEV_BOARD_HIL
   maglev::app::ActuatorSink& actuators = g_can_actuators;
 #else
-  static b::AmplifierBoardIrqActuators board_actuators(g_board.dac_writer, amp);
+  static DacActuators board_actuators(g_board.dac_writer, amp);
   maglev::app::ActuatorSink& actuators = board_actuators;
   g_board.init();  // DAC outputs at 0 A before the amplifiers can ever be enabled
   g_dac_actuators = &board_actuators;

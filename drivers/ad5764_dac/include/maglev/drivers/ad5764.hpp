@@ -23,9 +23,14 @@
 //
 // Coil j (0-based) is device j / 4, channel j % 4 (DAC A..D). Device 0 is the
 // first in the chain (nearest the MCU's MOSI).
+//
+// Chain writes it polled, through any SpiMaster (the board zeroes the
+// outputs with it at boot). The production board's servo tick writes the same
+// words, frame order, LDAC rule and link check from SPI1's end-of-transfer
+// interrupt with ad5764::Stm32IrqWriter (ad5764_stm32_irq.hpp), at the
+// register level.
 #pragma once
 
-#include <atomic>  // std::atomic_signal_fence: a compiler barrier, no library code
 #include <cstddef>
 #include <cstdint>
 
@@ -135,130 +140,6 @@ class Chain {
   OutputPin& ldac_;
   State state_{};
   std::uint32_t previous_[kDevices]{};
-  bool have_previous_ = false;
-};
-
-// The same chain written from the SPI's end-of-transfer interrupt: the
-// servo tick only starts the first SYNC frame (begin()), and each frame's
-// interrupt (advance()) checks its echo and starts the next; the fourth
-// pulses LDAC. The CPU no longer waits the 4 x 48 SCLK of the chain (9.6 us
-// at 20 MHz, a fifth of the 50 us period at 20 kHz) inside the tick.
-// Same words, same frame order, same LDAC rule and link check as
-// Chain::write_codes() (each frame's SDO echo is the frame before it; the
-// first frame's, the previous write's last).
-//
-//   servo tick      -> begin(codes): frame 0 started            (kOk)
-//   SPI interrupt   -> advance():    frame k done, k+1 started   (kNextFrame)
-//                                    frame 3 done, LDAC pulsed   (kComplete: result())
-// A write that has not completed when the next begin() comes (its
-// interrupts never came) is abandoned, LDAC not pulsed, and begin() says
-// kBusError: the caller trips the amplifiers, as for a failed polled write.
-template <std::size_t kDevices = 2>
-class IrqWriter {
- public:
-  enum class Step : std::uint8_t { kNextFrame = 0, kComplete = 1, kBusy = 2, kError = 3, kIdle = 4 };
-  static constexpr std::size_t kChannels = kDevices * kChannelsPerDevice;
-
-  IrqWriter(AsyncSpiMaster& spi, std::uint8_t device, OutputPin& ldac) : spi_(spi), device_(device), ldac_(ldac) {}
-
-  // After a polled Chain wrote the chain (boot): no echo to compare yet.
-  void init() {
-    phase_ = Phase::kIdle;
-    have_previous_ = false;
-  }
-
-  Status begin(const std::int16_t (&codes)[kChannels]) {
-    if (phase_ == Phase::kWriting) {
-      spi_.cancel();
-      return fail();
-    }
-    for (std::size_t ch = 0; ch < kChannelsPerDevice; ++ch) {
-      for (std::size_t d = 0; d < kDevices; ++d) {
-        const std::size_t device = kDevices - 1 - d;  // the last device's word goes out first
-        tx_[ch][d] = data_word(static_cast<std::uint8_t>(ch), codes[device * kChannelsPerDevice + ch]);
-      }
-    }
-    frame_ = 0;
-    result_ = Status::kOk;
-    return start_frame();
-  }
-
-  // The SPI's interrupt (or a poll). With no write under way the interrupt
-  // is a stray (a frame started by a write that a higher-priority begin()
-  // abandoned meanwhile): the transaction is ended, so EOT with EOTIE set
-  // cannot re-enter this interrupt for ever.
-  Step advance() {
-    if (phase_ != Phase::kWriting) {
-      spi_.cancel();  // nothing if no transaction is in flight
-      return Step::kIdle;
-    }
-    // Frames 0-2: the next frame started in the same call (it does not
-    // depend on this one's echo, which only decides the result at the end).
-    const bool last = frame_ + 1 == kChannelsPerDevice;
-    const BusStatus bs = last ? spi_.complete() : spi_.complete_and_restart(tx_[frame_ + 1]);
-    if (bs == BusStatus::kBusy) return Step::kBusy;
-    if (bs != BusStatus::kOk) {
-      (void)fail();
-      return Step::kError;  // LDAC not pulsed: never a partial update
-    }
-    // rx_ holds the frame that just ended (the next one's words are read
-    // only when it ends).
-    const std::uint32_t* sent_before = frame_ == 0 ? previous_ : tx_[frame_ - 1];
-    if (frame_ != 0 || have_previous_) {
-      bool same = true;
-      for (std::size_t d = 0; d < kDevices; ++d) same = same && rx_[d] == sent_before[d];
-      if (!same) {
-        ++state_.link_mismatches;
-        result_ = Status::kLinkMismatch;
-      }
-    }
-    if (++frame_ < kChannelsPerDevice) return Step::kNextFrame;
-    for (std::size_t d = 0; d < kDevices; ++d) previous_[d] = tx_[kChannelsPerDevice - 1][d];
-    have_previous_ = true;
-    ldac_.write(false);
-    ldac_.write(true);
-    ++state_.writes;
-    phase_ = Phase::kIdle;
-    return Step::kComplete;
-  }
-
-  // The finished write's outcome (kOk or kLinkMismatch after kComplete,
-  // kBusError after kError).
-  Status result() const { return result_; }
-  bool writing() const { return phase_ == Phase::kWriting; }
-  const State& state() const { return state_; }
-
- private:
-  enum class Phase : std::uint8_t { kIdle, kWriting };
-  Status start_frame() {
-    // Writing before the frame can end: begin() may run below the SPI
-    // interrupt's priority (the servo loop's missed-deadline path), and an
-    // interrupt that found no write under way would leave EOT pending and
-    // re-enter for ever.
-    phase_ = Phase::kWriting;
-    std::atomic_signal_fence(std::memory_order_seq_cst);
-    const BusStatus bs = spi_.start(SpiTransfer{device_, kWordBits, tx_[frame_], rx_, kDevices});
-    return bs == BusStatus::kOk ? Status::kOk : fail();
-  }
-  // The write ends without LDAC; the next one has no echo to compare.
-  Status fail() {
-    ++state_.bus_errors;
-    have_previous_ = false;
-    phase_ = Phase::kIdle;
-    result_ = Status::kBusError;
-    return Status::kBusError;
-  }
-
-  AsyncSpiMaster& spi_;
-  std::uint8_t device_;
-  OutputPin& ldac_;
-  State state_{};
-  std::uint32_t tx_[kChannelsPerDevice][kDevices]{};
-  std::uint32_t rx_[kDevices]{};
-  std::uint32_t previous_[kDevices]{};
-  std::size_t frame_ = 0;
-  Phase phase_ = Phase::kIdle;
-  Status result_ = Status::kOk;
   bool have_previous_ = false;
 };
 

@@ -66,9 +66,9 @@ inline void decode_words(const std::uint32_t (&rx)[kChannelsPerDevice / 2], std:
 class Adc {
  public:
   // cs_device[d] = the SPI master's chip-select index of ADC d.
-  // `rx_buffer` (optional, kDevices x 4 words): where the raw SPI words land.
-  // The board passes a buffer in non-cacheable D2 SRAM, the same one a DMA
-  // stream fills in the DMA variant of the read; null: a stack buffer.
+  // `rx_buffer` (optional, kDevices x 4 words): where the raw SPI words land
+  // (e.g. the non-cacheable D2 SRAM buffer Stm32DmaReader's DMA stream
+  // fills, ad7606_stm32_dma.hpp); null: a stack buffer.
   Adc(SpiMaster& spi, const std::uint8_t (&cs_device)[kDevices], InputPin& busy,
       std::uint32_t (*rx_buffer)[kChannelsPerDevice / 2] = nullptr)
       : spi_(spi), busy_(busy), rx_buffer_(rx_buffer) {
@@ -104,100 +104,9 @@ class Adc {
   State state_{};
 };
 
-// The pair read by DMA (drivers/ad7606_adc/README.md "DMA schedule"): the
-// CPU never waits on the 2 x 128 SCLKs.
-//   BUSY falls      -> begin():   ADC0's 4 words started (CS0 low, SPI RX DMA);
-//   DMA interrupt   -> advance(): ADC0 done -> CS0 high, ADC1 started -> kNextDevice;
-//                                 ADC1 done -> kComplete (or kError): run the tick;
-//   the servo tick  -> read():    decodes the completed buffer, ONCE.
-// read() returns kNotReady unless exactly one complete pair was read since
-// the last read(): a read not started, still running (then cancelled) or
-// failed is sensor loss, never the previous tick's words again.
-class DmaReader {
- public:
-  enum class Step : std::uint8_t { kNextDevice = 0, kComplete = 1, kBusy = 2, kError = 3, kIdle = 4 };
-
-  // `rx_buffer`: kDevices x 4 words the DMA can reach (board: D2 SRAM).
-  DmaReader(AsyncSpiMaster& spi, const std::uint8_t (&cs_device)[kDevices], InputPin& busy,
-            std::uint32_t (*rx_buffer)[kChannelsPerDevice / 2])
-      : spi_(spi), busy_(busy), rx_buffer_(rx_buffer) {
-    for (std::size_t d = 0; d < kDevices; ++d) cs_[d] = cs_device[d];
-  }
-
-  // BUSY fell. A read still under way (its tick never ran) is cancelled and
-  // counted; this conversion is then lost too (read() -> kNotReady).
-  Status begin() {
-    if (phase_ == Phase::kReading) {
-      spi_.cancel();
-      ++state_.not_ready;
-      return fail(Status::kNotReady);
-    }
-    if (busy_.read()) {
-      ++state_.busy_faults;
-      return fail(Status::kStillBusy);
-    }
-    device_ = 0;
-    return start_device();
-  }
-
-  // The DMA stream's interrupt (or a poll).
-  Step advance() {
-    if (phase_ != Phase::kReading) return Step::kIdle;
-    const BusStatus bs = spi_.complete();
-    if (bs == BusStatus::kBusy) return Step::kBusy;
-    if (bs != BusStatus::kOk) {
-      ++state_.bus_errors;
-      (void)fail(Status::kBusError);
-      return Step::kError;
-    }
-    if (++device_ < kDevices) return start_device() == Status::kOk ? Step::kNextDevice : Step::kError;
-    phase_ = Phase::kDone;
-    return Step::kComplete;
-  }
-
-  // The tick: the completed pair's codes, or why there are none.
-  Status read(Codes& out) {
-    const Phase phase = phase_;
-    phase_ = Phase::kIdle;
-    if (phase == Phase::kDone) {
-      for (std::size_t d = 0; d < kDevices; ++d) decode_words(rx_buffer_[d], out.channel[d]);
-      ++state_.reads;
-      return Status::kOk;
-    }
-    if (phase == Phase::kFailed) return failure_;  // counted where it happened
-    if (phase == Phase::kReading) spi_.cancel();  // the tick came before the data: lost
-    ++state_.not_ready;
-    return Status::kNotReady;
-  }
-
-  const State& state() const { return state_; }
-
- private:
-  enum class Phase : std::uint8_t { kIdle, kReading, kDone, kFailed };
-  Status start_device() {
-    const BusStatus bs = spi_.start(SpiTransfer{cs_[device_], kWordBits, nullptr, rx_buffer_[device_], kChannelsPerDevice / 2});
-    if (bs != BusStatus::kOk) {
-      ++state_.bus_errors;
-      return fail(Status::kBusError);
-    }
-    phase_ = Phase::kReading;
-    return Status::kOk;
-  }
-  Status fail(Status why) {
-    phase_ = Phase::kFailed;
-    failure_ = why;
-    return why;
-  }
-
-  AsyncSpiMaster& spi_;
-  InputPin& busy_;
-  std::uint32_t (*rx_buffer_)[kChannelsPerDevice / 2];
-  std::uint8_t cs_[kDevices]{};
-  std::size_t device_ = 0;
-  Phase phase_ = Phase::kIdle;
-  Status failure_ = Status::kNotReady;
-  State state_{};
-};
+// The pair read by DMA before the tick (begin() on BUSY, advance() in the
+// DMA interrupt, read() in the tick) is ad7606::Stm32DmaReader, at the
+// register level (ad7606_stm32_dma.hpp; README.md "DMA schedule").
 
 // Volts at the ADC input for a code (+-10 V range).
 constexpr double code_to_V(std::int16_t code) { return 10.0 * code / 32768.0; }

@@ -43,23 +43,19 @@ class SpiMaster {
   SpiMaster& operator=(const SpiMaster&) = default;
 };
 
-// Non-blocking transaction mode (an SPI with a DMA stream): start() frames
-// the transaction (CS low) and returns at once; complete() answers kBusy
-// while the wire runs, then ONCE kOk (t.rx filled, CS released) or the
-// error; cancel() abandons it (CS released, rx undefined). t.rx must stay
-// valid, and reachable by the DMA, until complete() stops answering kBusy.
+// Non-blocking transaction mode (an SPI with a DMA stream; the AD7606
+// pair's reads): start() frames the transaction (CS low) and returns at
+// once; complete() answers kBusy while the wire runs, then ONCE kOk (t.rx
+// filled, CS released) or the error; cancel() abandons it (CS released, rx
+// undefined). t.rx must stay valid, and reachable by the DMA, until
+// complete() stops answering kBusy. An implementation may refuse transfers
+// it cannot run this way (Stm32SpiMaster: receive-only, t.tx null) with
+// kBadArgument.
 class AsyncSpiMaster {
  public:
   virtual BusStatus start(const SpiTransfer& t) = 0;
   virtual BusStatus complete() = 0;
   virtual void cancel() = 0;
-  // complete() and, when it says kOk, the next transaction of the same
-  // device, word size and word count (the same rx) started at once with the
-  // TX words `tx`: a chain of frames (the AD5764's four SYNC frames) from
-  // the frame-end interrupt without re-validating or re-configuring what
-  // cannot have changed. kOk: the next one is on the wire; anything else is
-  // complete()'s answer and nothing was started.
-  virtual BusStatus complete_and_restart(const std::uint32_t* tx) = 0;
 
  protected:
   AsyncSpiMaster() = default;

@@ -56,10 +56,13 @@ struct QuadratureConfig {
   bool loss_active_high;
 };
 
-template <stm32h7::RegisterBus Bus>
+// LossPin: the loss line's pin type. InputPin (the interface) by default;
+// the board names its concrete (final) pin so the per-tick read is a direct,
+// inlined register load instead of a virtual call.
+template <stm32h7::RegisterBus Bus, typename LossPin = InputPin>
 class QuadratureEncoder {
  public:
-  QuadratureEncoder(Bus& bus, const QuadratureConfig& config, InputPin& signal_loss)
+  QuadratureEncoder(Bus& bus, const QuadratureConfig& config, LossPin& signal_loss)
       : bus_(bus), config_(config), loss_(signal_loss) {}
 
   void init() {
@@ -106,7 +109,7 @@ class QuadratureEncoder {
  private:
   Bus& bus_;
   QuadratureConfig config_;
-  InputPin& loss_;
+  LossPin& loss_;
   CounterExtender16 extender_{};
   bool signal_lost_ = false;
 };

@@ -16,17 +16,10 @@
 // RXDR -> SPE=1 -> CS low -> CSTART, and return. complete(): the stream's
 // TCIF (every frame read out of RXDR, so the wire is done) -> EOT checked,
 // OVR checked -> IFCR -> SPE=0 -> CS high. The CPU never waits on the wire.
-//
-// Start/complete mode with TX words (t.tx set; no DMA): a transaction that
-// fits the FIFO (the AD5764 chain's 48-bit SYNC frame: two 24-bit data
-// frames) is loaded whole before it starts: SPE=0 -> CFG1 / CFG2 (full
-// duplex, written only when they differ from the last start's) -> CR2.TSIZE
-// -> SPE=1 -> CS low -> every word into TXDR (RM0433 §50.4.9: the TxFIFO may
-// be filled before CSTART) -> IER.EOTIE -> CSTART, and return. complete(),
-// from the SPI's interrupt: EOT not yet -> kBusy; EOT -> OVR checked, the
-// RX words read out of the RxFIFO, IER = 0 -> IFCR -> SPE=0 -> CS high. The
-// CPU never waits on the wire here either, and never polls TXP / RXP: the
-// whole transaction fits the FIFO (fifo_frames()).
+// start() refuses transfers with TX words (t.tx set: kBadArgument). The
+// AD5764 chain, written from SPI1's end-of-transfer interrupt, has its own
+// register-level writer (ad5764::Stm32IrqWriter, drivers/ad5764_dac) that
+// takes SPI1 over after the boot write's polled transfer()s.
 #pragma once
 
 #include <cstddef>
@@ -94,13 +87,10 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     return status;
   }
 
-  // t.tx null: receive-only by DMA (t.rx the DMA-reachable buffer).
-  // t.tx set: the words through the FIFO, completion by EOT (no DMA); at
-  // most fifo_frames(t.word_bits) of them.
+  // Receive-only by DMA (t.rx the DMA-reachable buffer); t.tx must be null.
   BusStatus start(const SpiTransfer& t) override {
     namespace s = stm32h7::spi;
-    if (t.tx != nullptr) return start_fifo(t);
-    if (!valid(t) || t.rx == nullptr || rx_dma_ == nullptr) return BusStatus::kBadArgument;
+    if (t.tx != nullptr || !valid(t) || t.rx == nullptr || rx_dma_ == nullptr) return BusStatus::kBadArgument;
     if (in_flight_) return BusStatus::kBusy;
     const SpiDeviceSettings& d = devices_[t.device];
     // The AD7606 pair shares its settings, so CFG1 / CFG2 are written once
@@ -119,7 +109,6 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     d.chip_select->write(false);
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
     in_flight_ = true;
-    fifo_mode_ = false;
     device_ = t.device;
     return BusStatus::kOk;
   }
@@ -127,7 +116,6 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
   BusStatus complete() override {
     namespace s = stm32h7::spi;
     if (!in_flight_) return BusStatus::kNotStarted;
-    if (fifo_mode_) return complete_fifo();
     const dma::Status st = rx_dma_->poll();
     if (st == dma::Status::kBusy) return BusStatus::kBusy;
     BusStatus status = st == dma::Status::kComplete ? BusStatus::kOk : BusStatus::kTransferError;
@@ -141,51 +129,10 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     return status;
   }
 
-  // FIFO mode (the only one a chain of TX frames uses; in DMA mode this is
-  // complete(), then kBadArgument): EOT -> the RX words read, IFCR, SPE = 0,
-  // CS high (complete_fifo()'s order) -> TSIZE, SPE = 1, CS low, the TX
-  // words, CSTART (start_fifo()'s order). CFG1 / CFG2 keep the values of
-  // the same device and word size, and IER keeps EOTIE (written by the
-  // chain's first start_fifo(), cleared by its last complete()): between
-  // the frames SPE = 0 and EOT is cleared, so no interrupt can come. 11
-  // register accesses instead of 13, and none of the validation the first
-  // start did for this same shape.
-  BusStatus complete_and_restart(const std::uint32_t* tx) override {
-    namespace s = stm32h7::spi;
-    if (!in_flight_ || !fifo_mode_) {
-      const BusStatus done = complete();
-      return done == BusStatus::kOk ? BusStatus::kBadArgument : done;
-    }
-    const std::uint32_t sr = bus_.read32(base_ + s::kSr);
-    if ((sr & s::kSrEot) == 0u) return BusStatus::kBusy;
-    read_fifo_rx();
-    if ((sr & s::kSrOvr) != 0u) {
-      bus_.write32(base_ + s::kIer, 0u);
-      end_dma_frame();
-      return BusStatus::kTransferError;
-    }
-    const SpiDeviceSettings& d = devices_[device_];
-    end_frame(d, s::kIfcrEotc | s::kIfcrTxtfc | s::kIfcrOvrc);
-    load_fifo(d, tx, fifo_words_);
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
-    return BusStatus::kOk;
-  }
-
   void cancel() override {
     if (!in_flight_) return;
-    if (fifo_mode_) {
-      bus_.write32(base_ + stm32h7::spi::kIer, 0u);
-    } else {
-      rx_dma_->abort();
-    }
+    rx_dma_->abort();
     end_dma_frame();
-  }
-
-  // Data frames one transaction may hold in the FIFO at once: 8 bytes (the
-  // smallest FIFO of the part, SPI4-6; SPI1-3 have 16), a data frame taking
-  // 1, 2 or 4 bytes by its size (RM0433 "SPI FIFOs and data packing").
-  static constexpr std::size_t fifo_frames(std::uint8_t word_bits) {
-    return word_bits <= 8 ? 8u : (word_bits <= 16 ? 4u : 2u);
   }
 
   bool busy() const { return in_flight_; }
@@ -202,32 +149,6 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     namespace s = stm32h7::spi;
     return s::kCfg2Master | s::kCfg2Ssm | s::kCfg2Afcntr | (d.cpol ? s::kCfg2Cpol : 0u) | (d.cpha ? s::kCfg2Cpha : 0u);
   }
-  BusStatus start_fifo(const SpiTransfer& t) {
-    namespace s = stm32h7::spi;
-    if (!valid(t) || t.words > fifo_frames(t.word_bits)) return BusStatus::kBadArgument;
-    if (in_flight_) return BusStatus::kBusy;
-    const SpiDeviceSettings& d = devices_[t.device];
-    configure(cfg1(d, t), cfg2(d));
-    load_fifo(d, t.tx, t.words);
-    bus_.write32(base_ + s::kIer, s::kIerEotie);
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
-    in_flight_ = true;
-    fifo_mode_ = true;
-    device_ = t.device;
-    fifo_rx_ = t.rx;
-    fifo_words_ = static_cast<std::uint8_t>(t.words);
-    return BusStatus::kOk;
-  }
-  BusStatus complete_fifo() {
-    namespace s = stm32h7::spi;
-    const std::uint32_t sr = bus_.read32(base_ + s::kSr);
-    if ((sr & s::kSrEot) == 0u) return BusStatus::kBusy;
-    BusStatus status = (sr & s::kSrOvr) != 0u ? BusStatus::kTransferError : BusStatus::kOk;
-    read_fifo_rx();
-    bus_.write32(base_ + s::kIer, 0u);
-    end_dma_frame();
-    return status;
-  }
   const SpiDeviceSettings& begin_frame(const SpiTransfer& t) {
     namespace s = stm32h7::spi;
     const SpiDeviceSettings& d = devices_[t.device];
@@ -241,9 +162,8 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe | s::kCr1Cstart);
     return d;
   }
-  // CFG1 / CFG2 written only when they differ from what the last start of
-  // either mode wrote (every transaction ends with SPE = 0, so they are
-  // writable here).
+  // CFG1 / CFG2 written only when they differ from what the last start()
+  // wrote (every transaction ends with SPE = 0, so they are writable here).
   void configure(std::uint32_t c1, std::uint32_t c2) {
     namespace s = stm32h7::spi;
     if (c1 == cfg1_written_ && c2 == cfg2_written_) return;
@@ -256,24 +176,6 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
   // The polled transfer() writes them every time, and a refused DMA start
   // leaves CFG1 as neither: the next start writes both.
   void forget_configuration() { cfg1_written_ = 0; }
-  // FIFO mode: TSIZE, SPE = 1, CS low, the TX words (no TXP wait: SPE = 0
-  // flushed the FIFO, and the transaction fits it). CSTART is the caller's.
-  void load_fifo(const SpiDeviceSettings& d, const std::uint32_t* tx, std::size_t words) {
-    namespace s = stm32h7::spi;
-    bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(words));
-    bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
-    d.chip_select->write(false);
-    for (std::size_t i = 0; i < words; ++i) bus_.write32(base_ + s::kTxdr, tx[i]);
-  }
-  // EOT: every frame has been received into the RxFIFO (the transaction fits
-  // it), so no RXP wait.
-  void read_fifo_rx() {
-    namespace s = stm32h7::spi;
-    for (std::size_t i = 0; i < fifo_words_; ++i) {
-      const std::uint32_t word = bus_.read32(base_ + s::kRxdr);
-      if (fifo_rx_ != nullptr) fifo_rx_[i] = word;
-    }
-  }
   void end_frame(const SpiDeviceSettings& d, std::uint32_t clear) {
     namespace s = stm32h7::spi;
     bus_.write32(base_ + s::kIfcr, clear);
@@ -286,17 +188,13 @@ class Stm32SpiMaster final : public SpiMaster, public AsyncSpiMaster {
     in_flight_ = false;
   }
 
-
   Bus& bus_;
   stm32h7::Addr base_;
   std::uint32_t max_polls_;
   SpiDeviceSettings devices_[kDevices]{};
   dma::Stream<Bus>* rx_dma_ = nullptr;
-  bool in_flight_ = false;
-  bool fifo_mode_ = false;  // the started transaction: TX words through the FIFO (else RX by DMA)
+  bool in_flight_ = false;  // a receive-only DMA transaction is open
   std::uint8_t device_ = 0;
-  std::uint8_t fifo_words_ = 0;
-  std::uint32_t* fifo_rx_ = nullptr;
   std::uint32_t cfg1_written_ = 0;  // CFG1 / CFG2 as the last start wrote them; 0: unknown
   std::uint32_t cfg2_written_ = 0;
 };

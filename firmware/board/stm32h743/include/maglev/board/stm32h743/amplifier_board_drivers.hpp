@@ -7,14 +7,16 @@
 //   PE10, BUSY PE11, raw words into `adc_rx` by the SPI3 RX DMA: DMA1 stream 0,
 //   DMAMUX1 request spi3_rx_dma), TIM2 / TIM5 / TIM3 encoder counters (loss
 //   lines PF12..14, active low), AmplifierBoardSensors over them.
-// The ADC pair is read by DMA before the tick (ad7606::DmaReader; schedule in
+// The ADC pair is read by DMA before the tick (ad7606::Stm32DmaReader `adc`, at
+// the register level; schedule in
 // drivers/ad7606_adc/README.md): the image calls on_busy_fell() from the BUSY
 // interrupt and on_adc_dma() from the DMA stream's, and runs the servo tick
 // when either says so.
 // The DAC chain is written from SPI1's end-of-transfer interrupt
-// (ad5764::IrqWriter `dac_writer`; the image calls AmplifierBoardIrqActuators::
-// on_dac_irq() from SPI1_IRQHandler); `dac`, the polled chain on the same
-// SPI, zeroes the outputs at boot.
+// (ad5764::Stm32IrqWriter `dac_writer`, at the register level; the image
+// calls AmplifierBoardIrqActuators::on_dac_irq() from SPI1_IRQHandler);
+// `dac`, the polled chain on the same SPI, zeroes the outputs at boot,
+// before `dac_writer` takes SPI1 over.
 // The amplifier-enable line and the actuator sink stay with the board
 // (the HIL image shares the enable pin).
 #pragma once
@@ -24,7 +26,9 @@
 #include "maglev/board/stm32h743/amplifier_board_io.hpp"
 #include "maglev/board/stm32h743/pinmap.hpp"
 #include "maglev/drivers/ad5764.hpp"
+#include "maglev/drivers/ad5764_stm32_irq.hpp"
 #include "maglev/drivers/ad7606.hpp"
+#include "maglev/drivers/ad7606_stm32_dma.hpp"
 #include "maglev/drivers/quadrature_encoder.hpp"
 #include "maglev/drivers/stm32h7_dma.hpp"
 #include "maglev/drivers/stm32h7_gpio.hpp"
@@ -35,13 +39,24 @@ namespace maglev::board::stm32h743 {
 
 template <stm32h7::RegisterBus Bus>
 struct AmplifierBoardDrivers {
-  using Encoder = drivers::QuadratureEncoder<Bus>;
-  static constexpr std::uint8_t kAdcCs[2] = {0, 1};  // SPI3 chip-select index of ADC 0 / 1
+  using Encoder = drivers::QuadratureEncoder<Bus, drivers::Stm32InputPin<Bus>>;
+  // SPI1 -> the AD5764 chain. SCLK: pll1_q 80 MHz kernel clock / 4 = 20 MHz
+  // (AD5764 max 30 MHz), mode 1 (data latched on SCLK falling edges).
+  static constexpr drivers::ad5764::Stm32ChainWiring kDacWiring{
+      stm32h7::spi::kSpi1, pins::kDacSync.port, pins::kDacSync.pin, pins::kDacLdac.port, pins::kDacLdac.pin, 1,
+      false, true};
+  using DacWriter = drivers::ad5764::Stm32IrqWriter<Bus, kDacWiring>;
+  // SPI3 -> the AD7606 pair: /8 = 10 MHz, mode 2; RX by DMA1 stream 0
+  // (DMAMUX1 request spi3_rx_dma).
+  static constexpr drivers::ad7606::Stm32AdcWiring kAdcWiring{
+      stm32h7::spi::kSpi3, {pins::kAdc0Cs.port, pins::kAdc1Cs.port}, {pins::kAdc0Cs.pin, pins::kAdc1Cs.pin},
+      pins::kAdcBusy.port, pins::kAdcBusy.pin, stm32h7::dma::kDma1, 0, stm32h7::dma::kReqSpi3Rx, 2, true, false};
+  using AdcReader = drivers::ad7606::Stm32DmaReader<Bus, kAdcWiring>;
 
   // `adc_rx`: the AD7606 raw words (the board: D2 SRAM, non-cacheable, where
   // the SPI3 RX DMA stream writes them).
   AmplifierBoardDrivers(Bus& b, std::uint32_t (*adc_rx)[drivers::ad7606::kChannelsPerDevice / 2])
-      : bus(b), adc{spi_adc, kAdcCs, adc_busy, adc_rx} {}
+      : bus(b), adc{b, adc_rx} {}
   AmplifierBoardDrivers(const AmplifierBoardDrivers&) = delete;
   AmplifierBoardDrivers& operator=(const AmplifierBoardDrivers&) = delete;
 
@@ -54,21 +69,17 @@ struct AmplifierBoardDrivers {
   drivers::Stm32InputPin<Bus> loss0{bus, pins::kLoss0};
   drivers::Stm32InputPin<Bus> loss1{bus, pins::kLoss1};
   drivers::Stm32InputPin<Bus> loss2{bus, pins::kLoss2};
-  // SPI: pll1_q 80 MHz kernel clock. DAC: /4 = 20 MHz (AD5764 max 30 MHz),
-  // mode 1 (data latched on SCLK falling edges). ADC: /8 = 10 MHz, mode 2.
-  const drivers::SpiDeviceSettings dac_spi[1] = {{&dac_sync, 1, false, true}};
-  const drivers::SpiDeviceSettings adc_spi[2] = {{&adc0_cs, 2, true, false}, {&adc1_cs, 2, true, false}};
+  // The boot write's polled chain on SPI1 (pll1_q 80 MHz kernel clock): kDacWiring's settings.
+  const drivers::SpiDeviceSettings dac_spi[1] = {
+      {&dac_sync, kDacWiring.clock_divider_log2, kDacWiring.cpol, kDacWiring.cpha}};
   drivers::Stm32SpiMaster<Bus, 1> spi_dac{bus, stm32h7::spi::kSpi1, dac_spi};
-  drivers::Stm32SpiMaster<Bus, 2> spi_adc{bus, stm32h7::spi::kSpi3, adc_spi};
-  static constexpr drivers::dma::StreamConfig kAdcRxDma{stm32h7::dma::kDma1, 0, stm32h7::dma::kReqSpi3Rx, true};
-  drivers::dma::Stream<Bus> adc_rx_dma{bus, kAdcRxDma};
   drivers::ad5764::Chain<2> dac{spi_dac, 0, dac_ldac};
-  drivers::ad5764::IrqWriter<2> dac_writer{spi_dac, 0, dac_ldac};
-  drivers::ad7606::DmaReader adc;
+  DacWriter dac_writer{bus};
+  AdcReader adc;
   Encoder enc0{bus, {stm32h7::tim::kTim2, true, 1, false}, loss0};
   Encoder enc1{bus, {stm32h7::tim::kTim5, true, 1, false}, loss1};
   Encoder enc2{bus, {stm32h7::tim::kTim3, false, 1, false}, loss2};  // 16-bit: TIM3_IRQHandler extends it
-  AmplifierBoardSensors<Encoder, drivers::ad7606::DmaReader> sensors{adc, enc0, enc1, enc2};
+  AmplifierBoardSensors<Encoder, AdcReader> sensors{adc, enc0, enc1, enc2};
 
   // BUSY fell (EXTI11): start the DMA read of the pair. True: run the tick
   // now -- the read could not start, and the tick reports the sensor loss.
@@ -77,7 +88,7 @@ struct AmplifierBoardDrivers {
   // or a transfer error -> true: run the tick, it takes the buffer (or the loss).
   bool on_adc_dma() {
     const auto step = adc.advance();
-    return step == drivers::ad7606::DmaReader::Step::kComplete || step == drivers::ad7606::DmaReader::Step::kError;
+    return step == AdcReader::Step::kComplete || step == AdcReader::Step::kError;
   }
 
   // Alternate functions and GPIO of the parts (clocks already on).
@@ -110,9 +121,7 @@ struct AmplifierBoardDrivers {
   // counters from 0.
   void init() {
     spi_dac.init();
-    spi_adc.init();
-    adc_rx_dma.init();
-    spi_adc.attach_rx_dma(&adc_rx_dma);
+    adc.init();
     dac.init();
     (void)dac.write_zero();
     dac_writer.init();

@@ -23,7 +23,7 @@ inline void map_to_sample(const drivers::ad7606::Codes& codes, io::SensorSample&
   for (std::size_t i = 0; i < static_cast<std::size_t>(io::kCoils); ++i) sample.coil_current_adc[i] = codes.channel[1][i];
 }
 
-// Adc: ad7606::Adc (polled read in the tick) or ad7606::DmaReader (the pair
+// Adc: ad7606::Adc (polled read in the tick) or ad7606::Stm32DmaReader (the pair
 // read by DMA before the tick; read() takes the completed buffer).
 template <typename Encoder, typename Adc = drivers::ad7606::Adc>
 class AmplifierBoardSensors final : public app::SensorSource {
@@ -37,7 +37,7 @@ class AmplifierBoardSensors final : public app::SensorSource {
       s.interferometer_counts[i] = encoders_[i]->update();
       if (encoders_[i]->signal_lost()) flags = static_cast<std::uint16_t>(flags | (io::kBeamLoss0 << i));
     }
-    drivers::ad7606::Codes codes{};
+    drivers::ad7606::Codes codes;  // read() fills it whenever it says kOk; unused otherwise
     const bool adc_ok = adc_.read(codes) == drivers::ad7606::Status::kOk;
     if (adc_ok) {
       map_to_sample(codes, s);
@@ -88,15 +88,17 @@ class AmplifierBoardActuators final : public app::ActuatorSink {
 
 // The production board's sink: the same rules as AmplifierBoardActuators,
 // with the DAC chain written from SPI1's end-of-transfer interrupt
-// (ad5764::IrqWriter), so the rules split where the write now ends.
+// (DacWriter: ad5764::Stm32IrqWriter), so the rules split where the write
+// now ends.
 // Switching off: disable before the first frame (write(), in the tick).
 // Switching on: request the enable only when the fourth frame's LDAC pulse
 // has put the currents out with every echo matching (on_dac_irq()). A write
 // that cannot start (the previous one never finished), fails, or whose link
 // cannot be trusted trips the (latched) amplifier enable.
+template <typename DacWriter>
 class AmplifierBoardIrqActuators final : public app::ActuatorSink {
  public:
-  AmplifierBoardIrqActuators(drivers::ad5764::IrqWriter<2>& dac, drivers::AmplifierEnable& enable)
+  AmplifierBoardIrqActuators(DacWriter& dac, drivers::AmplifierEnable& enable)
       : dac_(dac), enable_(enable) {}
 
   void write(const io::ActuatorCommand& c) override {
@@ -120,7 +122,7 @@ class AmplifierBoardIrqActuators final : public app::ActuatorSink {
 
   // SPI1's interrupt. True when the write has finished (either way).
   bool on_dac_irq() {
-    using Step = drivers::ad5764::IrqWriter<2>::Step;
+    using Step = typename DacWriter::Step;
     const Step step = dac_.advance();
     if (step == Step::kComplete) {
       if (dac_.result() != drivers::ad5764::Status::kOk) {
@@ -138,7 +140,7 @@ class AmplifierBoardIrqActuators final : public app::ActuatorSink {
   }
 
  private:
-  drivers::ad5764::IrqWriter<2>& dac_;
+  DacWriter& dac_;
   drivers::AmplifierEnable& enable_;
   bool enable_when_written_ = false;
 };
