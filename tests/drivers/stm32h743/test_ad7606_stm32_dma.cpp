@@ -603,3 +603,110 @@ TEST(Ad7606Stm32Dma, BoardSensorSourceReportsLossAsAdcFault) {
   LONGS_EQUAL(0, next.displacement_adc[0]);  // nothing copied from the old buffer
   LONGS_EQUAL(0, next.coil_current_adc[7]);
 }
+
+// Other streams (the board uses DMA1 stream 0): the reader takes its stream's
+// registers, flag bits (LISR / HISR at 0, 6, 16, 22; RM0433 §15.5.5..8) and
+// DMAMUX1 channel (DMA1 stream n -> channel n, DMA2 stream n -> 8 + n; §17.3.2)
+// from the wiring. On a plain register bus, the test plays the hardware's end
+// of a transfer: EN cleared, the stream's flags set, SPI EOT. Addresses and bit
+// positions are literals from the manual, independent of registers.hpp.
+namespace {
+
+// What the manual puts where for one stream.
+struct StreamAt {
+  r::Addr cr;          // SxCR (SxPAR at +0x08, SxFCR at +0x14)
+  r::Addr isr;         // the ISR holding this stream's flags, and the controller's other one
+  r::Addr other_isr;
+  r::Addr ifcr;        // likewise for the clear registers
+  r::Addr other_ifcr;
+  unsigned shift;      // this stream's FEIF bit
+  r::Addr mux;         // its DMAMUX1 channel's CxCR
+};
+
+constexpr ad7606::Stm32AdcWiring on_stream(r::Addr dma, std::uint8_t stream) {
+  return {r::spi::kSpi3, {kPortE, kPortE}, {15, 10}, kPortE, 11, dma, stream, r::dma::kReqSpi3Rx, 2, true, false};
+}
+
+void transfer_ends(Bus& bus, const StreamAt& at, std::uint32_t flags) {
+  bus.preset(at.cr, bus.peek(at.cr) & ~1u);  // the hardware clears EN
+  bus.preset(at.isr, flags << at.shift);
+}
+
+template <ad7606::Stm32AdcWiring kOther>
+void reads_its_own_stream(const StreamAt& at) {
+  using R = ad7606::Stm32DmaReader<Bus, kOther>;
+  Bus bus;
+  std::uint32_t buffer[2][4]{};
+  R adc{bus, buffer};
+  adc.init();
+  // init(): the stream off, its flags (and only its) cleared, its DMAMUX channel routed.
+  UNSIGNED_LONGS_EQUAL(61u, bus.peek(at.mux));  // spi3_rx_dma
+  LONGS_EQUAL(1, bus.writes_to(at.mux));
+  LONGS_EQUAL(1, bus.writes_to(at.cr));
+  UNSIGNED_LONGS_EQUAL(0u, bus.peek(at.cr));
+  UNSIGNED_LONGS_EQUAL(0x40003C30u, bus.peek(at.cr + 0x08u));  // PAR = SPI3 RXDR
+  LONGS_EQUAL(1, bus.writes_to(at.cr + 0x14u));                 // FCR: direct mode
+  UNSIGNED_LONGS_EQUAL(0u, bus.peek(at.cr + 0x14u));
+  LONGS_EQUAL(1, bus.writes_to(at.ifcr));
+  UNSIGNED_LONGS_EQUAL(0x3Du << at.shift, bus.peek(at.ifcr));
+  LONGS_EQUAL(0, bus.writes_to(at.other_ifcr));
+  LONGS_EQUAL(0, bus.writes_to(kMux));  // DMAMUX1 channel 0 (the board's stream) untouched
+  LONGS_EQUAL(0, bus.writes_to(kCr));
+
+  bus.preset(kSpi + s::kSr, s::kSrEot);  // EOT is there once the stream's TC is
+  CHECK(adc.begin() == ad7606::Status::kOk);
+  UNSIGNED_LONGS_EQUAL(kSxCrRun, bus.peek(at.cr));
+  // Every other stream's flags, in both ISRs (this stream's positions in the
+  // other one included): not ours, nothing happens.
+  bus.clear_log();
+  bus.preset(at.other_isr, 0xFFFFFFFFu);
+  bus.preset(at.isr, ~(0x3Du << at.shift));
+  CHECK(adc.advance() == R::Step::kBusy);
+  LONGS_EQUAL(0, static_cast<long>(bus.log_size()));
+  // Its TCIF: ADC0 done (its flags cleared in its IFCR only), ADC1 started.
+  transfer_ends(bus, at, d::kFlagTc);
+  CHECK(adc.advance() == R::Step::kNextDevice);
+  LONGS_EQUAL(1, bus.writes_to(at.ifcr));
+  UNSIGNED_LONGS_EQUAL(0x3Du << at.shift, bus.peek(at.ifcr));
+  LONGS_EQUAL(0, bus.writes_to(at.other_ifcr));
+  UNSIGNED_LONGS_EQUAL(kSxCrRun, bus.peek(at.cr));
+  transfer_ends(bus, at, d::kFlagTc);
+  CHECK(adc.advance() == R::Step::kComplete);
+  ad7606::Codes codes{};
+  CHECK(adc.read(codes) == ad7606::Status::kOk);
+  // TEIF, even together with TCIF, and DMEIF: errors.
+  CHECK(adc.begin() == ad7606::Status::kOk);
+  transfer_ends(bus, at, d::kFlagTc | d::kFlagTe);
+  CHECK(adc.advance() == R::Step::kError);
+  CHECK(adc.read(codes) == ad7606::Status::kBusError);
+  CHECK(adc.begin() == ad7606::Status::kOk);
+  transfer_ends(bus, at, d::kFlagDme);
+  CHECK(adc.advance() == R::Step::kError);
+  UNSIGNED_LONGS_EQUAL(0u, bus.peek(at.cr));  // stream off after the error
+  LONGS_EQUAL(2, adc.state().bus_errors);
+  LONGS_EQUAL(1, adc.state().reads);
+}
+
+}  // namespace
+
+TEST_GROUP(Ad7606Stm32DmaOtherStreams){};
+
+TEST(Ad7606Stm32DmaOtherStreams, Dma1Stream5IsHisrBits11To6AndDmamuxChannel5) {
+  reads_its_own_stream<on_stream(r::dma::kDma1, 5)>(
+      {0x40020088u, 0x40020004u, 0x40020000u, 0x4002000Cu, 0x40020008u, 6, 0x40020814u});
+}
+
+TEST(Ad7606Stm32DmaOtherStreams, Dma1Stream2IsLisrBits21To16) {
+  reads_its_own_stream<on_stream(r::dma::kDma1, 2)>(
+      {0x40020040u, 0x40020000u, 0x40020004u, 0x40020008u, 0x4002000Cu, 16, 0x40020808u});
+}
+
+TEST(Ad7606Stm32DmaOtherStreams, Dma1Stream7IsHisrBits27To22) {
+  reads_its_own_stream<on_stream(r::dma::kDma1, 7)>(
+      {0x400200B8u, 0x40020004u, 0x40020000u, 0x4002000Cu, 0x40020008u, 22, 0x4002081Cu});
+}
+
+TEST(Ad7606Stm32DmaOtherStreams, Dma2Stream1IsDmamuxChannel9) {
+  reads_its_own_stream<on_stream(r::dma::kDma2, 1)>(
+      {0x40020428u, 0x40020400u, 0x40020404u, 0x40020408u, 0x4002040Cu, 6, 0x40020824u});
+}

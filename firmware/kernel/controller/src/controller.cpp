@@ -606,7 +606,9 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   // 1. sensors -> pose (integer, constant work).
   PoseMeasurement pose = SensorsToPoseStep(sample, &s2p_);
   measured_ = pose.pose;
-  Tick t(pose);
+  sequencer_inputs_.homing_done = false;
+  sequencer_inputs_.homing_failed = false;
+  Tick t(pose, sequencer_inputs_);
   supervise(sample, tick_overrun, t);
   home(sample, t);
   sequence(t);
@@ -636,7 +638,7 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
   for (int a = 0; a < kAxisCount; ++a) {
     si.pose[a] = pico_to_si(measured_.pico[a]);
     si.following_error[a] = pico_to_si(reference_.pico[a] - measured_.pico[a]);
-    t.abs_err[a] = std::fabs(si.following_error[a]);
+    t.qi.abs_error[a] = std::fabs(si.following_error[a]);
   }
   si.current_limited = last_current_limited_;
   si.beam_glitch = t.m.beam_glitch;
@@ -738,7 +740,6 @@ void Controller<Scalar>::sequence(Tick& t) {
   SequencerInputs& qi = t.qi;
   qi.z_valid = t.sup->z_sensors_valid && (t.m.valid_axes & kPoseValidZ) != 0;
   qi.z_m = pico_to_si(measured_.pico[3]);
-  for (int a = 0; a < kAxisCount; ++a) qi.abs_error[a] = t.abs_err[a];
   qi.tilt_references_in_range = tilt_references_in_range_;
   qi.fault_reaction = t.sup->reaction;
   t.so = &sequencer_.step(qi);

@@ -24,9 +24,10 @@ std::uint16_t next_run(bool holds, std::uint16_t run) {
 }
 
 // Field by field (no memcmp over padding bytes, whose value is unspecified).
-bool same_sample(const io::SensorSample& a, const io::SensorSample& b) {
+// The interferometer counts are not compared here: the caller has their
+// differences already, and a moving or noisy stage differs there first.
+bool same_sample_but_counts(const io::SensorSample& a, const io::SensorSample& b) {
   bool same = a.status_flags == b.status_flags;
-  for (int k = 0; k < io::kInterferometerAxes; ++k) same = same && a.interferometer_counts[k] == b.interferometer_counts[k];
   for (int k = 0; k < io::kDisplacementSensors; ++k) same = same && a.displacement_adc[k] == b.displacement_adc[k];
   for (int k = 0; k < io::kHallChannels; ++k) same = same && a.hall_adc[k] == b.hall_adc[k];
   for (int k = 0; k < io::kCoils; ++k) same = same && a.coil_current_adc[k] == b.coil_current_adc[k];
@@ -128,18 +129,21 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   // --- sensor plausibility --------------------------------------------------
   const std::uint16_t flags = s.status_flags;
   c.beam_lost = static_cast<std::uint8_t>(flags & (io::kBeamLoss0 | io::kBeamLoss1 | io::kBeamLoss2));
+  std::uint32_t counts_moved = 0;
   for (int a = 0; a < io::kInterferometerAxes; ++a) {
     // Wrap-safe difference of the 32-bit hardware counter.
     const auto delta = static_cast<std::int32_t>(s.interferometer_counts[a] - previous_counts_[a]);
     const std::int32_t mag = delta < 0 ? -delta : delta;
     c.count_delta[a] = delta;
+    counts_moved |= static_cast<std::uint32_t>(delta);
     c.jump = static_cast<std::uint8_t>(c.jump | ((have_previous_ && mag > max_count_step_) ? (1u << a) : 0u));
     previous_counts_[a] = s.interferometer_counts[a];
   }
   stale_run_ = next_run((flags & io::kStaleFrame) != 0, stale_run_);
   // Only while a loop is closed: a landed stage's sensors may legitimately
   // sit still (and the check is armed again before the first loop closes).
-  const bool identical = have_previous_ && in.closed_axes != 0 && same_sample(s, previous_sample_);
+  const bool identical =
+      have_previous_ && in.closed_axes != 0 && counts_moved == 0 && same_sample_but_counts(s, previous_sample_);
   identical_run_ = next_run(identical, identical_run_);
   previous_sample_ = s;
   have_previous_ = true;

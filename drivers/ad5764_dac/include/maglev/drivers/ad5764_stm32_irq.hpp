@@ -9,9 +9,10 @@
 //   SPI interrupt   -> advance():    frame k done, k+1 started       (kNextFrame)
 //                                    frame 3 done, LDAC pulsed       (kComplete: result())
 //
-// Why registers and not Stm32SpiMaster + AsyncSpiMaster: the interrupt runs
-// four times a tick, 80 000 times a second at 20 kHz, and each frame is the
-// same shape on the same wires. Through the generic SPI master each frame
+// Why registers, not the generic SPI master: the interrupt runs four times a
+// tick, 80 000 times a second at 20 kHz, and each frame is the same shape on
+// the same wires. Through the generic path this replaced (Stm32SpiMaster
+// behind an asynchronous SPI interface, since removed) each frame
 // paid two virtual calls into the master, two into the SYNC pin, the
 // transfer's state machine and a runtime peripheral base: ~158 Cortex-M7
 // instructions per frame for 12 register accesses (docs/PERFORMANCE.md

@@ -55,12 +55,15 @@ struct State {
   std::uint32_t not_ready = 0;  // DMA read: the tick found no completed read
 };
 
-// Raw DOUTA words of one device -> codes: word w = V(2w+1) << 16 | V(2w+2).
+// Channel k (0-based) of one device's raw DOUTA words: word w = V(2w+1) << 16 | V(2w+2).
+constexpr std::int16_t channel_code(const std::uint32_t (&rx)[kChannelsPerDevice / 2], std::size_t k) {
+  const std::uint32_t word = rx[k / 2];
+  return static_cast<std::int16_t>(static_cast<std::uint16_t>(k % 2 == 0 ? word >> 16 : word & 0xFFFFu));
+}
+
+// Raw DOUTA words of one device -> codes.
 inline void decode_words(const std::uint32_t (&rx)[kChannelsPerDevice / 2], std::int16_t (&channel)[kChannelsPerDevice]) {
-  for (std::size_t w = 0; w < kChannelsPerDevice / 2; ++w) {
-    channel[2 * w] = static_cast<std::int16_t>(static_cast<std::uint16_t>(rx[w] >> 16));
-    channel[2 * w + 1] = static_cast<std::int16_t>(static_cast<std::uint16_t>(rx[w] & 0xFFFFu));
-  }
+  for (std::size_t k = 0; k < kChannelsPerDevice; ++k) channel[k] = channel_code(rx, k);
 }
 
 class Adc {

@@ -8,11 +8,11 @@
 // read() returns kNotReady unless exactly one complete pair was read since
 // the last read(): a read not started, still running (then cancelled) or
 // failed is sensor loss, never the previous tick's words again: the rules
-// of the generic reader over Stm32SpiMaster's DMA mode + dma::Stream that
-// this one replaced on the board.
+// of the generic reader (over Stm32SpiMaster's DMA mode and a dma::Stream
+// driver, since removed) that this one replaced.
 //
 // Why registers: the three bodies run 60 000 times a second at 20 kHz, on
-// the same two devices with the same settings. Through the generic master
+// the same two devices with the same settings. Through the generic path
 // each body paid virtual calls (the SPI master, the CS and BUSY pins), the
 // transfer's validation, the DMA stream's argument checks and runtime
 // register addresses: ~173 Cortex-M7 instructions a body for ~8 register
@@ -65,7 +65,7 @@ class Stm32DmaReader {
 
   // `rx_buffer`: kDevices x 4 words the DMA can reach (board: D2 SRAM).
   // `max_eot_polls`: how long advance() waits for EOT after the stream's TC.
-  Stm32DmaReader(Bus& bus, std::uint32_t (*rx_buffer)[kWords], std::uint32_t max_eot_polls = 10000)
+  Stm32DmaReader(Bus& bus, std::uint32_t (&rx_buffer)[kDevices][kWords], std::uint32_t max_eot_polls = 10000)
       : bus_(bus), rx_buffer_(rx_buffer), max_eot_polls_(max_eot_polls) {}
 
   // SPI master in simplex-receiver mode with RXDMAEN (no request before
@@ -125,10 +125,20 @@ class Stm32DmaReader {
 
   // The tick: the completed pair's codes, or why there are none.
   Status read(Codes& out) {
+    const Status status = read_raw();
+    if (status == Status::kOk) {
+      for (std::size_t dev = 0; dev < kDevices; ++dev) decode_words(rx_buffer_[dev], out.channel[dev]);
+    }
+    return status;
+  }
+
+  // The same, without decoding: on kOk the completed pair's raw words are in
+  // words() (words()[d], channel_code()) until the next begin(). The board
+  // maps the channels it uses straight from them into its sample.
+  Status read_raw() {
     const Phase phase = phase_;
     phase_ = Phase::kIdle;
     if (phase == Phase::kDone) {
-      for (std::size_t dev = 0; dev < kDevices; ++dev) decode_words(rx_buffer_[dev], out.channel[dev]);
       ++state_.reads;
       return Status::kOk;
     }
@@ -138,6 +148,7 @@ class Stm32DmaReader {
     return Status::kNotReady;
   }
 
+  const std::uint32_t (&words() const)[kDevices][kWords] { return rx_buffer_; }
   const State& state() const { return state_; }
 
   static constexpr std::uint32_t kCfg1 = stm32h7::field(kWiring.clock_divider_log2 & 7u, stm32h7::spi::kCfg1MbrShift) |
@@ -214,7 +225,7 @@ class Stm32DmaReader {
   }
 
   Bus& bus_;
-  std::uint32_t (*rx_buffer_)[kWords];
+  std::uint32_t (&rx_buffer_)[kDevices][kWords];
   std::uint32_t max_eot_polls_;
   std::size_t device_ = 0;
   Phase phase_ = Phase::kIdle;

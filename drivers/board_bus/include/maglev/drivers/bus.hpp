@@ -27,9 +27,6 @@ enum class BusStatus : std::uint8_t {
   kOk = 0,
   kTimeout = 1,
   kBadArgument = 2,
-  kBusy = 3,           // a started transaction is still on the wire
-  kTransferError = 4,  // the DMA or the peripheral reported an error: rx holds no valid data
-  kNotStarted = 5,     // complete() with no transaction started
 };
 
 class SpiMaster {
@@ -41,27 +38,6 @@ class SpiMaster {
   ~SpiMaster() = default;
   SpiMaster(const SpiMaster&) = default;
   SpiMaster& operator=(const SpiMaster&) = default;
-};
-
-// Non-blocking transaction mode (an SPI with a DMA stream; the AD7606
-// pair's reads): start() frames the transaction (CS low) and returns at
-// once; complete() answers kBusy while the wire runs, then ONCE kOk (t.rx
-// filled, CS released) or the error; cancel() abandons it (CS released, rx
-// undefined). t.rx must stay valid, and reachable by the DMA, until
-// complete() stops answering kBusy. An implementation may refuse transfers
-// it cannot run this way (Stm32SpiMaster: receive-only, t.tx null) with
-// kBadArgument.
-class AsyncSpiMaster {
- public:
-  virtual BusStatus start(const SpiTransfer& t) = 0;
-  virtual BusStatus complete() = 0;
-  virtual void cancel() = 0;
-
- protected:
-  AsyncSpiMaster() = default;
-  ~AsyncSpiMaster() = default;
-  AsyncSpiMaster(const AsyncSpiMaster&) = default;
-  AsyncSpiMaster& operator=(const AsyncSpiMaster&) = default;
 };
 
 class OutputPin {

@@ -9,9 +9,9 @@
 // CFG1.RXDMAEN, CFG2.COMM = simplex receiver, CR1.SPE. Then NDTR words from
 // the word source (the chip model: what it clocks out while CS is low) land
 // in memory at M0AR, NDTR = 0, EN clears, TCIF and SPI EOT set. Anything
-// missing: nothing moves, no flag (the driver's complete() keeps answering
-// kBusy and the tick reports the loss). M0AR outside the mapped buffer, or an
-// injected fault: TEIF, EN cleared, nothing written. An injected stall: the
+// missing: nothing moves, no flag (ad7606::Stm32DmaReader's advance() keeps
+// answering kBusy and the tick reports the loss). M0AR outside the mapped
+// buffer, or an injected fault: TEIF, EN cleared, nothing written. An injected stall: the
 // transfer never ends. No DMA set up (a polled transfer): CSTART sets EOT and
 // the fake's own RXDR answers the words.
 #pragma once

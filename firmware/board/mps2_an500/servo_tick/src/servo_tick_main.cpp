@@ -362,6 +362,24 @@ void measure_drivers_on_memory_bus(const Calibration& cal) {
   print_tick_stats("drivers_on_memory_bus", "sensors", sensors, cal);
   print_tick_stats("drivers_on_memory_bus", "actuators", actuators, cal);
   print_tick_stats("drivers_on_memory_bus", "dac_irq", dac_irq, cal);
+  // The servo loop's next-tick check (ServoHooks::next_tick_pending, one EXTI
+  // pending-register read) is the only other register access in on_tick():
+  // its cost on the fake (pass A's bus) and on the memory-cost bus.
+  Stats next_fake, next_bus;
+  for (std::uint32_t i = 0; i < 1000; ++i) {
+    std::uint32_t t0 = systick_now();
+    bool pending = Board<false>::tick_irq_pending_again();
+    std::uint32_t t1 = systick_now();
+    __asm__ volatile("" : : "r"(pending) : "memory");
+    next_fake.add(systick_elapsed(t0, t1), i);
+    t0 = systick_now();
+    pending = Board<false, false, MemoryBus>::tick_irq_pending_again();
+    t1 = systick_now();
+    __asm__ volatile("" : : "r"(pending) : "memory");
+    next_bus.add(systick_elapsed(t0, t1), i);
+  }
+  print_tick_stats("drivers_on_fake_bus", "next_tick_check", next_fake, cal);
+  print_tick_stats("drivers_on_memory_bus", "next_tick_check", next_bus, cal);
 }
 
 char g_command_line[1024];

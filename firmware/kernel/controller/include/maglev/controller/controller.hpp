@@ -383,13 +383,16 @@ class Controller {
     // step()'s local, initialized by SensorsToPoseStep's return value in
     // place: held by reference, the Tick no longer copies the 136-byte
     // result into itself (a memcpy per tick, ~90 M7 instructions).
-    explicit Tick(PoseMeasurement& pose) : m(pose) {}
+    // The sequencer's inputs are the controller's (sequencer_inputs_): a
+    // Tick-local SequencerInputs{} cost a 36-byte memset call every tick,
+    // though supervise() and sequence() write every field but the two
+    // homing flags, which step() clears.
+    Tick(PoseMeasurement& pose, SequencerInputs& inputs) : m(pose), qi(inputs) {}
     PoseMeasurement& m;   // sensors -> pose (step())
     SupervisorInputs si;  // supervise()
     const SupervisorStatus* sup = nullptr;
     const SequencerOutput* so = nullptr;
-    SequencerInputs qi{};
-    float abs_err[kAxisCount];           // supervise()
+    SequencerInputs& qi;  // supervise() (abs_error), home() (homing flags), sequence()
     Scalar accel_ff[kAxisCount];         // advance_references()
     std::int64_t step_pm[kAxisCount];    // advance_references()
     Scalar excitation[kAxisCount];       // excite()
@@ -432,6 +435,7 @@ class Controller {
   int active_ = 0;
   SensorsToPoseState s2p_{};
   Sequencer sequencer_{};
+  SequencerInputs sequencer_inputs_{};  // Tick::qi
   Supervisor supervisor_{};
   Pid2DofState<Scalar> pid_state_[kAxisCount]{};
   InternalModelState<Scalar> imr_state_[kAxisCount]{};

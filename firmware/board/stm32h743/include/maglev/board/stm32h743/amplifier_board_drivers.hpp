@@ -30,7 +30,6 @@
 #include "maglev/drivers/ad7606.hpp"
 #include "maglev/drivers/ad7606_stm32_dma.hpp"
 #include "maglev/drivers/quadrature_encoder.hpp"
-#include "maglev/drivers/stm32h7_dma.hpp"
 #include "maglev/drivers/stm32h7_gpio.hpp"
 #include "maglev/drivers/stm32h7_spi.hpp"
 #include "maglev/stm32h7/register_bus.hpp"
@@ -55,7 +54,7 @@ struct AmplifierBoardDrivers {
 
   // `adc_rx`: the AD7606 raw words (the board: D2 SRAM, non-cacheable, where
   // the SPI3 RX DMA stream writes them).
-  AmplifierBoardDrivers(Bus& b, std::uint32_t (*adc_rx)[drivers::ad7606::kChannelsPerDevice / 2])
+  AmplifierBoardDrivers(Bus& b, std::uint32_t (&adc_rx)[drivers::ad7606::kDevices][drivers::ad7606::kChannelsPerDevice / 2])
       : bus(b), adc{b, adc_rx} {}
   AmplifierBoardDrivers(const AmplifierBoardDrivers&) = delete;
   AmplifierBoardDrivers& operator=(const AmplifierBoardDrivers&) = delete;

@@ -17,10 +17,20 @@ namespace maglev::board::stm32h743 {
 // The amplifier board's ADC wiring (drivers/ad7606_adc README): ADC0 V1-V3
 // the laser displacement sensors, V4-V7 the Hall channels; ADC1 V1-V8 the
 // coil current monitors. The driver knows codes; the board knows what they mean.
+// code(d, k): ADC d's channel k (0-based), from decoded codes or raw words.
+template <typename CodeOf>
+inline void map_codes_to_sample(const CodeOf& code, io::SensorSample& sample) {
+  // Unrolled: every channel index a constant, so a raw word's half is one
+  // shift or one extension.
+#pragma GCC unroll 8
+  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kDisplacementSensors); ++i) sample.displacement_adc[i] = code(0, i);
+#pragma GCC unroll 8
+  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kHallChannels); ++i) sample.hall_adc[i] = code(0, 3 + i);
+#pragma GCC unroll 8
+  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kCoils); ++i) sample.coil_current_adc[i] = code(1, i);
+}
 inline void map_to_sample(const drivers::ad7606::Codes& codes, io::SensorSample& sample) {
-  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kDisplacementSensors); ++i) sample.displacement_adc[i] = codes.channel[0][i];
-  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kHallChannels); ++i) sample.hall_adc[i] = codes.channel[0][3 + i];
-  for (std::size_t i = 0; i < static_cast<std::size_t>(io::kCoils); ++i) sample.coil_current_adc[i] = codes.channel[1][i];
+  map_codes_to_sample([&codes](std::size_t d, std::size_t k) { return codes.channel[d][k]; }, sample);
 }
 
 // Adc: ad7606::Adc (polled read in the tick) or ad7606::Stm32DmaReader (the pair
@@ -37,10 +47,8 @@ class AmplifierBoardSensors final : public app::SensorSource {
       s.interferometer_counts[i] = encoders_[i]->update();
       if (encoders_[i]->signal_lost()) flags = static_cast<std::uint16_t>(flags | (io::kBeamLoss0 << i));
     }
-    drivers::ad7606::Codes codes;  // read() fills it whenever it says kOk; unused otherwise
-    const bool adc_ok = adc_.read(codes) == drivers::ad7606::Status::kOk;
+    const bool adc_ok = read_adc(s);
     if (adc_ok) {
-      map_to_sample(codes, s);
       // A laser sensor with no target rails its output: treat full scale as out of range.
       for (std::size_t i = 0; i < static_cast<std::size_t>(io::kDisplacementSensors); ++i) {
         if (s.displacement_adc[i] == INT16_MAX || s.displacement_adc[i] == INT16_MIN) {
@@ -55,6 +63,24 @@ class AmplifierBoardSensors final : public app::SensorSource {
   }
 
  private:
+  // The pair's channels into the sample. A reader that hands out its raw
+  // words (Stm32DmaReader::read_raw) is mapped straight from them: the
+  // channels the board uses, each decoded once, with no Codes copy between.
+  bool read_adc(io::SensorSample& s) {
+    using drivers::ad7606::Status;
+    if constexpr (requires { adc_.read_raw(); }) {
+      if (adc_.read_raw() != Status::kOk) return false;
+      const auto& rx = adc_.words();
+      map_codes_to_sample([&rx](std::size_t d, std::size_t k) { return drivers::ad7606::channel_code(rx[d], k); }, s);
+      return true;
+    } else {
+      drivers::ad7606::Codes codes;  // read() fills it whenever it says kOk; unused otherwise
+      if (adc_.read(codes) != Status::kOk) return false;
+      map_to_sample(codes, s);
+      return true;
+    }
+  }
+
   Adc& adc_;
   Encoder* encoders_[3];
 };
