@@ -17,9 +17,13 @@ class AmplifierEnable {
   explicit AmplifierEnable(OutputPin& line) : line_(line) { line_.write(false); }
 
   // Apply the command's enable request; returns the level actually driven.
+  // The line is written when its level changes: nothing else drives it (the
+  // constructor set it low, trip() drives it low), so `enabled_` is its
+  // level, and the DAC interrupt's request(true) on every tick costs no
+  // pin write.
   bool request(bool enable) {
     const bool on = enable && !fault_latched_;
-    line_.write(on);
+    if (on != enabled_) line_.write(on);
     enabled_ = on;
     return on;
   }

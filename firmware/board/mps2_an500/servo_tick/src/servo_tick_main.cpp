@@ -50,6 +50,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "maglev/app/interrupt_meter.hpp"
 #include "maglev/app/recorder.hpp"
 #include "maglev/app/servo_loop.hpp"
 #include "maglev/board/mps2_an500/instruction_counter.hpp"
@@ -288,6 +289,34 @@ struct MemoryBus {
 };
 Board<false, false, MemoryBus> g_board_d;
 
+// The board's three servo-chain interrupt handlers (firmware/board/stm32h743
+// src/main.cpp: EXTI15_10, DMA1_Stream0, SPI1) around their driver bodies:
+// the DWT CYCCNT reads and the InterruptMeter bookkeeping (the cycle counts
+// the board reports as servo.max_interrupt_cycles), the EXTI pending clear,
+// the null checks. The same statements on the memory-cost bus; the body
+// (inlined on the board, and counted above) is a volatile flag here.
+maglev::app::InterruptMeter g_replica_meter;
+void* volatile g_replica_servo = nullptr;
+volatile bool g_replica_body_result = false;
+std::uint32_t replica_cycle_counter() { return g_board_d.bus.read32(r::dwt::kCyccnt); }
+[[gnu::noinline]] void replica_exti_handler() {
+  const std::uint32_t start = replica_cycle_counter();
+  g_replica_meter.begin_tick();
+  g_board_d.bus.write32(r::exti::kBase + r::exti::kCpupr1, r::bit(11));
+  if (g_replica_body_result && g_replica_servo != nullptr) __asm__ volatile("" ::: "memory");
+  g_replica_meter.add(start, replica_cycle_counter());
+}
+[[gnu::noinline]] void replica_dma_handler() {
+  const std::uint32_t start = replica_cycle_counter();
+  if (g_replica_body_result && g_replica_servo != nullptr) __asm__ volatile("" ::: "memory");
+  g_replica_meter.add(start, replica_cycle_counter());
+}
+[[gnu::noinline]] void replica_spi1_handler() {
+  const std::uint32_t start = replica_cycle_counter();
+  if (g_replica_servo != nullptr) (void)g_replica_body_result;
+  g_replica_meter.add(start, replica_cycle_counter());
+}
+
 std::uint32_t& memory_bus_word(r::Addr a) {
   return const_cast<std::uint32_t&>(MemoryBus::image[(a & 0xFFFFu) >> 2]);
 }
@@ -330,7 +359,12 @@ void measure_drivers_on_memory_bus(const Calibration& cal) {
     // an inlined read() into the unused local, and count less than the board runs.
     __asm__ volatile("" : : "r"(&s) : "memory");
     sensors.add(systick_elapsed(t0, t1), i);
-    c.dac_code[0] = static_cast<std::int16_t>(i);
+    // Every coil the same code, so both devices' words of a frame are equal
+    // and one RXDR word can echo them: each frame's SDO echo is the frame
+    // before it, so the writer takes its real path (every echo matches, the
+    // enable requested), not the link-mismatch trip.
+    const auto code = static_cast<std::int16_t>(i);
+    for (auto& d : c.dac_code) d = code;
     t0 = systick_now();
     g_board_d.board_actuators.write(c);
     t1 = systick_now();
@@ -338,6 +372,9 @@ void measure_drivers_on_memory_bus(const Calibration& cal) {
     // The four SPI1 interrupt bodies, each timed alone (EOT preset above).
     pieces = 0;
     for (int frame = 0; frame < 4; ++frame) {
+      const std::uint8_t echoed_channel = static_cast<std::uint8_t>((frame + 3) % 4);
+      const auto echoed_code = static_cast<std::int16_t>(frame == 0 ? code - 1 : code);
+      memory_bus_word(r::spi::kSpi1 + r::spi::kRxdr) = maglev::drivers::ad5764::data_word(echoed_channel, echoed_code);
       t0 = systick_now();
       (void)g_board_d.board_actuators.on_dac_irq();
       t1 = systick_now();
@@ -351,7 +388,8 @@ void measure_drivers_on_memory_bus(const Calibration& cal) {
   const auto& dac = g_board_d.parts.dac_writer.state();
   const struct { const char* name; std::uint32_t value; } paths[] = {
       {" adc reads=", adc.reads},           {" adc bus_errors=", adc.bus_errors}, {" adc not_ready=", adc.not_ready},
-      {" busy_faults=", adc.busy_faults},   {" dac writes=", dac.writes},         {" dac bus_errors=", dac.bus_errors}};
+      {" busy_faults=", adc.busy_faults},   {" dac writes=", dac.writes},         {" dac bus_errors=", dac.bus_errors},
+      {" dac link_mismatches=", dac.link_mismatches}, {" amplifier trips=", g_board_d.amp.trips()}};
   hw::semihost_write("drivers_on_memory_bus paths:");
   for (const auto& p : paths) {
     hw::semihost_write(p.name);
@@ -378,6 +416,23 @@ void measure_drivers_on_memory_bus(const Calibration& cal) {
     __asm__ volatile("" : : "r"(pending) : "memory");
     next_bus.add(systick_elapsed(t0, t1), i);
   }
+  // The handlers' own work per tick: EXTI once, the DMA stream's twice,
+  // SPI1's four times.
+  Stats wrappers;
+  for (std::uint32_t i = 0; i < 1000; ++i) {
+    std::uint32_t total = 0;
+    const auto timed = [&total](void (*handler)()) {
+      const std::uint32_t t0 = systick_now();
+      handler();
+      const std::uint32_t t1 = systick_now();
+      total += systick_elapsed(t0, t1);
+    };
+    timed(&replica_exti_handler);
+    for (int k = 0; k < 2; ++k) timed(&replica_dma_handler);
+    for (int k = 0; k < 4; ++k) timed(&replica_spi1_handler);
+    wrappers.add(total - 6u * static_cast<std::uint32_t>(cal.empty_counts), i);
+  }
+  print_tick_stats("drivers_on_memory_bus", "handler_wrappers", wrappers, cal);
   print_tick_stats("drivers_on_fake_bus", "next_tick_check", next_fake, cal);
   print_tick_stats("drivers_on_memory_bus", "next_tick_check", next_bus, cal);
 }
