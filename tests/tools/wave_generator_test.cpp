@@ -3,12 +3,14 @@
 // (axis limit, Nyquist, ...; nothing started), abort outside Ready, and the
 // kernel side: Controller::set_injection clamps to the kernel's own limits.
 #include <cmath>
+#include <cstring>
 #include <complex>
 #include <memory>
 #include <numbers>
 #include <vector>
 
 #include "maglev/controller/controller.hpp"
+#include "maglev/lab_tools/lab_tick.hpp"
 #include "maglev/lab_tools/wave_generator.hpp"
 
 #include <CppUTest/TestHarness.h>
@@ -177,4 +179,45 @@ TEST(Wave, KernelIgnoresInjectionOutsideReady) {
   (void)ctl->step(io::SensorSample{}, false);  // idle: motion not allowed
   DOUBLES_EQUAL(0.0, ctl->status().excitation_A[0], 0.0);
   CHECK_FALSE(ctl->status().injection_active);
+}
+
+namespace {
+bool same_injection(const kernel::Injection& a, const kernel::Injection& b) {
+  return a.active == b.active && a.at_reference == b.at_reference && a.axis == b.axis &&
+         std::memcmp(&a.value, &b.value, sizeof a.value) == 0;
+}
+}  // namespace
+
+TEST(Wave, LabTickGivesTheIdleInjectionOnceAndStillRunsAStartedWave) {
+  // LabTick::before_step skips the ticks of a generator that is not running,
+  // once the controller holds the idle generator's injection (Injection{}).
+  // The controller must hold exactly what set_injection(wave.step(ready))
+  // would have given it on every tick.
+  auto ctl = std::make_unique<kernel::Controller<float>>();
+  kernel::Injection stale{};
+  stale.active = true;
+  stale.axis = 2;
+  stale.value = 0.01f;
+  ctl->set_injection(stale);  // what a bind() may find
+  LabTick<float>::bind(ctl.get(), nullptr, w.get());
+  LabTick<float>::before_step();
+  CHECK(same_injection(kernel::Injection{}, ctl->injection()));
+  for (int i = 0; i < 5; ++i) {
+    LabTick<float>::before_step();
+    CHECK(same_injection(kernel::Injection{}, ctl->injection()));
+  }
+  // A started wave is stepped again: the controller is not Ready (a fresh
+  // controller is Idle), so the generator's step() aborts it.
+  WaveConfig c{};
+  c.amplitude = 0.1f;
+  c.f_start_Hz = 10.0f;
+  CHECK(w->start(c, k) == WaveError::kOk);
+  LabTick<float>::before_step();
+  CHECK(w->state() == WaveState::kAborted);
+  CHECK(same_injection(kernel::Injection{}, ctl->injection()));
+  // Rebinding forgets what the controller holds.
+  ctl->set_injection(stale);
+  LabTick<float>::bind(ctl.get(), nullptr, w.get());
+  LabTick<float>::before_step();
+  CHECK(same_injection(kernel::Injection{}, ctl->injection()));
 }

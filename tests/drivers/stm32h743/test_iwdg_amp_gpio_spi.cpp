@@ -82,6 +82,30 @@ TEST(AmplifierEnable, DefaultsOffAndTripLatches) {
   LONGS_EQUAL(1, amp.trips());
 }
 
+TEST(AmplifierEnable, TheLineIsWrittenOnlyWhenItsLevelChanges) {
+  // The DAC interrupt requests the enable on every tick: the line is the
+  // only thing it drives, so a request that changes nothing writes nothing.
+  FakeOutputPin<> line;
+  AmplifierEnable amp(line);
+  const std::size_t after_construction = line.writes();  // the constructor's OFF
+  CHECK_TRUE(amp.request(true));
+  CHECK_TRUE(amp.request(true));
+  CHECK_TRUE(amp.request(true));
+  LONGS_EQUAL(after_construction + 1, line.writes());
+  CHECK_TRUE(line.level());
+  CHECK_FALSE(amp.request(false));
+  CHECK_FALSE(amp.request(false));
+  LONGS_EQUAL(after_construction + 2, line.writes());
+  CHECK_FALSE(line.level());
+  // A trip always drives the line (even when already low), and a latched
+  // request changes nothing.
+  amp.trip();
+  LONGS_EQUAL(after_construction + 3, line.writes());
+  CHECK_FALSE(amp.request(true));
+  LONGS_EQUAL(after_construction + 3, line.writes());
+  CHECK_FALSE(line.level());
+}
+
 TEST(AmplifierEnable, GpioIsDrivenLowBeforeBecomingAnOutput) {
   Bus bus;
   const PinId pin{r::gpio::port('E'), 9};
