@@ -468,7 +468,7 @@ void SysTick_Handler() {
 
 // Any fault: coils off first, log to backup SRAM, reset.
 void HardFault_Handler() {
-  g_bus.write32(pins::kAmpEnable.port + r::gpio::kBsrr, 1u << (pins::kAmpEnable.pin + 16u));
+  g_bus.write32(pins::kAmpEnable.port + r::gpio::kBsrr, r::gpio::bsrr(pins::kAmpEnable.pin, false));
   r::modify32(g_bus, r::rcc::kBase + r::rcc::kAhb4enr, 0u, r::bit(28));
   r::modify32(g_bus, r::pwr::kBase + r::pwr::kCr1, 0u, r::pwr::kCr1Dbp);
   if (g_fault_log.magic != kFaultMagic) {

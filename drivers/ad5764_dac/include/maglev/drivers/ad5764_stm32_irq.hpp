@@ -161,11 +161,8 @@ class Stm32IrqWriter {
   bool writing() const { return phase_ == Phase::kWriting; }
   const State& state() const { return state_; }
 
-  static constexpr std::uint32_t kCfg1 =
-      stm32h7::field(kWiring.clock_divider_log2 & 7u, stm32h7::spi::kCfg1MbrShift) | (kWordBits - 1u);
-  static constexpr std::uint32_t kCfg2 = stm32h7::spi::kCfg2Master | stm32h7::spi::kCfg2Ssm |
-                                         stm32h7::spi::kCfg2Afcntr | (kWiring.cpol ? stm32h7::spi::kCfg2Cpol : 0u) |
-                                         (kWiring.cpha ? stm32h7::spi::kCfg2Cpha : 0u);
+  static constexpr std::uint32_t kCfg1 = stm32h7::spi::cfg1(kWiring.clock_divider_log2, kWordBits);
+  static constexpr std::uint32_t kCfg2 = stm32h7::spi::cfg2_master(kWiring.cpol, kWiring.cpha);
 
  private:
   enum class Phase : std::uint8_t { kIdle, kWriting };
@@ -174,7 +171,7 @@ class Stm32IrqWriter {
   void write(stm32h7::Addr offset, std::uint32_t v) { bus_.write32(kWiring.spi + offset, v); }
   // BSRR: set (bits 0..15) / reset (16..31), no read-modify-write.
   void pin(stm32h7::Addr port, std::uint8_t n, bool high) {
-    bus_.write32(port + stm32h7::gpio::kBsrr, high ? (1u << n) : (1u << (n + 16u)));
+    bus_.write32(port + stm32h7::gpio::kBsrr, stm32h7::gpio::bsrr(n, high));
   }
   // TSIZE, SPE = 1, SYNC low, the words (SPE = 0 flushed the FIFO before).
   // CSTART is the caller's.

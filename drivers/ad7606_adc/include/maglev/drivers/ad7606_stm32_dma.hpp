@@ -151,11 +151,10 @@ class Stm32DmaReader {
   const std::uint32_t (&words() const)[kDevices][kWords] { return rx_buffer_; }
   const State& state() const { return state_; }
 
-  static constexpr std::uint32_t kCfg1 = stm32h7::field(kWiring.clock_divider_log2 & 7u, stm32h7::spi::kCfg1MbrShift) |
-                                         (kWordBits - 1u) | stm32h7::spi::kCfg1Rxdmaen;
+  static constexpr std::uint32_t kCfg1 =
+      stm32h7::spi::cfg1(kWiring.clock_divider_log2, kWordBits) | stm32h7::spi::kCfg1Rxdmaen;
   static constexpr std::uint32_t kCfg2 =
-      stm32h7::spi::kCfg2Master | stm32h7::spi::kCfg2Ssm | stm32h7::spi::kCfg2Afcntr |
-      (kWiring.cpol ? stm32h7::spi::kCfg2Cpol : 0u) | (kWiring.cpha ? stm32h7::spi::kCfg2Cpha : 0u) |
+      stm32h7::spi::cfg2_master(kWiring.cpol, kWiring.cpha) |
       stm32h7::field(stm32h7::spi::kCommSimplexReceiver, stm32h7::spi::kCfg2CommShift);
   static constexpr std::uint32_t kStreamCr =
       stm32h7::field(stm32h7::dma::kDirPeripheralToMemory, stm32h7::dma::kCrDirShift) | stm32h7::dma::kCrMinc |
@@ -172,7 +171,7 @@ class Stm32DmaReader {
   void spi(stm32h7::Addr offset, std::uint32_t v) { bus_.write32(kWiring.spi + offset, v); }
   void stream(stm32h7::Addr offset, std::uint32_t v) { bus_.write32(kStream + offset, v); }
   void pin(stm32h7::Addr port, std::uint8_t n, bool high) {
-    bus_.write32(port + stm32h7::gpio::kBsrr, high ? (1u << n) : (1u << (n + 16u)));
+    bus_.write32(port + stm32h7::gpio::kBsrr, stm32h7::gpio::bsrr(n, high));
   }
   void clear_dma_flags() {
     bus_.write32(kWiring.dma + stm32h7::dma::ifcr(kWiring.dma_stream), stm32h7::dma::kFlagsAll << kFlagShift);

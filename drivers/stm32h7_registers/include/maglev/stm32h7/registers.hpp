@@ -166,6 +166,8 @@ inline constexpr Addr kBsrr = 0x18;     // BSx bits 0..15 set, BRx bits 16..31 r
 inline constexpr Addr kAfrl = 0x20;
 inline constexpr Addr kAfrh = 0x24;
 inline constexpr std::uint32_t kModeInput = 0, kModeOutput = 1, kModeAlternate = 2;
+// BSRR value that drives pin `n` high (BSn) or low (BRn): no read-modify-write.
+constexpr std::uint32_t bsrr(unsigned n, bool high) { return high ? (1u << n) : (1u << (n + 16u)); }
 }  // namespace gpio
 
 // --- EXTI, RM0433 §20.6 (CPU1 registers, base 0x5800 0000) -------------------------------
@@ -252,6 +254,15 @@ inline constexpr std::uint32_t kIfcrTxtfc = bit(4);
 inline constexpr std::uint32_t kIfcrOvrc = bit(6);
 inline constexpr Addr kTxdr = 0x20;
 inline constexpr Addr kRxdr = 0x30;
+// CFG1 for SCLK = kernel / 2^(mbr+1) (MBR code 0..7) and `word_bits`-bit frames.
+constexpr std::uint32_t cfg1(unsigned mbr, unsigned word_bits) {
+  return ((mbr & 7u) << kCfg1MbrShift) | (word_bits - 1u);
+}
+// CFG2 of a master with software slave management (NSS internal) that keeps
+// driving its pins while SPE = 0, in SPI mode (cpol, cpha), full duplex.
+constexpr std::uint32_t cfg2_master(bool cpol, bool cpha) {
+  return kCfg2Master | kCfg2Ssm | kCfg2Afcntr | (cpol ? kCfg2Cpol : 0u) | (cpha ? kCfg2Cpha : 0u);
+}
 }  // namespace spi
 
 // --- DMA / DMAMUX, RM0433 §15 (DMA1/DMA2) and §17 (DMAMUX1) ----------------------------

@@ -45,7 +45,7 @@ class Stm32OutputPin final : public OutputPin {
   }
   void write(bool high) override {
     // BSRR: atomic set (bits 0..15) / reset (bits 16..31), no read-modify-write race with ISRs.
-    bus_.write32(id_.port + stm32h7::gpio::kBsrr, high ? (1u << id_.pin) : (1u << (id_.pin + 16u)));
+    bus_.write32(id_.port + stm32h7::gpio::kBsrr, stm32h7::gpio::bsrr(id_.pin, high));
   }
 
  private:

@@ -47,7 +47,7 @@ class Stm32SpiMaster final : public SpiMaster {
   void init() {
     namespace s = stm32h7::spi;
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi);
-    bus_.write32(base_ + s::kCfg2, s::kCfg2Master | s::kCfg2Ssm | s::kCfg2Afcntr);
+    bus_.write32(base_ + s::kCfg2, s::cfg2_master(false, false));
     for (std::size_t i = 0; i < kDevices; ++i) devices_[i].chip_select->write(true);
   }
 
@@ -81,20 +81,12 @@ class Stm32SpiMaster final : public SpiMaster {
   bool valid(const SpiTransfer& t) const {
     return t.device < kDevices && t.word_bits >= 4 && t.word_bits <= 32 && t.words != 0 && t.words <= 0xFFFF;
   }
-  static std::uint32_t cfg1(const SpiDeviceSettings& d, const SpiTransfer& t) {
-    return stm32h7::field(d.clock_divider_log2 & 7u, stm32h7::spi::kCfg1MbrShift) |
-           static_cast<std::uint32_t>(t.word_bits - 1u);
-  }
-  static std::uint32_t cfg2(const SpiDeviceSettings& d) {
-    namespace s = stm32h7::spi;
-    return s::kCfg2Master | s::kCfg2Ssm | s::kCfg2Afcntr | (d.cpol ? s::kCfg2Cpol : 0u) | (d.cpha ? s::kCfg2Cpha : 0u);
-  }
   const SpiDeviceSettings& begin_frame(const SpiTransfer& t) {
     namespace s = stm32h7::spi;
     const SpiDeviceSettings& d = devices_[t.device];
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi);  // SPE = 0: configuration registers writable
-    bus_.write32(base_ + s::kCfg1, cfg1(d, t));
-    bus_.write32(base_ + s::kCfg2, cfg2(d));
+    bus_.write32(base_ + s::kCfg1, s::cfg1(d.clock_divider_log2, t.word_bits));
+    bus_.write32(base_ + s::kCfg2, s::cfg2_master(d.cpol, d.cpha));
     bus_.write32(base_ + s::kCr2, static_cast<std::uint32_t>(t.words));
     bus_.write32(base_ + s::kCr1, s::kCr1Ssi | s::kCr1Spe);
     d.chip_select->write(false);
