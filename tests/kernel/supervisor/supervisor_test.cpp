@@ -14,12 +14,14 @@ struct Rig {
   Supervisor sup;
   io::SensorSample sample{};
   SupervisorInputs in{};
+  float coil_current_cmd_A[io::kCoils] = {};  // in.coil_current_cmd_A points here
   Rig() {
     SupervisorConfig c;
     CHECK(validate(c, kRate) == SupervisorConfigError::kOk);
     sup.configure(c, kRate);
     sup.reset();
     in.sample = &sample;
+    in.coil_current_cmd_A = coil_current_cmd_A;
     in.positions_valid = true;
     in.envelope_active = true;
     in.closed_axes = kAxisMaskAll;
@@ -113,7 +115,7 @@ TEST(Supervisor, RmsCurrentFollowsTheThermalTimeConstant) {
   Rig r;
   // 3.5 A dc on coil 4: filtered i^2 crosses 9 A^2 when 1 - exp(-t/tau) = 9/12.25,
   // t = -10 s * ln(1 - 0.7347) = 13.27 s = 33170 ticks.
-  r.in.coil_current_cmd_A[4] = 3.5f;
+  r.coil_current_cmd_A[4] = 3.5f;
   r.in.coil_current_measured_A[4] = 3.5f;  // the amplifier follows
   int n = 0;
   while (r.tick().active == FaultCode::kNone && n < 100000) ++n;
@@ -126,7 +128,7 @@ TEST(Supervisor, RmsCurrentFollowsTheThermalTimeConstant) {
 
 TEST(Supervisor, PeakCurrentCommandedLandsMeasuredCutsCurrents) {
   Rig r;
-  r.in.coil_current_cmd_A[2] = -4.2f;
+  r.coil_current_cmd_A[2] = -4.2f;
   CHECK(r.tick().first_fault.code == FaultCode::kPeakCurrentCommanded);
   CHECK(r.sup.status().reaction == FaultReaction::kLand);
   Rig m;
@@ -299,7 +301,7 @@ TEST(Supervisor, AnAmplifierThatDoesNotFollowItsCommandCutsTheCurrents) {
   // monitor is held between frames), and the reaction is currents off: an
   // actuator that does not follow cannot land the stage.
   Rig r;
-  r.in.coil_current_cmd_A[2] = 0.5f;
+  r.coil_current_cmd_A[2] = 0.5f;
   r.in.coil_current_measured_A[2] = 4.0f;
   int n = 1;
   while (r.tick().active == FaultCode::kNone && n < 100) ++n;
@@ -309,7 +311,7 @@ TEST(Supervisor, AnAmplifierThatDoesNotFollowItsCommandCutsTheCurrents) {
   CHECK(r.sup.status().reaction == FaultReaction::kCurrentsOff);
   // A brief disagreement (a step the amplifier is still following) does not trip.
   Rig q;
-  q.in.coil_current_cmd_A[5] = 2.0f;
+  q.coil_current_cmd_A[5] = 2.0f;
   q.in.coil_current_measured_A[5] = 0.0f;
   for (int k = 0; k < 9; ++k) CHECK(q.tick().active == FaultCode::kNone);
   q.in.coil_current_measured_A[5] = 1.9f;

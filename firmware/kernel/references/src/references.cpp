@@ -75,8 +75,11 @@ void MoveReference::evaluate(double t, double* s, double* v, double* a) const {
   }
   if (t < 0.0) t = 0.0;
   if (t > duration_s_) t = duration_s_;
-  int i = 0;
+  // The last segment whose start is <= t (segment 0 below seg_[1].t0): the
+  // search may start at any segment that starts <= t.
+  int i = seg_hint_ < n_seg_ && seg_[seg_hint_].t0 <= t ? seg_hint_ : 0;
   while (i + 1 < n_seg_ && seg_[i + 1].t0 <= t) ++i;
+  seg_hint_ = i;
   const Segment& g = seg_[i];
   const double tau = t - g.t0;
   *s = g.s0 + g.v0 * tau + 0.5 * g.a0 * tau * tau + g.jerk * tau * tau * tau / 6.0;
@@ -88,6 +91,7 @@ MAGLEV_CONFIG_CODE ReferenceError MoveReference::finish_plan(std::int64_t start_
                                           const AxisReferenceLimits& limits) {
   if (!inside(start_pico, limits) || !inside(target_pico, limits)) return ReferenceError::kOutsideTravel;
   // Integrate the segment start states (s, v continuous; a as given).
+  seg_hint_ = 0;
   double s = 0.0, v = 0.0, t = 0.0;
   peak_velocity_ = 0.0;
   for (int i = 0; i < n_seg_; ++i) {

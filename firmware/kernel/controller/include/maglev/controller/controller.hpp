@@ -339,6 +339,9 @@ class Controller {
     Pid2DofCoefficients<Scalar> pid[kAxisCount];
     InternalModelCoefficients<Scalar> imr[kAxisCount];
     BiquadCoefficients<Scalar> filter[kAxisCount][kMaxBiquadStages];
+    // Any of the axis' filter stages enabled. An axis without one skips the
+    // stages and their state updates (run_axis_loops, configure).
+    bool filtered[kAxisCount];
     ForceAllocationState<Scalar> allocation;
     double inertia_over_two_b_star[kAxisCount];  // (m or I) / (2 b*): A per (m/s^2) or (rad/s^2)
   };
@@ -443,6 +446,10 @@ class Controller {
   Excitation excitation_{};
   Injection injection_{};
   BiquadState<Scalar> filter_state_[kAxisCount][kMaxBiquadStages]{};
+  // The loop output's last two values (the first stage's input), kept while
+  // the axis has no filter stage enabled: what a stage enabled later starts
+  // from (configure), as if pass-through stages had tracked their input.
+  Scalar unfiltered_history_[kAxisCount][2]{};
   Profile profile_[kAxisCount]{};
   MoveReference move_[kAxisCount]{};
   SinusoidReference sinusoid_[kAxisCount]{};

@@ -47,6 +47,14 @@ constexpr std::int64_t TruncToInt64(double v) {
   return std::int64_t{q} * (std::int64_t{1} << 32) + low;
 }
 
+// TruncToInt64 for 0 <= v < 2^51: its non-negative branch alone (the
+// caller knows the sign: detail::double_to_raw).
+constexpr std::int64_t TruncNonNegativeToInt64(double v) {
+  const std::int32_t q = static_cast<std::int32_t>(v * 0x1.0p-32);
+  const double r = v - static_cast<double>(q) * 0x1.0p32;
+  return std::int64_t{q} * (std::int64_t{1} << 32) + std::int64_t{static_cast<std::uint32_t>(r)};
+}
+
 // floor(a / d) exactly, for d > 0 and |a / d| < 2^50, given inv_d = 1.0 / d:
 // the double estimate is within one of the quotient (three roundings of
 // 2^-53 relative each, plus the rounding to an integer), and one exact int64

@@ -97,6 +97,10 @@ class MoveReference {
                              const AxisReferenceLimits& limits);
   Segment seg_[7] = {};
   int n_seg_ = 0;
+  // The segment the last evaluate() found: sampling moves forward in time,
+  // so the next search starts there instead of at segment 0 (the same
+  // segment either way: the t0 do not decrease). finish_plan() resets it.
+  mutable int seg_hint_ = 0;
   double duration_s_ = 0.0;
   double peak_velocity_ = 0.0;
   double period_s_ = 0.0;

@@ -134,7 +134,9 @@ struct SupervisorInputs {
   std::uint8_t closed_axes;     // following error applies to these
   float pose[kSequencedAxes];      // measured, SI, Axis order
   float following_error[kSequencedAxes];  // reference - measured, SI
-  float coil_current_cmd_A[io::kCoils];
+  // Last tick's commanded coil currents (io::kCoils of them), read in place
+  // from the caller's own copy (the controller's last_current_A_): no copy per tick.
+  const float* coil_current_cmd_A;
   float coil_current_measured_A[io::kCoils];
   bool current_limited;  // last tick's allocation scaled its currents down (k < 1)
   // sensors_to_pose replaced this tick's step of these beams (bit b: beam b)
