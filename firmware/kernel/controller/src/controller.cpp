@@ -116,14 +116,13 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
       status_.config_axis = static_cast<std::uint8_t>(a);
       return refuse(ConfigError::kAxisLoop);
     }
-    scratch.filtered[a] = false;
     for (int f = 0; f < kMaxBiquadStages; ++f) {
       if (design_biquad<Scalar>(c.axis[a].filters[f], rate, &scratch.filter[a][f]) != LoopDesignError::kOk) {
         status_.config_axis = static_cast<std::uint8_t>(a);
         return refuse(ConfigError::kAxisLoop);
       }
-      scratch.filtered[a] = scratch.filtered[a] || scratch.filter[a][f].enabled;
     }
+    scratch.filtered[a] = biquad_chain_enabled(scratch.filter[a]);
   }
   if (!(c.payload_mass_kg >= 0.0f && c.payload_mass_kg <= 1.5f)) return refuse(ConfigError::kPayload);
   ForceAllocationConfig alloc = c.allocation;
@@ -240,24 +239,9 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
     }
     running_type_[a] = t;
   }
-  // Filter stages: a stage that passes its input through (disabled) has the
-  // state x1 = y1 = its input one tick ago, x2 = y2 two ticks ago. An axis
-  // with every stage disabled does not update that state each tick
-  // (run_axis_loops): it keeps its input's history instead, and here, when
-  // a stage gets enabled, the stages are given the state tracking would have
-  // left (every stage's input is then the loop output). The other way, the
-  // history is the first stage's input, tracked until now. Bit for bit the
-  // filters' output of tracking every stage on every tick.
-  for (int a = 0; a < kAxisCount; ++a) {
-    const bool was = applied_[1 - active_].filtered[a], now = applied_[active_].filtered[a];
-    Scalar* h = unfiltered_history_[a];
-    if (!was && now) {
-      for (BiquadState<Scalar>& st : filter_state_[a]) st = BiquadState<Scalar>{h[0], h[1], h[0], h[1]};
-    } else if (was && !now) {
-      h[0] = filter_state_[a][0].x1;
-      h[1] = filter_state_[a][0].x2;
-    }
-  }
+  // The filter chains skip their stages while none is enabled (BiquadBank):
+  // a newly enabled chain gets the state tracking every stage would have left.
+  filters_.reconfigure(applied_[1 - active_].filtered, applied_[active_].filtered);
   sequencer_.configure(c.sequencer, c.servo_rate_Hz);
   supervisor_.configure(c.supervisor, c.servo_rate_Hz);
   homing_needed_ticks_ = static_cast<std::uint32_t>(c.sequencer.homing_time_s * c.servo_rate_Hz) + 1u;
@@ -926,13 +910,7 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
     const Scalar dr_um = t.step_pm[a] == 0 ? Traits::zero() : numeric::pico_to_micro<Scalar>(t.step_pm[a]);
     const Scalar ff = a == axis_index(Axis::kZ) ? gravity_A + t.accel_ff[a] : t.accel_ff[a];
     const Scalar v_loop = l.update(e_um, dr_um, ff);
-    Scalar v = v_loop;
-    if (ap.filtered[a]) {
-      for (int f = 0; f < kMaxBiquadStages; ++f) v = biquad_update(ap.filter[a][f], filter_state_[a][f], v);
-    } else {  // every stage passes through: only the input's history (configure)
-      unfiltered_history_[a][1] = unfiltered_history_[a][0];
-      unfiltered_history_[a][0] = v_loop;
-    }
+    const Scalar v = filters_.update(a, ap.filter[a], ap.filtered[a], v_loop);
     t.aw_offset[a] = v_loop - v;
     t.loop_out[a] = l.saturate(v);
     const bool closed = (so.closed_axes & (1u << a)) != 0;
@@ -941,6 +919,7 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
     t.effort[a] = closed ? t.loop_out[a] + t.excitation[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
     if (!closed) l.reset(e_um);
   }
+  filters_.end_tick();
   if (t.reference_injection_pm != 0) reference_.pico[inj_axis] -= t.reference_injection_pm;
 }
 

@@ -17,6 +17,7 @@
 
 #include "maglev/io/code_placement.hpp"
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "maglev/axis_loops/design_error.hpp"
@@ -169,5 +170,73 @@ void biquad_reset(BiquadState<Scalar>& s, Scalar x, Scalar y) {
   s.x1 = s.x2 = x;
   s.y1 = s.y2 = y;
 }
+
+template <typename Scalar>
+bool biquad_chain_enabled(const BiquadCoefficients<Scalar> (&c)[kMaxBiquadStages]) {
+  bool any = false;
+  for (const BiquadCoefficients<Scalar>& k : c) any = any || k.enabled;
+  return any;
+}
+
+// The filter chains of kChains axes: each kMaxBiquadStages stages in series
+// on its axis' loop output.
+//
+// A disabled stage passes its input through, and biquad_update() keeps its
+// state anyway (x1 = y1 = its last input, x2 = y2 = the one before), so that
+// a stage enabled later starts from the signal. With no stage of a chain
+// enabled -- the default -- that is two stages' state updates per axis and
+// tick for nothing read. Such a chain leaves its stages as they were and
+// keeps only its input's last two values (`history`); reconfigure(), when one
+// of its stages is enabled again, gives the stages the state running them
+// would have left. That depends on the ticks since the last stage was
+// disabled: none, the state as it was; one, x1 = y1 = that tick's input and
+// x2 / y2 the old x1 / y1; two or more, the pass-through state of the last
+// two inputs. The output is bit for bit that of running biquad_update() on
+// every stage on every tick, for any sequence of configurations, several
+// between one tick and the next included (test
+// Biquad.BankSkippingPassThroughStagesEqualsTrackingEveryStage).
+template <typename Scalar, std::size_t kChains>
+class BiquadBank {
+ public:
+  // One tick of chain k: its coefficients c, `enabled` = biquad_chain_enabled(c).
+  Scalar update(int k, const BiquadCoefficients<Scalar> (&c)[kMaxBiquadStages], bool enabled, Scalar x) {
+    if (enabled) {
+      for (int f = 0; f < kMaxBiquadStages; ++f) x = biquad_update(c[f], stage_[k][f], x);
+      return x;
+    }
+    history_[k][1] = history_[k][0];
+    history_[k][0] = x;
+    return x;
+  }
+
+  // Once per tick, after the chains' update().
+  void end_tick() { ++ticks_; }
+
+  // Between ticks, when coefficients change: was[k] / now[k] are
+  // biquad_chain_enabled() of chain k's old and new coefficients.
+  void reconfigure(const bool (&was)[kChains], const bool (&now)[kChains]) {
+    for (std::size_t k = 0; k < kChains; ++k) {
+      if (was[k] && !now[k]) {
+        disabled_at_[k] = ticks_;
+      } else if (!was[k] && now[k]) {
+        const std::uint64_t since = ticks_ - disabled_at_[k];
+        const Scalar h0 = history_[k][0], h1 = history_[k][1];
+        for (BiquadState<Scalar>& st : stage_[k]) {
+          if (since == 1) {
+            st = BiquadState<Scalar>{h0, st.x1, h0, st.y1};
+          } else if (since >= 2) {
+            st = BiquadState<Scalar>{h0, h1, h0, h1};
+          }
+        }
+      }
+    }
+  }
+
+ private:
+  BiquadState<Scalar> stage_[kChains][kMaxBiquadStages]{};
+  Scalar history_[kChains][2]{};
+  std::uint64_t disabled_at_[kChains]{};  // ticks_ when the chain's last stage was disabled
+  std::uint64_t ticks_ = 0;               // end_tick() calls (no wrap in 2^64 ticks)
+};
 
 }  // namespace maglev::kernel

@@ -339,9 +339,7 @@ class Controller {
     Pid2DofCoefficients<Scalar> pid[kAxisCount];
     InternalModelCoefficients<Scalar> imr[kAxisCount];
     BiquadCoefficients<Scalar> filter[kAxisCount][kMaxBiquadStages];
-    // Any of the axis' filter stages enabled. An axis without one skips the
-    // stages and their state updates (run_axis_loops, configure).
-    bool filtered[kAxisCount];
+    bool filtered[kAxisCount];  // biquad_chain_enabled(filter[a])
     ForceAllocationState<Scalar> allocation;
     double inertia_over_two_b_star[kAxisCount];  // (m or I) / (2 b*): A per (m/s^2) or (rad/s^2)
   };
@@ -445,11 +443,7 @@ class Controller {
   LoopType running_type_[kAxisCount] = {};  // detects a live loop-type switch (bumpless hand-over)
   Excitation excitation_{};
   Injection injection_{};
-  BiquadState<Scalar> filter_state_[kAxisCount][kMaxBiquadStages]{};
-  // The loop output's last two values (the first stage's input), kept while
-  // the axis has no filter stage enabled: what a stage enabled later starts
-  // from (configure), as if pass-through stages had tracked their input.
-  Scalar unfiltered_history_[kAxisCount][2]{};
+  BiquadBank<Scalar, kAxisCount> filters_{};
   Profile profile_[kAxisCount]{};
   MoveReference move_[kAxisCount]{};
   SinusoidReference sinusoid_[kAxisCount]{};
