@@ -506,6 +506,42 @@ TEST(ForceAllocation, BStarFromMagnetisation) {
   DOUBLES_EQUAL(1.7037, st.two_b_star_N_per_A, 1e-9);
 }
 
+// The float kernel's DAC code: one sign test, one bound test (the M7's
+// tick converts eight a tick). The same code as the reference form it
+// replaced -- NaN -> 0, clamp to [-32768, 32767] in double, round half away
+// from zero -- for currents around every half code of the range and beyond
+// it (each float and its two neighbours), the bounds, signed zeros,
+// infinities and NaN.
+TEST(ForceAllocation, DacCodeRoundsHalfAwayAndSaturates) {
+  ForceAllocationConfig cfg = DefaultForceAllocationConfig();
+  static ForceAllocationState<float> st;
+  CHECK(ApplyForceAllocationConfig<float>(cfg, &st) == ForceAllocationError::kOk);
+  auto reference = [&](float amps) {
+    const double v = static_cast<double>(amps) * st.dac_codes_per_A;
+    if (!(v == v)) return 0;
+    const double c = v > 32767.0 ? 32767.0 : (v < -32768.0 ? -32768.0 : v);
+    return static_cast<int>(static_cast<std::int32_t>(c >= 0.0 ? c + 0.5 : c - 0.5));
+  };
+  auto check = [&](float amps) {
+    const int got = maglev::kernel::CurrentToDacCode<float>(amps, st);
+    if (got != reference(amps)) CHECK_EQUAL(reference(amps), got);
+  };
+  const float special[] = {0.0f, -0.0f, INFINITY, -INFINITY, NAN, 1e30f, -1e30f,
+                           static_cast<float>(32767.0 / st.dac_codes_per_A), static_cast<float>(-32768.0 / st.dac_codes_per_A)};
+  for (float a : special) check(a);
+  int checked = 0;
+  for (int k = -33000; k <= 33000; ++k) {
+    for (double d : {-0.5, -0.25, 0.0, 0.25, 0.5}) {
+      const float a = static_cast<float>((k + d) / st.dac_codes_per_A);
+      check(a);
+      check(std::nextafter(a, INFINITY));
+      check(std::nextafter(a, -INFINITY));
+      checked += 3;
+    }
+  }
+  CHECK(checked > 900000);
+}
+
 TEST(ForceAllocation, DacCodesRoundAndSaturate) {
   ForceAllocationConfig cfg = DefaultForceAllocationConfig();
   static ForceAllocationState<float> st;

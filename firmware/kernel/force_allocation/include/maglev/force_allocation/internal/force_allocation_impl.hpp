@@ -255,14 +255,22 @@ std::int16_t CurrentToDacCode(Scalar current_A, const ForceAllocationState<Scala
     code = code > 32767 ? 32767 : (code < -32768 ? -32768 : code);
     return static_cast<std::int16_t>(code);
   } else {
-    // Clamped in double to the DAC's own range before rounding: a rounded
-    // value beyond +-32767.5 would saturate anyway, so the codes are those of
-    // rounding first and clamping the int64 after (the form this replaced).
-    // int32 conversion: one VCVT on the M7 (an int64 one is a libgcc call).
+    // Round half away from zero, then the DAC's range; NaN -> 0. The codes
+    // are those of rounding first and clamping the int64 after (the form
+    // this replaced). One sign test picks the side, one bound test the
+    // clamp, and the int32 VCVT truncates toward zero (an int64 one is a
+    // libgcc call on the M7). Values at the bounds: 32767 + 0.5 and
+    // -32768 - 0.5 truncate to the bounds themselves, so v = 32767 and
+    // v = -32768 may take either branch. NaN fails both sign tests. (Test
+    // ForceAllocation.DacCodeRoundsHalfAwayAndSaturates: every half code and
+    // its neighbours, the bounds, infinities and NaN, against the reference
+    // form clamp-then-round.)
     const double v = static_cast<double>(current_A) * state.dac_codes_per_A;
-    if (!(v == v)) return 0;  // NaN
-    const double c = v > 32767.0 ? 32767.0 : (v < -32768.0 ? -32768.0 : v);
-    return static_cast<std::int16_t>(static_cast<std::int32_t>(c >= 0.0 ? c + 0.5 : c - 0.5));
+    if (v >= 0.0) {
+      return v < 32767.0 ? static_cast<std::int16_t>(static_cast<std::int32_t>(v + 0.5)) : std::int16_t{32767};
+    }
+    if (v > -32768.0) return static_cast<std::int16_t>(static_cast<std::int32_t>(v - 0.5));
+    return v <= -32768.0 ? std::int16_t{-32768} : std::int16_t{0};  // else NaN
   }
 }
 
