@@ -32,27 +32,24 @@ constexpr std::int64_t RoundToInt64(double v) {
   return static_cast<std::int64_t>(bits & ((std::uint64_t{1} << 52) - 1u)) - (std::int64_t{1} << 51);
 }
 
-// The same value as static_cast<std::int64_t>(v) (truncation toward zero)
-// for |v| < 2^51. v = q 2^32 + r with q = trunc(v 2^-32) (|q| < 2^19: one
-// 32-bit VCVT, which truncates) and r = v - q 2^32: exact, because q 2^32 is
-// a multiple of v's ulp and |r| <= |v|; r has v's sign and |r| < 2^32, so
-// trunc(v) = q 2^32 + trunc(r), the last one unsigned 32-bit VCVT. About 12
-// M7 instructions; the round-and-compare form this replaced took ~45 (it
-// is on the tick's path through si_to_pico and Fixed::from_double).
-constexpr std::int64_t TruncToInt64(double v) {
-  const std::int32_t q = static_cast<std::int32_t>(v * 0x1.0p-32);
-  const double r = v - static_cast<double>(q) * 0x1.0p32;
-  const std::int64_t low = v >= 0.0 ? std::int64_t{static_cast<std::uint32_t>(r)}
-                                    : -std::int64_t{static_cast<std::uint32_t>(-r)};
-  return std::int64_t{q} * (std::int64_t{1} << 32) + low;
-}
-
-// TruncToInt64 for 0 <= v < 2^51: its non-negative branch alone (the
-// caller knows the sign: detail::double_to_raw).
+// static_cast<std::int64_t>(v) (truncation toward zero) for 0 <= v < 2^51.
+// v = q 2^32 + r with q = trunc(v 2^-32) (q < 2^19: one 32-bit VCVT, which
+// truncates) and r = v - q 2^32: exact, because q 2^32 is a multiple of v's
+// ulp and r <= v; 0 <= r < 2^32, so trunc(v) = q 2^32 + trunc(r), the last
+// one unsigned 32-bit VCVT. (detail::double_to_raw, which knows the sign,
+// calls it directly.)
 constexpr std::int64_t TruncNonNegativeToInt64(double v) {
   const std::int32_t q = static_cast<std::int32_t>(v * 0x1.0p-32);
   const double r = v - static_cast<double>(q) * 0x1.0p32;
   return std::int64_t{q} * (std::int64_t{1} << 32) + std::int64_t{static_cast<std::uint32_t>(r)};
+}
+
+// The same value as static_cast<std::int64_t>(v) for |v| < 2^51: truncation
+// is odd, so the negative side is the non-negative one of -v, negated. About
+// 12 M7 instructions; the round-and-compare form this replaced took ~45 (it
+// is on the tick's path through Fixed::from_double).
+constexpr std::int64_t TruncToInt64(double v) {
+  return v >= 0.0 ? TruncNonNegativeToInt64(v) : -TruncNonNegativeToInt64(-v);
 }
 
 // floor(a / d) exactly, for d > 0 and |a / d| < 2^50, given inv_d = 1.0 / d:
