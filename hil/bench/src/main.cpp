@@ -75,6 +75,8 @@ void usage() {
       "                 [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet] [--scenarios DIR]\n"
       "                 [--can-log FILE]   the run's CAN traffic as a candump log (simulated time)\n"
       "                 [--plant default|ideal|nominal|as-built] [--error-seed N]   the plant model (docs/PLANT.md)\n"
+      "                 [--floor CLASS]    the floor under the base: none, vc-e .. vc-a, operating-theatre,\n"
+      "                                    residential, office, workshop (docs/PLANT.md section 12)\n"
       "                 [--seeds N]        as-built error seeds 1..N: per paper figure median, spread, ratio\n"
       "                 [--servo-rate HZ]  2500 (default), 5000, 10000 or 20000: the controller's servo rate\n"
       "                                    (re-discretized loops; the plant steps at it; in process only over\n"
@@ -151,6 +153,8 @@ Args parse_args(int argc, char** argv) {
         if (!maglev::hil::parse_plant_model(v, &m)) a.error = "--plant: expected default, ideal, nominal or as-built, got '" + v + "'";
         a.run.plant = m;
       }
+    } else if (s == "--floor") {
+      if (value(&v)) a.run.floor = v;  // checked with the scenario (overrides.cpp)
     } else if (s == "--servo-rate") {
       if (value(&v)) {
         char* end = nullptr;

@@ -183,9 +183,50 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     }
   }
   if (o->error_seed_override) o->error_set.error_seed = *o->error_seed_override;
+  // The floor under the base (docs/PLANT.md section 12): a named class or a
+  // band velocity of the lab's own, and an optional isolator. Any model.
+  {
+    hil::FloorVibrationConfig& f = o->plant.floor;
+    using FC = hil::FloorVibrationConfig;
+    auto floor_num = [&](const std::string& key, double lo, double hi, const char* what, double* dst) {
+      const auto it = sc.plant.find(key);
+      if (it == sc.plant.end()) return;
+      const auto x = scenario::parse_number(it->second);
+      if (!x) plant_fail(key, "not a number: '" + it->second + "'");
+      else if (!(*x >= lo && *x <= hi)) plant_fail(key, it->second + " is outside " + what);
+      else *dst = *x;
+    };
+    std::optional<std::string> name;
+    if (const auto it = sc.plant.find("floor"); it != sc.plant.end()) name = it->second;
+    if (o->floor_override) name = *o->floor_override;
+    if (name) {
+      const int c = hil::find_floor_class(*name);
+      if (c < 0) {
+        if (o->floor_override) fail("--floor: expected " + std::string(hil::floor_class_names()) + ", got '" + *name + "'");
+        else plant_fail("floor", "expected " + std::string(hil::floor_class_names()) + ", got '" + *name + "'");
+      } else {
+        f.band_velocity_m_per_s = hil::kFloorClasses[c].band_velocity_m_per_s;
+      }
+    }
+    if (sc.plant.count("floor_band_velocity_m_per_s") != 0 && sc.plant.count("floor") != 0) {
+      plant_fail("floor_band_velocity_m_per_s", "give floor or floor_band_velocity_m_per_s, not both");
+    } else if (!o->floor_override) {
+      floor_num("floor_band_velocity_m_per_s", 0.0, FC::kMaxBandVelocity_m_per_s,
+                "[0, 2e-3] m/s (0: none; 2e-3 is 2.5x the workshop curve)", &f.band_velocity_m_per_s);
+    }
+    floor_num("floor_isolator_hz", 0.0, FC::kMaxIsolator_Hz, "0 (no isolator) or [0.3, 20] Hz", &f.isolator_hz);
+    if (f.isolator_hz > 0.0 && f.isolator_hz < FC::kMinIsolator_Hz) {
+      plant_fail("floor_isolator_hz", "0 (no isolator) or [0.3, 20] Hz");
+    }
+    floor_num("floor_isolator_damping", FC::kMinIsolatorDamping, FC::kMaxIsolatorDamping, "[0.01, 2]",
+              &f.isolator_damping);
+  }
   for (const auto& [k, v] : sc.plant) {
     auto& p = o->plant;
     if (k == "model" || k == "noise" || k == "error_seed" || k == "error_scale" || hil::find_error_term(k) >= 0) continue;
+    if (k == "floor" || k == "floor_band_velocity_m_per_s" || k == "floor_isolator_hz" || k == "floor_isolator_damping") {
+      continue;
+    }
     if (k == "payload_kg") num("plant", k, v, Dim::kMass, &p.body.payload_kg);
     else if (k == "current_noise_scale") num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_scale);
     else if (k == "current_noise_density_A_per_rtHz")
@@ -226,7 +267,8 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     } else {
       plant_fail(k, "unknown key (model, noise, error_seed, error_scale, an error term of docs/PLANT.md, payload_kg, "
                     "current_noise_scale, current_noise_density_A_per_rtHz, interferometer_noise_m, displacement_noise_m, "
-                    "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick, integrator, noise_generator)");
+                    "sensor_noise, initial_x_m, initial_y_m, substeps_per_tick, integrator, noise_generator, floor, "
+                    "floor_band_velocity_m_per_s, floor_isolator_hz, floor_isolator_damping)");
     }
   }
   if (o->plant_model == hil::PlantModel::kAsBuilt) {

@@ -18,6 +18,7 @@ bool resolve_overrides(const scenario::Scenario& sc, const RunOptions& opt, Over
   if (errs.empty()) apply_profile(opt.profile ? *opt.profile : profile_of(sc), ov, &errs, rate);
   ov->plant_model_override = opt.plant;
   ov->error_seed_override = opt.error_seed;
+  ov->floor_override = opt.floor;
   if (errs.empty()) apply_overrides(sc, ov, &errs);
   if (!errs.empty()) {
     if (errors != nullptr) *errors = errs;
@@ -47,6 +48,12 @@ RunResult new_result(const scenario::Scenario& sc, const Overrides& ov) {
     R.metrics["plant_displacement_noise_m"] = ov.plant.displacement.noise_m;
   }
   for (const auto& [name, value] : ov.drawn_errors) R.metrics["plant_error_" + name] = value;
+  // The floor, when there is one (every run without keeps its metrics.json).
+  if (ov.plant.floor.active()) {
+    R.metrics["plant_floor_band_velocity_m_per_s"] = ov.plant.floor.band_velocity_m_per_s;
+    R.metrics["plant_floor_isolator_hz"] = ov.plant.floor.isolator_hz;
+    R.metrics["plant_floor_isolator_damping"] = ov.plant.floor.isolator_damping;
+  }
   // Off only on a plant whose sensors read without noise (overrides.cpp).
   if (ov.controller.supervisor.max_identical_samples == 0) R.metrics["frozen_sample_check"] = 0.0;
   return R;

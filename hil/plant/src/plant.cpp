@@ -99,6 +99,7 @@ Plant::Plant(const PlantConfig& config, std::uint64_t seed)
       tick_s_(1.0 / config.integration.servo_rate_Hz),
       side_force_per_A_(config.field.coil_turns * config.field.coil_effective_length_m),
       com_arm_m_(config.body.com_above_coil_midplane_m) {
+  if (config.floor.active()) floor_ = FloorVibration(config.floor, tick_s_, seed);
   const double s2 = config.body.payload_side_m * config.body.payload_side_m;
   inertia_ = {config.body.inertia_kgm2[0] + config.body.payload_kg * s2 / 12.0,
               config.body.inertia_kgm2[1] + config.body.payload_kg * s2 / 12.0,
@@ -1075,6 +1076,10 @@ Wrench Plant::TotalWrench(const BodyState& state, const double* currents_A) cons
   if (external_force_active_) {
     for (int i = 0; i < 3; ++i) acc.f[i] += external_force_N_[i];
   }
+  if (floor_.active()) {
+    acc.f[0] += floor_force_N_[0];
+    acc.f[1] += floor_force_N_[1];
+  }
   return ToWrench(k, acc);
 }
 
@@ -1159,6 +1164,13 @@ void Plant::advance(double dt_s) {
   if (fast && ClearOfSurface(dt_s)) per_tick = 1;
   const int n = std::max(1, static_cast<int>(std::ceil(dt_s / (tick_s_ / per_tick) - 1e-9)));
   const double h = dt_s / n;
+  if (floor_.active()) {
+    // In the base's frame the floor's acceleration u'' acts as -m u''.
+    double a[FloorVibration::kAxes];
+    floor_.Next(dt_s, a);
+    floor_force_N_[0] = -mass_ * a[0];
+    floor_force_N_[1] = -mass_ * a[1];
+  }
   double i0[kCoils];
   double i1[kCoils];
   double i2[kCoils];

@@ -3,14 +3,7 @@
 # errors in metrics.json (reproducible per error seed), as-built coupling
 # above rest noise and above the nominal stage's, ideal unchanged.
 #   usage: fidelity_bench.sh MAGLEV_HIL SOURCE_DIR OUT_DIR PYTHON3
-set -u
-HIL="$1"; DIR="$2"; OUT="$3"; PY="$4"
-rm -rf "$OUT"; mkdir -p "$OUT"
-fail() { echo "FAIL: $*"; exit 1; }
-expect() {  # expect FILE PATTERN: the refusal names file:line: key: reason
-  out=$("$HIL" check "$DIR/$1" 2>&1) && fail "$1 accepted"
-  echo "$out" | grep -q -- "$2" || { echo "$out"; fail "$1: no '$2'"; }
-}
+. "$2/bench_lib.sh"
 expect bad_plant.scenario "bad_plant.scenario:8: coil_yaw_rad: 0.02 is above its physical bound"
 expect bad_plant.scenario "bad_plant.scenario:9: com_xy_m: a magnitude, must be >= 0"
 expect bad_plant.scenario "bad_plant.scenario:10: amp_gain_error: not a number: 'lots'"
@@ -18,8 +11,7 @@ expect bad_plant.scenario "bad_plant.scenario:11: error_scale: must be within \[
 expect bad_model.scenario "bad_model.scenario:7: model: expected default, ideal, nominal or as-built, got 'as_bilt'"
 expect bad_model.scenario "bad_model.scenario:8: noise: expected component or fitted, got 'quiet'"
 expect bad_nominal.scenario "bad_nominal.scenario:8: bstar_error: an error-set key needs model = as-built"
-out=$("$HIL" run "$DIR/fidelity_move.scenario" --plant bogus --out "$OUT/x" 2>&1) && fail "--plant bogus accepted"
-echo "$out" | grep -q -- "--plant: expected default, ideal, nominal or as-built, got 'bogus'" || fail "--plant message: $out"
+refused_option fidelity_move.scenario "$OUT/x" "--plant: expected default, ideal, nominal or as-built, got 'bogus'" --plant bogus
 echo "refusals: ok"
 run() {  # run NAME ARGS...: a run into OUT/NAME
   name=$1; shift

@@ -37,6 +37,7 @@ struct Overrides {
   hil::PlantModel plant_model = hil::PlantModel::kDefault;
   std::optional<hil::PlantModel> plant_model_override;
   std::optional<std::uint64_t> error_seed_override;
+  std::optional<std::string> floor_override;  // --floor CLASS: overrides [plant] floor
   hil::ErrorSet error_set;
   hil::DrawnErrors drawn_errors;  // as-built: what was drawn (metrics.json plant_error_*)
 };

@@ -24,6 +24,7 @@
 #include <cstdint>
 
 #include "maglev/plant/amplifier.hpp"
+#include "maglev/plant/floor_vibration.hpp"
 #include "maglev/plant/halbach_field.hpp"
 #include "maglev/plant/plant_config.hpp"
 #include "maglev/plant/rng.hpp"
@@ -132,6 +133,7 @@ class Plant {
   double mass_kg() const { return mass_; }
   const Eigen::Vector3d& inertia_kgm2() const { return inertia_; }
   double tick_s() const { return tick_s_; }
+  const FloorVibration& floor_vibration() const { return floor_; }
   double suspension_stiffness_N_per_m() const { return k_susp_; }
   const std::array<CoilSide, 2 * kCoils>& coil_sides() const { return sides_; }
 
@@ -272,6 +274,10 @@ class Plant {
   double mass_;
   Eigen::Vector3d external_force_N_ = Eigen::Vector3d::Zero();
   bool external_force_active_ = false;
+  // Floor vibration (config.floor): the base's motion as the inertial force
+  // -m u'' on the CoM (x, y, world), held over each tick.
+  FloorVibration floor_;
+  double floor_force_N_[2] = {0.0, 0.0};
   Eigen::Vector3d inertia_;
   double tick_s_;
   double side_force_per_A_;  // N * p

@@ -7,6 +7,7 @@
 // lists every element with its source.
 #pragma once
 
+#include "maglev/plant/floor_vibration.hpp"
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -261,6 +262,9 @@ struct PlantConfig {
   IntegrationConfig integration;
   InitialState initial;
   AsBuiltConfig as_built;
+  // The floor under the stage's base (floor_vibration.hpp; `[plant] floor`);
+  // none by default.
+  FloorVibrationConfig floor;
   bool sensor_noise_enabled = true;
   // How the noise's normal draws are made (rng.hpp; `[plant] noise_generator`):
   // kZiggurat (issue 16, 4x cheaper) or kPolar (std::normal_distribution,
