@@ -77,6 +77,7 @@ void usage() {
       "                 [--plant default|ideal|nominal|as-built] [--error-seed N]   the plant model (docs/PLANT.md)\n"
       "                 [--floor CLASS]    the floor under the base: none, vc-e .. vc-a, operating-theatre,\n"
       "                                    residential, office, workshop (docs/PLANT.md section 12)\n"
+      "                 [--floor-isolator-hz HZ]  the base on a passive isolator (0: rigid; 0.3-20 Hz)\n"
       "                 [--seeds N]        as-built error seeds 1..N: per paper figure median, spread, ratio\n"
       "                 [--servo-rate HZ]  2500 (default), 5000, 10000 or 20000: the controller's servo rate\n"
       "                                    (re-discretized loops; the plant steps at it; in process only over\n"
@@ -155,6 +156,13 @@ Args parse_args(int argc, char** argv) {
       }
     } else if (s == "--floor") {
       if (value(&v)) a.run.floor = v;  // checked with the scenario (overrides.cpp)
+    } else if (s == "--floor-isolator-hz") {
+      if (value(&v)) {
+        char* end = nullptr;
+        const double hz = std::strtod(v.c_str(), &end);
+        if (end == v.c_str() || *end != '\0') a.error = s + ": not a number: '" + v + "'";
+        a.run.floor_isolator_hz = hz;  // its range is checked with the scenario (overrides.cpp)
+      }
     } else if (s == "--servo-rate") {
       if (value(&v)) {
         char* end = nullptr;

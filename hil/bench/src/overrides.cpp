@@ -218,6 +218,14 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     if (f.isolator_hz > 0.0 && f.isolator_hz < FC::kMinIsolator_Hz) {
       plant_fail("floor_isolator_hz", "0 (no isolator) or [0.3, 20] Hz");
     }
+    if (o->floor_isolator_override) {
+      const double hz = *o->floor_isolator_override;
+      if (!(hz == 0.0 || (hz >= FC::kMinIsolator_Hz && hz <= FC::kMaxIsolator_Hz))) {
+        fail("--floor-isolator-hz: 0 (no isolator) or [0.3, 20] Hz, got " + std::to_string(hz));
+      } else {
+        f.isolator_hz = hz;
+      }
+    }
     floor_num("floor_isolator_damping", FC::kMinIsolatorDamping, FC::kMaxIsolatorDamping, "[0.01, 2]",
               &f.isolator_damping);
   }

@@ -19,6 +19,7 @@ bool resolve_overrides(const scenario::Scenario& sc, const RunOptions& opt, Over
   ov->plant_model_override = opt.plant;
   ov->error_seed_override = opt.error_seed;
   ov->floor_override = opt.floor;
+  ov->floor_isolator_override = opt.floor_isolator_hz;
   if (errs.empty()) apply_overrides(sc, ov, &errs);
   if (!errs.empty()) {
     if (errors != nullptr) *errors = errs;

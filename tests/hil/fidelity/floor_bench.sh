@@ -11,6 +11,8 @@ expect bad_floor.scenario "bad_floor.scenario:9: floor_isolator_damping: 5 is ou
 expect bad_floor.scenario "bad_floor.scenario:10: floor_band_velocity_m_per_s: give floor or floor_band_velocity_m_per_s, not both"
 expect bad_floor_velocity.scenario "bad_floor_velocity.scenario:7: floor_band_velocity_m_per_s: 0.01 is outside \[0, 2e-3\] m/s"
 refused_option fidelity_floor.scenario "$OUT/x" "--floor: expected none, workshop, .* got 'basement'" --floor basement
+refused_option fidelity_floor.scenario "$OUT/x" "--floor-isolator-hz: 0 (no isolator) or \[0.3, 20\] Hz, got 0.1" \
+  --floor vc-c --floor-isolator-hz 0.1
 echo "refusals: ok"
 run() {  # run NAME SCENARIO ARGS...
   name=$1; sc=$2; shift 2
@@ -21,10 +23,13 @@ run none fidelity_floor.scenario
 run vcd fidelity_floor.scenario --floor vc-d
 run vcc fidelity_floor.scenario --floor vc-c
 run table fidelity_floor_table.scenario
+run table_cli fidelity_floor.scenario --floor vc-c --floor-isolator-hz 1.5
 "$PY" - "$OUT" <<'PYEOF' || exit 1
 import json, sys
 out = sys.argv[1]
 m = {n: json.load(open(f"{out}/{n}/metrics.json")) for n in ("none", "vcd", "vcc", "table")}
+cli = json.load(open(f"{out}/table_cli/metrics.json"))
+assert cli["x_rest_rms_noise_m"] == m["table"]["x_rest_rms_noise_m"], "--floor-isolator-hz is not the scenario key"
 for n, d in m.items():
     assert d["completed"] == 1 and d["fault_code"] == 0 and d["final_sequencer_state"] == 6, f"{n}: not Ready"
 assert not any(k.startswith("plant_floor_") for k in m["none"]), "no floor, yet plant_floor_* recorded"

@@ -38,6 +38,7 @@ struct Overrides {
   std::optional<hil::PlantModel> plant_model_override;
   std::optional<std::uint64_t> error_seed_override;
   std::optional<std::string> floor_override;  // --floor CLASS: overrides [plant] floor
+  std::optional<double> floor_isolator_override;  // --floor-isolator-hz HZ: overrides [plant] floor_isolator_hz
   hil::ErrorSet error_set;
   hil::DrawnErrors drawn_errors;  // as-built: what was drawn (metrics.json plant_error_*)
 };
