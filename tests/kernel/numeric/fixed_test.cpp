@@ -2,6 +2,8 @@
 // and the wide-accumulator precision claim.
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <vector>
 
 #include "CppUTest/TestHarness.h"
 #include "maglev/numeric/fixed.hpp"
@@ -282,4 +284,53 @@ TEST(Saturation, Clamp) {
   DOUBLES_EQUAL(4.0, clamp_abs(Q7_24::from_double(5.0), Q7_24::from_double(4.0)).to_double(), 0.0);
   DOUBLES_EQUAL(-4.0, static_cast<double>(clamp_abs(-5.0f, 4.0f)), 0.0);
   DOUBLES_EQUAL(1.0, static_cast<double>(clamp_abs(1.0f, 4.0f)), 0.0);
+}
+
+// The float kernel's one-test saturations (issue 16) against the two-sided
+// forms they replaced, bit for bit: ScalarTraits<float>::from_double against
+// clamp-then-convert, clamp_abs<float> against clamp(v, -limit, limit).
+// Values around both bounds and their neighbours, signed zeros, infinities,
+// NaN, and random values over every binary exponent from 2^-60 to 2^64.
+TEST(Saturation, OneTestSaturationsEqualTheTwoSidedForms) {
+  using Tr = maglev::numeric::ScalarTraits<float>;
+  using maglev::numeric::clamp;
+  using maglev::numeric::clamp_abs;
+  const auto same_bits = [](float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  const double m = Tr::kMaxMagnitude;
+  const auto two_sided = [m](double v) { return static_cast<float>(v > m ? m : (v < -m ? -m : v)); };
+  const float limits[] = {4.0f, 0.5f, 1e-30f, 127.99999f, 0.0f};
+  std::vector<double> values = {0.0, -0.0, m, -m, std::nextafter(m, 0.0), std::nextafter(m, 1e300),
+                                -std::nextafter(m, 0.0), -std::nextafter(m, 1e300), 1e300, -1e300,
+                                INFINITY, -INFINITY, std::nan(""), -std::nan(""), 5e-324, -5e-324};
+  for (float l : limits) {
+    for (float v : {l, -l, std::nextafter(l, 0.0f), std::nextafter(l, 1e30f)}) {
+      values.push_back(v);
+      values.push_back(-static_cast<double>(v));
+    }
+  }
+#if defined(__arm__)
+  constexpr int kSamples = 30000;
+#else
+  constexpr int kSamples = 300000;
+#endif
+  std::uint64_t s = 11;
+  for (int i = 0; i < kSamples; ++i) {
+    const int e = static_cast<int>(NextRandom(&s) % 125u) - 60;
+    const double v = std::ldexp(1.0 + static_cast<double>(NextRandom(&s) >> 11) * 0x1.0p-53, e);
+    values.push_back((NextRandom(&s) & 1u) ? -v : v);
+  }
+  int checked = 0;
+  for (double v : values) {
+    if (!same_bits(two_sided(v), Tr::from_double(v))) {
+      CHECK_EQUAL(two_sided(v), Tr::from_double(v));
+    }
+    const float f = static_cast<float>(v);
+    for (float l : limits) {
+      if (!same_bits(clamp(f, -l, l), clamp_abs(f, l))) {
+        CHECK_EQUAL(clamp(f, -l, l), clamp_abs(f, l));
+      }
+      ++checked;
+    }
+  }
+  CHECK(checked > 5 * kSamples);
 }

@@ -25,6 +25,10 @@ struct LoopTerms {
   using Coeff = typename Traits::Coeff;
 
   static void weight_step(Acc& state, Scalar& prev_d_input, Coeff one_minus_b_gain, Coeff c, Scalar step) {
+    // Almost every tick has no explicit step: a zero step adds an exact zero
+    // to both states (the caller's zero is +0, so no signed zero changes
+    // either), so skipping it keeps every bit (issue 16).
+    if (step == Traits::zero()) return;
     Traits::mac(state, one_minus_b_gain, -step);
     prev_d_input += step - Traits::mul(c, step);
   }

@@ -182,7 +182,11 @@ class Pid2Dof {
   // overflow guard; the anti-windup proper is the back-calculation.
   void apply_limit(Scalar applied_effort_A) {
     State& s = *s_;
-    Traits::mac(s.integrator, c_->antiwindup, applied_effort_A - s.last_output);
+    // Nothing cut (most ticks): the correction is an exact zero, and adding
+    // it would leave the integrator as it is (it is never -0: it starts at a
+    // +0 or a preset and only nonzero terms reach it), so it is skipped.
+    const Scalar cut = applied_effort_A - s.last_output;
+    if (!(cut == Traits::zero())) Traits::mac(s.integrator, c_->antiwindup, cut);
     const auto lim = Traits::acc_from_double(0.5 * Traits::kMaxMagnitude);
     if (lim < s.integrator) s.integrator = lim;
     if (s.integrator < -lim) s.integrator = -lim;
