@@ -91,6 +91,7 @@ void usage() {
       "  maglev-hil selfstab-schedule --profile P   paper 001's z gain schedule from the plant\n"
       "  maglev-hil profiles                  the stage profiles; run/suite take --profile NAME|FILE\n"
       "  maglev-hil error-terms               the as-built error terms (markdown, docs/PLANT.md)\n"
+      "  maglev-hil floor-classes             the named floors (markdown, docs/PLANT.md section 12)\n"
       "  maglev-hil check-profile NAME|FILE   allocation, passive axes, loops, current headroom\n"
       "  maglev-hil campaign --runs N [--seed S] [--jobs J] [--out DIR] [--only I]   randomized faults, judged\n"
       "  maglev-hil controller --can IFACE [--kernel K] [--config NAME|FILE] [--out DIR] [--duration S]\n"
@@ -484,6 +485,15 @@ int main(int argc, char** argv) {
     for (const auto& t : maglev::hil::kErrorTerms) {
       std::printf("| `%s` | %s | %g | %s | %g | %s |\n", t.key, kDraw[static_cast<int>(t.draw)], t.magnitude,
                   t.lo_fraction > 0 ? std::to_string(t.lo_fraction).substr(0, 5).c_str() : "-", t.max, t.source);
+    }
+    return 0;
+  }
+  if (a.cmd == "floor-classes") {
+    // The named floors as a markdown table (docs/PLANT.md section 12 is this
+    // output: kFloorClasses is the one source; hil_fidelity_floor checks it).
+    std::printf("| `floor =` | rms velocity per one-third-octave band, 1-80 Hz | source |\n|---|---|---|\n");
+    for (const auto& c : maglev::hil::kFloorClasses) {
+      std::printf("| `%s` | %g um/s | %s |\n", c.name, c.band_velocity_m_per_s * 1e6, c.source);
     }
     return 0;
   }

@@ -14,6 +14,12 @@ refused_option fidelity_floor.scenario "$OUT/x" "--floor: expected none, worksho
 refused_option fidelity_floor.scenario "$OUT/x" "--floor-isolator-hz: 0 (no isolator) or \[0.3, 20\] Hz, got 0.1" \
   --floor vc-c --floor-isolator-hz 0.1
 echo "refusals: ok"
+# docs/PLANT.md's floor table is `maglev-hil floor-classes` (kFloorClasses, the one source).
+"$HIL" floor-classes > "$OUT/floor_classes.md" || fail "floor-classes"
+while IFS= read -r line; do
+  grep -qxF -- "$line" "$DIR/../../../docs/PLANT.md" || fail "docs/PLANT.md lacks the floor-classes line: $line"
+done < "$OUT/floor_classes.md"
+echo "docs/PLANT.md floor table: ok"
 run() {  # run NAME SCENARIO ARGS...
   name=$1; sc=$2; shift 2
   "$HIL" run "$DIR/$sc" --out "$OUT/$name" --no-plots --quiet "$@" > "$OUT/$name.log" 2>&1 ||

@@ -42,10 +42,10 @@ struct FloorClass {
 };
 inline constexpr FloorClass kFloorClasses[] = {
     {"none", 0.0, "no floor motion (the default)"},
-    {"workshop", 800e-6, "ISO 2631-2 workshop curve (Gordon 1991, Table 1)"},
-    {"office", 400e-6, "ISO 2631-2 office curve (Gordon 1991, Table 1)"},
-    {"residential", 200e-6, "ISO 2631-2 residential (day) curve (Gordon 1991, Table 1)"},
-    {"operating-theatre", 100e-6, "ISO 2631-2 operating theatre curve (Gordon 1991, Table 1)"},
+    {"workshop", 800e-6, "ISO 2631-2 workshop curve, as tabulated with the VC curves (Gordon 1991)"},
+    {"office", 400e-6, "ISO 2631-2 office curve, as tabulated with the VC curves (Gordon 1991)"},
+    {"residential", 200e-6, "ISO 2631-2 residential (day) curve, as tabulated with the VC curves (Gordon 1991)"},
+    {"operating-theatre", 100e-6, "ISO 2631-2 operating theatre curve, as tabulated with the VC curves (Gordon 1991)"},
     {"vc-a", 50e-6, "VC-A (Gordon 1991; IEST-RP-CC012)"},
     {"vc-b", 25e-6, "VC-B (Gordon 1991; IEST-RP-CC012)"},
     {"vc-c", 12.5e-6, "VC-C (Gordon 1991; IEST-RP-CC012)"},
