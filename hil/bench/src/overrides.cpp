@@ -214,17 +214,17 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       floor_num("floor_band_velocity_m_per_s", 0.0, FC::kMaxBandVelocity_m_per_s,
                 "[0, 2e-3] m/s (0: none; 2e-3 is 2.5x the workshop curve)", &f.band_velocity_m_per_s);
     }
-    floor_num("floor_isolator_hz", 0.0, FC::kMaxIsolator_Hz, "0 (no isolator) or [0.3, 20] Hz", &f.isolator_hz);
-    if (f.isolator_hz > 0.0 && f.isolator_hz < FC::kMinIsolator_Hz) {
-      plant_fail("floor_isolator_hz", "0 (no isolator) or [0.3, 20] Hz");
+    // The isolator: the scenario's key, then --floor-isolator-hz; one range.
+    if (const auto it = sc.plant.find("floor_isolator_hz"); it != sc.plant.end()) {
+      const auto x = scenario::parse_number(it->second);
+      if (!x) plant_fail("floor_isolator_hz", "not a number: '" + it->second + "'");
+      else if (!FC::isolator_hz_ok(*x)) plant_fail("floor_isolator_hz", std::string(FC::kIsolatorRange) + ", got " + it->second);
+      else f.isolator_hz = *x;
     }
     if (o->floor_isolator_override) {
       const double hz = *o->floor_isolator_override;
-      if (!(hz == 0.0 || (hz >= FC::kMinIsolator_Hz && hz <= FC::kMaxIsolator_Hz))) {
-        fail("--floor-isolator-hz: 0 (no isolator) or [0.3, 20] Hz, got " + std::to_string(hz));
-      } else {
-        f.isolator_hz = hz;
-      }
+      if (!FC::isolator_hz_ok(hz)) fail("--floor-isolator-hz: " + std::string(FC::kIsolatorRange) + ", got " + std::to_string(hz));
+      else f.isolator_hz = hz;
     }
     floor_num("floor_isolator_damping", FC::kMinIsolatorDamping, FC::kMaxIsolatorDamping, "[0.01, 2]",
               &f.isolator_damping);

@@ -21,6 +21,12 @@ namespace {
 constexpr std::int32_t kMax = INT32_MAX;
 constexpr std::int32_t kMin = -INT32_MAX;
 Q7_24 R(std::int32_t raw) { return Q7_24::from_raw(raw); }
+// A random positive double of any binary exponent from 2^-60 to 2^64 (the
+// exponent first, then the 52-bit fraction).
+double RandomMagnitude(std::uint64_t* s) {
+  const int e = static_cast<int>(NextRandom(s) % 125u) - 60;
+  return std::ldexp(1.0 + static_cast<double>(NextRandom(s) >> 11) * 0x1.0p-53, e);
+}
 }  // namespace
 
 TEST_GROUP(Fixed){};
@@ -73,9 +79,7 @@ TEST(Fixed, DoubleToRawFastPathEqualsTheGeneralPath) {
 #endif
   std::uint64_t s = 7;
   for (int i = 0; i < kSamples; ++i) {
-    const int e = static_cast<int>(NextRandom(&s) % 125u) - 60;
-    const double frac = 1.0 + static_cast<double>(NextRandom(&s) >> 11) * 0x1.0p-53;
-    double v = std::ldexp(frac, e);
+    double v = RandomMagnitude(&s);
     if (i % 4 == 1) v = std::floor(v) + 0.5;  // ties
     if (NextRandom(&s) & 1u) v = -v;
     for (double limit : limits) {
@@ -315,8 +319,7 @@ TEST(Saturation, OneTestSaturationsEqualTheTwoSidedForms) {
 #endif
   std::uint64_t s = 11;
   for (int i = 0; i < kSamples; ++i) {
-    const int e = static_cast<int>(NextRandom(&s) % 125u) - 60;
-    const double v = std::ldexp(1.0 + static_cast<double>(NextRandom(&s) >> 11) * 0x1.0p-53, e);
+    const double v = RandomMagnitude(&s);
     values.push_back((NextRandom(&s) & 1u) ? -v : v);
   }
   int checked = 0;

@@ -70,6 +70,8 @@ struct FloorVibrationConfig {
   static constexpr double kMaxBandVelocity_m_per_s = 2e-3;  // 2.5x the workshop curve
   static constexpr double kMinIsolator_Hz = 0.3, kMaxIsolator_Hz = 20.0;
   static constexpr double kMinIsolatorDamping = 0.01, kMaxIsolatorDamping = 2.0;
+  static constexpr const char* kIsolatorRange = "0 (no isolator) or [0.3, 20] Hz";
+  static bool isolator_hz_ok(double hz) { return hz == 0.0 || (hz >= kMinIsolator_Hz && hz <= kMaxIsolator_Hz); }
   bool active() const { return band_velocity_m_per_s > 0.0; }
 };
 

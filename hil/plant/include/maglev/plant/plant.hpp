@@ -133,7 +133,6 @@ class Plant {
   double mass_kg() const { return mass_; }
   const Eigen::Vector3d& inertia_kgm2() const { return inertia_; }
   double tick_s() const { return tick_s_; }
-  const FloorVibration& floor_vibration() const { return floor_; }
   double suspension_stiffness_N_per_m() const { return k_susp_; }
   const std::array<CoilSide, 2 * kCoils>& coil_sides() const { return sides_; }
 

@@ -7,13 +7,13 @@
 // lists every element with its source.
 #pragma once
 
-#include "maglev/plant/floor_vibration.hpp"
 #include <array>
 #include <cstdint>
 #include <vector>
 
 #include "maglev/io/sensor_sample.hpp"
 #include "maglev/io/stage_parameters.hpp"
+#include "maglev/plant/floor_vibration.hpp"
 #include "maglev/plant/rng.hpp"
 
 namespace maglev::hil {
