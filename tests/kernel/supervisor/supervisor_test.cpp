@@ -142,6 +142,40 @@ TEST(Supervisor, PeakCurrentCommandedLandsMeasuredCutsCurrents) {
   CHECK(ok.tick().active == FaultCode::kNone);
 }
 
+// The coil checks compare maxima over the coils on a normal tick (one
+// compare per check, not per coil); the fault still names the first coil in
+// coil order, with its own value, and a NaN current trips nothing (as the
+// per-coil compare it replaced: NaN > limit is false).
+TEST(Supervisor, CoilChecksNameTheFirstTrippingCoilAndIgnoreNaN) {
+  Rig r;
+  r.coil_current_cmd_A[6] = 4.3f;
+  r.coil_current_cmd_A[3] = -4.1f;
+  r.coil_current_cmd_A[5] = 4.9f;
+  const auto& s = r.tick();
+  CHECK(s.first_fault.code == FaultCode::kPeakCurrentCommanded);
+  LONGS_EQUAL(3, s.first_fault.axis);
+  DOUBLES_EQUAL(-4.1, s.first_fault.value, 1e-6);
+  Rig m;
+  m.in.coil_current_measured_A[1] = -4.8f;
+  m.coil_current_cmd_A[1] = -4.8f;
+  m.in.coil_current_measured_A[0] = 4.7f;
+  m.coil_current_cmd_A[0] = 4.7f;
+  const auto& sm = m.tick();
+  CHECK(sm.first_fault.code == FaultCode::kPeakCurrentMeasured);  // before the commanded one
+  LONGS_EQUAL(0, sm.first_fault.axis);
+  DOUBLES_EQUAL(4.7, sm.first_fault.value, 1e-6);
+  Rig n;
+  n.coil_current_cmd_A[2] = __builtin_nanf("");
+  n.in.coil_current_measured_A[2] = __builtin_nanf("");
+  n.in.coil_current_measured_A[4] = 4.4f;  // inside the margin
+  n.coil_current_cmd_A[4] = 4.0f;         // at the peak, not beyond
+  CHECK(n.tick().active == FaultCode::kNone);
+  n.coil_current_cmd_A[7] = 4.2f;  // a real one beside the NaN still trips
+  const auto& sn = n.tick();
+  CHECK(sn.active == FaultCode::kPeakCurrentCommanded);
+  LONGS_EQUAL(7, sn.first_fault.axis);
+}
+
 TEST(Supervisor, TickOverrunAfterConsecutiveLimit) {
   Rig r;
   r.in.tick_overrun = true;

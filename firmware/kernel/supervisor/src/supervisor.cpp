@@ -111,11 +111,12 @@ struct Supervisor::Checks {
   std::uint8_t jump;          // kCounterJump, bit = beam
   std::int32_t count_delta[io::kInterferometerAxes];
   std::uint8_t lds_bad;       // kDisplacementOutOfRange, bit = sensor
-  std::uint8_t monitor_rail;  // kCurrentMonitorOutOfRange, bit = coil
-  std::uint8_t mismatch;      // kCurrentMismatch, bit = coil
-  std::uint8_t peak_measured;   // kPeakCurrentMeasured
-  std::uint8_t peak_commanded;  // kPeakCurrentCommanded
-  std::uint8_t rms;             // kRmsCurrent
+  // The coil checks: any coil tripping (attribute() finds which, coil_masks()).
+  bool monitor_rail;    // kCurrentMonitorOutOfRange
+  bool mismatch;        // kCurrentMismatch
+  bool peak_measured;   // kPeakCurrentMeasured
+  bool peak_commanded;  // kPeakCurrentCommanded
+  bool rms;             // kRmsCurrent
   std::uint8_t limits;          // bit a: kTravelX/Y/ThetaZ (0..2), kZEnvelope (3), kTiltEnvelope (4, 5)
   std::uint8_t following;       // kFollowingError, bit = axis
   bool stale, frozen, adc_fault, overrun, saturation;
@@ -124,7 +125,7 @@ struct Supervisor::Checks {
 const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   const io::SensorSample& s = *in.sample;
   Checks c;
-  c.jump = c.lds_bad = c.monitor_rail = c.mismatch = c.peak_measured = c.peak_commanded = c.rms = c.following = 0;
+  c.jump = c.lds_bad = c.following = 0;
 
   // --- sensor plausibility --------------------------------------------------
   const std::uint16_t flags = s.status_flags;
@@ -162,37 +163,37 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   // --- currents: one pass over the coils -------------------------------------
   saturated_run_ = next_run(in.current_limited, saturated_run_);
   c.saturation = saturated_run_ >= config_.max_saturated_ticks;
-  const float measured_limit = config_.peak_current_A + config_.measured_current_margin_A;
-  const float commanded_limit = config_.peak_current_A * 1.001f;
-  const float rms2_limit = config_.rms_current_A * config_.rms_current_A;
-  // The masks build in registers (32-bit locals), stored into `c` once: `c`
-  // is passed by reference to attribute(), so byte fields updated in the
-  // loop were re-stored to the stack on every coil.
-  std::uint32_t monitor_rail = 0, mismatch = 0, peak_measured = 0, peak_commanded = 0, rms = 0;
+  // A normal tick needs only "does any coil trip": per check one maximum (VMAXNM)
+  // or one OR, compared once after the loop. The tick where one does trips
+  // attribute(), which finds the coil from the same values (coil_masks()).
+  // fmax ignores a NaN operand and a NaN compares false: a NaN current trips
+  // neither form. (Per-coil bit masks cost ~50 M7 instructions a tick more.)
+  const CoilLimits lim = coil_limits();
   const float mismatch_A = config_.current_mismatch_A;
-  const std::uint16_t mismatch_ticks = config_.current_mismatch_ticks;
+  std::uint32_t monitor_rail = 0;
+  std::uint32_t max_run = 0;
+  float max_measured = 0.0f, max_commanded = 0.0f, max_i2 = 0.0f;
   for (int j = 0; j < io::kCoils; ++j) {
-    const std::uint32_t bit = 1u << j;
     const float m = in.coil_current_measured_A[j];
     const float i = in.coil_current_cmd_A[j];
     const bool off = abs_f(m - i) > mismatch_A;
     const std::uint16_t run = next_run(off, mismatch_run_[j]);
     mismatch_run_[j] = run;
+    max_run = run > max_run ? run : max_run;
     // Thermal model: first-order low-pass of i^2 with the coil's time constant.
     const float i2 = i2_filtered_[j] + thermal_alpha_ * (i * i - i2_filtered_[j]);
     i2_filtered_[j] = i2;
     status_.rms_current_A[j] = std::sqrt(i2);
-    monitor_rail |= at_rail(s.coil_current_adc[j]) ? bit : 0u;
-    mismatch |= run >= mismatch_ticks ? bit : 0u;
-    peak_measured |= abs_f(m) > measured_limit ? bit : 0u;
-    peak_commanded |= abs_f(i) > commanded_limit ? bit : 0u;
-    rms |= i2 > rms2_limit ? bit : 0u;
+    monitor_rail |= at_rail(s.coil_current_adc[j]) ? 1u : 0u;
+    max_measured = std::fmax(max_measured, abs_f(m));
+    max_commanded = std::fmax(max_commanded, abs_f(i));
+    max_i2 = std::fmax(max_i2, i2);
   }
-  c.monitor_rail = static_cast<std::uint8_t>(monitor_rail);
-  c.mismatch = static_cast<std::uint8_t>(mismatch);
-  c.peak_measured = static_cast<std::uint8_t>(peak_measured);
-  c.peak_commanded = static_cast<std::uint8_t>(peak_commanded);
-  c.rms = static_cast<std::uint8_t>(rms);
+  c.monitor_rail = monitor_rail != 0;
+  c.mismatch = max_run >= config_.current_mismatch_ticks;
+  c.peak_measured = max_measured > lim.measured_A;
+  c.peak_commanded = max_commanded > lim.commanded_A;
+  c.rms = max_i2 > lim.rms2_A2;
 
   // --- position limits ---------------------------------------------------------
   const float x = in.pose[0], y = in.pose[1], tz = in.pose[2], z = in.pose[3];
@@ -211,11 +212,11 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   c.following = static_cast<std::uint8_t>(c.following & in.closed_axes);
 
   // --- latch and reaction --------------------------------------------------------
-  const bool any = (in.stage_profile_error | c.beam_lost | c.jump | in.beam_glitch | c.lds_bad | c.monitor_rail |
-                    c.mismatch | c.peak_measured | c.peak_commanded | c.rms | c.limits | c.following) != 0 ||
-                   c.stale || c.frozen || c.adc_fault || c.overrun || c.saturation;
+  const bool any = (in.stage_profile_error | c.beam_lost | c.jump | in.beam_glitch | c.lds_bad | c.limits |
+                    c.following) != 0 ||
+                   c.monitor_rail || c.mismatch || c.peak_measured || c.peak_commanded || c.rms || c.stale || c.frozen || c.adc_fault || c.overrun || c.saturation;
   const Trip t = any ? attribute(in, c) : Trip{};
-  const bool actuator_failed = (c.mismatch | c.peak_measured) != 0;  // it cannot land the stage
+  const bool actuator_failed = c.mismatch || c.peak_measured;  // it cannot land the stage
   status_.in_plane_sensors_valid = c.beam_lost == 0 && c.jump == 0 && !c.stale && !c.frozen;
   status_.z_sensors_valid = c.lds_bad == 0 && !c.adc_fault;
   status_.active = t.code;
@@ -237,6 +238,28 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   return status_;
 }
 
+Supervisor::CoilLimits Supervisor::coil_limits() const {
+  return CoilLimits{config_.peak_current_A + config_.measured_current_margin_A, config_.peak_current_A * 1.001f,
+                    config_.rms_current_A * config_.rms_current_A};
+}
+
+// The coil checks per coil, from the values step() compared this tick (the
+// inputs, the mismatch runs and the thermal state it left): the same
+// outcome coil by coil as its maxima, bit j = coil j.
+Supervisor::CoilMasks Supervisor::coil_masks(const SupervisorInputs& in) const {
+  const CoilLimits lim = coil_limits();
+  CoilMasks m{};
+  for (int j = 0; j < io::kCoils; ++j) {
+    const std::uint32_t bit = 1u << j;
+    m.monitor_rail |= at_rail(in.sample->coil_current_adc[j]) ? bit : 0u;
+    m.mismatch |= mismatch_run_[j] >= config_.current_mismatch_ticks ? bit : 0u;
+    m.peak_measured |= abs_f(in.coil_current_measured_A[j]) > lim.measured_A ? bit : 0u;
+    m.peak_commanded |= abs_f(in.coil_current_cmd_A[j]) > lim.commanded_A ? bit : 0u;
+    m.rms |= i2_filtered_[j] > lim.rms2_A2 ? bit : 0u;
+  }
+  return m;
+}
+
 // The first tripping check in priority order -- the most fundamental cause
 // first (a lost beam also produces a following error) -- with its axis and
 // value. The order is the contract (tests/kernel/supervisor): configuration,
@@ -246,6 +269,7 @@ Supervisor::Trip Supervisor::attribute(const SupervisorInputs& in, const Checks&
   Trip t;
   const auto bit = [](std::uint32_t mask, int k) { return (mask & (1u << k)) != 0; };
   const auto u8 = [](int k) { return static_cast<std::uint8_t>(k); };
+  const CoilMasks cm = coil_masks(in);
   note(t, in.stage_profile_error != 0, FaultCode::kStageProfileInvalid, kNoAxis,
        static_cast<float>(in.stage_profile_error));
   for (int a = 0; a < io::kInterferometerAxes; ++a) note(t, bit(c.beam_lost, a), FaultCode::kBeamLoss, u8(a), 0.0f);
@@ -269,22 +293,22 @@ Supervisor::Trip Supervisor::attribute(const SupervisorInputs& in, const Checks&
     note(t, bit(c.lds_bad, k), FaultCode::kDisplacementOutOfRange, u8(k), static_cast<float>(s.displacement_adc[k]));
   }
   for (int j = 0; j < io::kCoils; ++j) {
-    note(t, bit(c.monitor_rail, j), FaultCode::kCurrentMonitorOutOfRange, u8(j),
+    note(t, bit(cm.monitor_rail, j), FaultCode::kCurrentMonitorOutOfRange, u8(j),
          static_cast<float>(s.coil_current_adc[j]));
   }
   note(t, c.overrun, FaultCode::kTickOverrun, kNoAxis, static_cast<float>(overrun_run_));
   note(t, c.saturation, FaultCode::kCurrentSaturation, kNoAxis, static_cast<float>(saturated_run_));
   for (int j = 0; j < io::kCoils; ++j) {
-    note(t, bit(c.mismatch, j), FaultCode::kCurrentMismatch, u8(j), in.coil_current_measured_A[j]);
+    note(t, bit(cm.mismatch, j), FaultCode::kCurrentMismatch, u8(j), in.coil_current_measured_A[j]);
   }
   for (int j = 0; j < io::kCoils; ++j) {
-    note(t, bit(c.peak_measured, j), FaultCode::kPeakCurrentMeasured, u8(j), in.coil_current_measured_A[j]);
+    note(t, bit(cm.peak_measured, j), FaultCode::kPeakCurrentMeasured, u8(j), in.coil_current_measured_A[j]);
   }
   for (int j = 0; j < io::kCoils; ++j) {
-    note(t, bit(c.peak_commanded, j), FaultCode::kPeakCurrentCommanded, u8(j), in.coil_current_cmd_A[j]);
+    note(t, bit(cm.peak_commanded, j), FaultCode::kPeakCurrentCommanded, u8(j), in.coil_current_cmd_A[j]);
   }
   for (int j = 0; j < io::kCoils; ++j) {
-    note(t, bit(c.rms, j), FaultCode::kRmsCurrent, u8(j), status_.rms_current_A[j]);
+    note(t, bit(cm.rms, j), FaultCode::kRmsCurrent, u8(j), status_.rms_current_A[j]);
   }
   note(t, bit(c.limits, 0), FaultCode::kTravelX, 0, in.pose[0]);
   note(t, bit(c.limits, 1), FaultCode::kTravelY, 1, in.pose[1]);

@@ -180,6 +180,18 @@ class Supervisor {
     float value = 0.0f;
   };
   struct Checks;  // every check's outcome of one tick, as bits (supervisor.cpp)
+  // The coil current limits as the checks compare them.
+  struct CoilLimits {
+    float measured_A;   // peak + the monitor's margin
+    float commanded_A;  // peak, 0.1 % over
+    float rms2_A2;      // rms limit squared: compared with the filtered i^2
+  };
+  // The coil checks coil by coil (bit j = coil j), for attribute().
+  struct CoilMasks {
+    std::uint32_t monitor_rail, mismatch, peak_measured, peak_commanded, rms;
+  };
+  CoilLimits coil_limits() const;
+  CoilMasks coil_masks(const SupervisorInputs& in) const;
   Trip attribute(const SupervisorInputs& in, const Checks& c) const;
   // Keeps the first tripping check only.
   static void note(Trip& t, bool tripped, FaultCode code, std::uint8_t axis, float value);
