@@ -53,13 +53,12 @@ MAGLEV_CONFIG_CODE bool Invert3(const double m[3][3], double inv[3][3]) {
   return true;
 }
 
-// Branch-free select for int64 (keeps the tick's cost data-independent).
-constexpr std::int64_t Select(bool c, std::int64_t a, std::int64_t b) {
-  const std::int64_t mask = -static_cast<std::int64_t>(c);
-  return (a & mask) | (b & ~mask);
-}
-
 using numeric::Int64ToDouble;
+
+// |v| as uint32: exact for every int32, INT32_MIN included (2^31).
+constexpr std::uint32_t UnsignedMagnitude(std::int32_t v) {
+  return v < 0 ? 0u - static_cast<std::uint32_t>(v) : static_cast<std::uint32_t>(v);
+}
 
 }  // namespace
 
@@ -250,10 +249,9 @@ bool ExtendCounter(std::uint32_t raw, std::uint32_t* last_raw, std::int64_t* cou
                    std::int64_t max_counts_per_tick) {
   // Modular difference reinterpreted as signed: correct across the 2^32 wrap
   // in both directions as long as |true delta| < 2^31 per tick.
-  const std::int64_t delta = static_cast<std::int32_t>(raw - *last_raw);
-  const std::int64_t mag = delta < 0 ? -delta : delta;
-  const bool plausible = mag <= max_counts_per_tick;
-  *counts = Select(plausible, *counts + delta, *counts);
+  const auto delta = static_cast<std::int32_t>(raw - *last_raw);
+  const bool plausible = std::int64_t{UnsignedMagnitude(delta)} <= max_counts_per_tick;
+  *counts += plausible ? delta : 0;
   *last_raw = plausible ? raw : *last_raw;
   return plausible;
 }
@@ -369,21 +367,32 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   }
 
   // --- counters ----------------------------------------------------------------
+  // Counts and their steps are int32 wherever they fit: a step is a 32-bit
+  // counter difference, and a kept step (last_step) is at most
+  // max_counts_per_tick < 1e9 (ApplySensorsToPoseConfig) in magnitude. Only
+  // the extended count and the n-tick prediction after a stale gap need
+  // int64 (each int64 operation is two to four M7 instructions).
   const bool seed = !s.seeded;
-  s.steps_seen = seed ? std::uint8_t{0} : s.steps_seen;
-  s.stale_gap = seed ? std::uint8_t{0} : s.stale_gap;
+  if (seed) {  // once per (re)seed: this sample is the counters' zero
+    s.steps_seen = 0;
+    s.stale_gap = 0;
+    for (int b = 0; b < io::kInterferometerAxes; ++b) {
+      s.last_raw[b] = sample.interferometer_counts[b];
+      s.counts[b] = 0;
+      s.last_step[b] = 0;
+    }
+  }
   // After stale samples the next fresh sample's step covers n = stale_gap + 1
   // ticks.
-  const std::int64_t n = std::int64_t{s.stale_gap} + 1;
+  const std::int32_t n = std::int32_t{s.stale_gap} + 1;
   // The acceleration check needs two real steps after the seed (the seed's
   // own step is zero by construction), and a fresh sample.
   const bool armed = s.max_counts_step_change > 0 && s.steps_seen >= 2 && !stale;
+  const auto max_step = static_cast<std::uint32_t>(s.max_counts_per_tick);      // < 1e9
+  const auto max_change = static_cast<std::uint32_t>(s.max_counts_step_change);  // <= max_step
   double meas_pm[3];
   for (int b = 0; b < io::kInterferometerAxes; ++b) {
     const std::uint32_t raw = sample.interferometer_counts[b];
-    s.last_raw[b] = seed ? raw : s.last_raw[b];
-    s.counts[b] = Select(seed, 0, s.counts[b]);
-    s.last_step[b] = Select(seed, 0, s.last_step[b]);
     // A step within the speed bound that differs from the one the last step
     // predicts (n of them) by more than any actuator can make it, over n
     // ticks, plus one tick's worth of steps (a sample that reaches the
@@ -392,34 +401,36 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
     // counter. Count the predicted step instead and take the rest as an
     // offset of the raw counter, so that a jump that stays, or one that
     // comes back, leaves the pose where the mirror is.
-    const std::int64_t step = static_cast<std::int32_t>(raw - s.last_raw[b]);
-    const std::int64_t expected = n * s.last_step[b];
+    const auto step = static_cast<std::int32_t>(raw - s.last_raw[b]);
+    const std::int32_t last_step = s.last_step[b];
+    const std::uint32_t speed_mag = UnsignedMagnitude(last_step);
+    // n = 1 on every tick but the first after a stale gap: no products then.
+    // (max_change + speed_mag < 2^31: both below 1e9.)
+    const std::int64_t expected = n == 1 ? std::int64_t{last_step} : std::int64_t{n} * last_step;
+    const std::int64_t tolerance = n == 1 ? std::int64_t{max_change} + speed_mag
+                                          : std::int64_t{max_change} * n * n + speed_mag;
     const std::int64_t change = step - expected;
     const std::int64_t change_mag = change < 0 ? -change : change;
-    const std::int64_t step_mag = step < 0 ? -step : step;
-    const std::int64_t speed_mag = s.last_step[b] < 0 ? -s.last_step[b] : s.last_step[b];
-    const std::int64_t tolerance = s.max_counts_step_change * n * n + speed_mag;
-    const bool glitch = armed && step_mag <= s.max_counts_per_tick && change_mag > tolerance;
+    const bool glitch = armed && UnsignedMagnitude(step) <= max_step && change_mag > tolerance;
     const std::uint32_t used = glitch ? s.last_raw[b] + static_cast<std::uint32_t>(expected) : raw;
-    const std::int64_t before = s.counts[b];
-    const bool ok = ExtendCounter(used, &s.last_raw[b], &s.counts[b], s.max_counts_per_tick);
-    s.last_raw[b] = glitch ? raw : s.last_raw[b];
+    // ExtendCounter's rule, with the step it took kept in int32.
+    const auto delta = static_cast<std::int32_t>(used - s.last_raw[b]);
+    const bool ok = UnsignedMagnitude(delta) <= max_step;
+    const std::int32_t moved = ok ? delta : 0;
+    s.counts[b] += moved;
+    s.last_raw[b] = glitch ? raw : (ok ? used : s.last_raw[b]);
     // The step per tick; after a stale gap (n > 1) the gap's mean step,
-    // truncated toward zero. In double: an int64 division is a library call
-    // on the M7. Exact: |moved| < 2^31 n, and a non-integer moved/n lies at
-    // least 1/n from an integer, far beyond double's rounding.
-    // Only after a stale gap (n > 1): every other tick's step is `moved` itself.
-    const std::int64_t moved = s.counts[b] - before;
-    std::int64_t truncated = moved;
+    // truncated toward zero. In double: an integer division is a library
+    // call on the M7. Exact: |moved| < 2^31 n, and a non-integer moved/n lies
+    // at least 1/n from an integer, far beyond double's rounding.
+    std::int32_t truncated = moved;
     if (n != 1) {
-      const double mean_step = Int64ToDouble(moved) / static_cast<double>(n);
-      const std::int64_t nearest = numeric::RoundToInt64(mean_step);
-      const double back = Int64ToDouble(nearest);
-      truncated = nearest - (mean_step >= 0.0 ? (back > mean_step ? 1 : 0) : (back < mean_step ? -1 : 0));
+      const double mean_step = static_cast<double>(moved) / static_cast<double>(n);
+      truncated = static_cast<std::int32_t>(mean_step);  // VCVT truncates toward zero
     }
-    s.last_step[b] = stale ? s.last_step[b] : truncated;
+    s.last_step[b] = stale ? last_step : truncated;
     out.beam_glitch = static_cast<std::uint8_t>(out.beam_glitch | (glitch ? (1u << b) : 0u));
-    out.glitch_counts[b] = Select(glitch, change, 0);
+    out.glitch_counts[b] = glitch ? change : 0;
     s.jump_latched = static_cast<std::uint8_t>(s.jump_latched | (ok ? 0u : (1u << b)));
     // counts * lsb in double: |counts| < 2^53 converts exactly, and the
     // product's rounding is < 1e-4 pm anywhere within a metre of travel.

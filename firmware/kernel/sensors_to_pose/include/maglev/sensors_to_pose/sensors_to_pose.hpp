@@ -213,7 +213,8 @@ struct SensorsToPoseState {
   std::uint32_t last_raw[io::kInterferometerAxes];
   std::int64_t counts[io::kInterferometerAxes];
   std::uint8_t jump_latched;  // bit b: beam b saw an implausible jump (sticky until re-seed)
-  std::int64_t last_step[io::kInterferometerAxes];  // counts per tick of the last fresh step
+  // Counts per tick of the last fresh step: |.| <= max_counts_per_tick < 1e9.
+  std::int32_t last_step[io::kInterferometerAxes];
   std::uint8_t steps_seen;   // fresh steps since the re-seed (saturates at 2)
   std::uint8_t stale_gap;    // stale samples since the last fresh one (saturates)
   bool seeded;
