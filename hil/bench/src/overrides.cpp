@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <iterator>
 
 #include "maglev/bench/axes.hpp"
@@ -198,7 +199,17 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     };
     std::optional<std::string> name;
     if (const auto it = sc.plant.find("floor"); it != sc.plant.end()) name = it->second;
-    if (o->floor_override) name = *o->floor_override;
+    if (o->floor_override) {
+      // The command line wins, visibly: a run that replaces the scenario's
+      // floor says so (metrics.json records the level used).
+      for (const char* key : {"floor", "floor_band_velocity_m_per_s"}) {
+        if (const auto it = sc.plant.find(key); it != sc.plant.end()) {
+          std::fprintf(stderr, "note: --floor %s replaces the scenario's [plant] %s = %s\n",
+                       o->floor_override->c_str(), key, it->second.c_str());
+        }
+      }
+      name = *o->floor_override;
+    }
     if (name) {
       const int c = hil::find_floor_class(*name);
       if (c < 0) {
@@ -210,9 +221,12 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     }
     if (sc.plant.count("floor_band_velocity_m_per_s") != 0 && sc.plant.count("floor") != 0) {
       plant_fail("floor_band_velocity_m_per_s", "give floor or floor_band_velocity_m_per_s, not both");
-    } else if (!o->floor_override) {
+    } else {
+      // Checked under --floor too: a bad key is refused whatever replaces it.
+      double band = f.band_velocity_m_per_s;
       floor_num("floor_band_velocity_m_per_s", 0.0, FC::kMaxBandVelocity_m_per_s,
-                "[0, 2e-3] m/s (0: none; 2e-3 is 2.5x the workshop curve)", &f.band_velocity_m_per_s);
+                "[0, 2e-3] m/s (0: none; 2e-3 is 2.5x the workshop curve)", &band);
+      if (!o->floor_override) f.band_velocity_m_per_s = band;
     }
     // The isolator: the scenario's key, then --floor-isolator-hz; one range.
     if (const auto it = sc.plant.find("floor_isolator_hz"); it != sc.plant.end()) {
@@ -223,6 +237,10 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     }
     if (o->floor_isolator_override) {
       const double hz = *o->floor_isolator_override;
+      if (const auto it = sc.plant.find("floor_isolator_hz"); it != sc.plant.end()) {
+        std::fprintf(stderr, "note: --floor-isolator-hz %g replaces the scenario's [plant] floor_isolator_hz = %s\n", hz,
+                     it->second.c_str());
+      }
       if (!FC::isolator_hz_ok(hz)) fail("--floor-isolator-hz: " + std::string(FC::kIsolatorRange) + ", got " + std::to_string(hz));
       else f.isolator_hz = hz;
     }

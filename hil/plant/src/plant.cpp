@@ -1077,8 +1077,7 @@ Wrench Plant::TotalWrench(const BodyState& state, const double* currents_A) cons
     for (int i = 0; i < 3; ++i) acc.f[i] += external_force_N_[i];
   }
   if (floor_.active()) {
-    acc.f[0] += floor_force_N_[0];
-    acc.f[1] += floor_force_N_[1];
+    for (int a = 0; a < FloorVibration::kAxes; ++a) acc.f[a] += floor_force_N_[a];
   }
   return ToWrench(k, acc);
 }
@@ -1168,8 +1167,7 @@ void Plant::advance(double dt_s) {
     // In the base's frame the floor's acceleration u'' acts as -m u''.
     double a[FloorVibration::kAxes];
     floor_.Next(dt_s, a);
-    floor_force_N_[0] = -mass_ * a[0];
-    floor_force_N_[1] = -mass_ * a[1];
+    for (int k = 0; k < FloorVibration::kAxes; ++k) floor_force_N_[k] = -mass_ * a[k];
   }
   double i0[kCoils];
   double i1[kCoils];

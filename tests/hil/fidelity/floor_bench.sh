@@ -13,6 +13,9 @@ expect bad_floor_velocity.scenario "bad_floor_velocity.scenario:7: floor_band_ve
 refused_option fidelity_floor.scenario "$OUT/x" "--floor: expected none, workshop, .* got 'basement'" --floor basement
 refused_option fidelity_floor.scenario "$OUT/x" "--floor-isolator-hz: 0 (no isolator) or \[0.3, 20\] Hz, got 0.1" \
   --floor vc-c --floor-isolator-hz 0.1
+# A bad scenario key is refused whatever --floor puts in its place.
+refused_option bad_floor_velocity.scenario "$OUT/x" "bad_floor_velocity.scenario:7: floor_band_velocity_m_per_s: 0.01 is outside" \
+  --floor vc-b
 echo "refusals: ok"
 # docs/PLANT.md's floor table is `maglev-hil floor-classes` (kFloorClasses, the one source).
 "$HIL" floor-classes > "$OUT/floor_classes.md" || fail "floor-classes"
@@ -30,6 +33,12 @@ run vcd fidelity_floor.scenario --floor vc-d
 run vcc fidelity_floor.scenario --floor vc-c
 run table fidelity_floor_table.scenario
 run table_cli fidelity_floor.scenario --floor vc-c --floor-isolator-hz 1.5
+# The command line replacing the scenario's floor says so.
+run table_over fidelity_floor_table.scenario --floor vc-d --floor-isolator-hz 2
+grep -q "note: --floor vc-d replaces the scenario's \[plant\] floor = vc-c" "$OUT/table_over.log" ||
+  fail "--floor replaced the scenario's floor silently"
+grep -q "note: --floor-isolator-hz 2 replaces the scenario's \[plant\] floor_isolator_hz = 1.5" "$OUT/table_over.log" ||
+  fail "--floor-isolator-hz replaced the scenario's isolator silently"
 "$PY" - "$OUT" <<'PYEOF' || exit 1
 import json, sys
 out = sys.argv[1]
@@ -41,10 +50,18 @@ for n, d in m.items():
 assert not any(k.startswith("plant_floor_") for k in m["none"]), "no floor, yet plant_floor_* recorded"
 assert m["vcc"]["plant_floor_band_velocity_m_per_s"] == 12.5e-6 and m["vcc"]["plant_floor_isolator_hz"] == 0
 assert m["table"]["plant_floor_isolator_hz"] == 1.5 and m["table"]["plant_floor_isolator_damping"] == 0.1
+over = json.load(open(f"{out}/table_over/metrics.json"))
+assert over["plant_floor_band_velocity_m_per_s"] == 6.25e-6 and over["plant_floor_isolator_hz"] == 2
 x = {n: d["x_rest_rms_noise_m"] for n, d in m.items()}
 y = {n: d["y_rest_rms_noise_m"] for n, d in m.items()}
+z = {n: d["z_rest_rms_noise_m"] for n, d in m.items()}
 print("x rest rms (nm): " + ", ".join(f"{n} {v*1e9:.2f}" for n, v in x.items()))
 print("y rest rms (nm): " + ", ".join(f"{n} {v*1e9:.2f}" for n, v in y.items()))
+print("z rest rms (nm): " + ", ".join(f"{n} {v*1e9:.2f}" for n, v in z.items()))
+# The floor moves vertically too: z's rest noise (the LDS's ~11 nm without
+# a floor) grows on a rigid base, and the isolator takes most of it away.
+assert z["vcc"] > 1.5 * z["none"], "VC-C on a rigid base adds no z noise"
+assert z["table"] < z["none"] + 0.5 * (z["vcc"] - z["none"]), "the isolator did not cut the floor's z noise"
 for r in (x, y):
     # A rigid base: the floor reaches the loops through S(f) and its 13 dB
     # peak near 45 Hz -- far above the components' ~0.5 nm.

@@ -113,49 +113,58 @@ TEST(FloorVibration, ASeedIsARealizationAndNoneIsNothing) {
   FloorVibration a(Class("vc-d"), kTick_s, 5), b(Class("vc-d"), kTick_s, 5), c(Class("vc-d"), kTick_s, 6);
   bool differs = false;
   for (int k = 0; k < 3000; ++k) {
-    double xa[2], xb[2], xc[2];
+    double xa[FloorVibration::kAxes], xb[FloorVibration::kAxes], xc[FloorVibration::kAxes];
     a.Next(kTick_s, xa);
     b.Next(kTick_s, xb);
     c.Next(kTick_s, xc);
-    CHECK(xa[0] == xb[0] && xa[1] == xb[1]);
+    CHECK(xa[0] == xb[0] && xa[1] == xb[1] && xa[2] == xb[2]);
     differs = differs || xa[0] != xc[0];
   }
   CHECK(differs);
   FloorVibration none;
   CHECK(!none.active());
   CHECK(!FloorVibrationConfig{}.active());
-  double z[2] = {1.0, 1.0};
+  double z[FloorVibration::kAxes] = {1.0, 1.0, 1.0};
   none.Next(kTick_s, z);
-  CHECK(z[0] == 0.0 && z[1] == 0.0);
+  CHECK(z[0] == 0.0 && z[1] == 0.0 && z[2] == 0.0);
   CHECK_EQUAL(-1, hil::find_floor_class("vc-z"));
   CHECK_EQUAL(0, hil::find_floor_class("none"));
 }
 
 TEST(FloorVibration, ThePlantFeelsTheFloorAsMinusMassTimesItsAcceleration) {
   // Two plants, the same state in mid-air, amplifiers off: one tick later
-  // their in-plane velocities differ by the floor's -a dt and nothing else.
+  // their velocities differ by the floor's -a dt, in x, y and z (the floor
+  // moves vertically too), and nothing else.
   hil::PlantConfig quiet = hil::PlantConfig::Ideal();
   quiet.sensor_noise_enabled = false;
   quiet.body.gravity_enabled = false;  // it stays in mid-air
+  // The z spring-damper acts on the platen's motion relative to the base,
+  // which the floor changes: off, so that the floor is the only difference.
+  quiet.suspension.enabled = false;
   hil::PlantConfig shaken = quiet;
   shaken.floor = Class("office");
   hil::Plant p0(quiet, 1), p1(shaken, 1);
   hil::BodyState s = p0.body_state();
-  s.position_m.z() = 30e-6;  // clear of the surface
+  // Clear of the surface: the office floor moves it ~30 um in z in the 50
+  // ticks once no spring holds it.
+  s.position_m.z() = 200e-6;
   p0.set_body_state(s);
   p1.set_body_state(s);
   FloorVibration expected(shaken.floor, p1.tick_s(), 1);
   for (int k = 0; k < 50; ++k) {
-    double a[2];
+    double a[FloorVibration::kAxes];
     expected.Next(p1.tick_s(), a);
-    const double v0x = p0.truth().velocity_m_per_s[0], v1x = p1.truth().velocity_m_per_s[0];
-    const double v0y = p0.truth().velocity_m_per_s[1], v1y = p1.truth().velocity_m_per_s[1];
+    double v0[3], v1[3];
+    for (int i = 0; i < 3; ++i) {
+      v0[i] = p0.truth().velocity_m_per_s[i];
+      v1[i] = p1.truth().velocity_m_per_s[i];
+    }
     p0.advance_tick();
     p1.advance_tick();
-    const double dvx = (p1.truth().velocity_m_per_s[0] - v1x) - (p0.truth().velocity_m_per_s[0] - v0x);
-    const double dvy = (p1.truth().velocity_m_per_s[1] - v1y) - (p0.truth().velocity_m_per_s[1] - v0y);
-    DOUBLES_EQUAL(-a[0] * p1.tick_s(), dvx, 1e-6 * std::fabs(a[0]) * p1.tick_s() + 1e-15);
-    DOUBLES_EQUAL(-a[1] * p1.tick_s(), dvy, 1e-6 * std::fabs(a[1]) * p1.tick_s() + 1e-15);
-    CHECK(p1.truth().velocity_m_per_s[2] == p0.truth().velocity_m_per_s[2]);
+    for (int i = 0; i < 3; ++i) {
+      const double dv = (p1.truth().velocity_m_per_s[i] - v1[i]) - (p0.truth().velocity_m_per_s[i] - v0[i]);
+      DOUBLES_EQUAL(-a[i] * p1.tick_s(), dv, 1e-6 * std::fabs(a[i]) * p1.tick_s() + 1e-15);
+    }
+    CHECK(a[2] != 0.0);
   }
 }

@@ -1,5 +1,5 @@
-// Floor vibration: the building's in-plane motion under the stage's base
-// (issue 15: what sets a real stage's in-plane noise beyond its components).
+// Floor vibration: the building's motion under the stage's base, in x, y and
+// z (issue 15: what sets a real stage's rest noise beyond its components).
 //
 // The magnet array, the interferometers and the laser displacement sensors
 // are all fixed to one base. The levitated platen touches nothing, so the
@@ -10,7 +10,7 @@
 // levitated stage is quiet above its bandwidth only relative to the inertial
 // frame, not to its own metrology.
 //
-// The floor's horizontal velocity is specified the way facilities are: an rms
+// The floor's velocity is specified the way facilities are: an rms
 // velocity per one-third-octave band (the generic vibration criteria, VC-A ..
 // VC-E, and the ISO 2631-2-derived office / workshop curves, Gordon 1991 and
 // Amick et al. 2005), flat in velocity from 1 to 80 Hz. A floor "of class C"
@@ -59,7 +59,7 @@ int find_floor_class(std::string_view name);
 const char* floor_class_names();
 
 struct FloorVibrationConfig {
-  // rms velocity per one-third-octave band, 1-80 Hz, each horizontal axis
+  // rms velocity per one-third-octave band, 1-80 Hz, each axis (x, y, z)
   // (m/s); 0: no floor motion (the default: every run before it is unchanged).
   double band_velocity_m_per_s = 0.0;
   // The base's isolator: natural frequency (Hz; 0: the base stands rigidly
@@ -77,7 +77,7 @@ struct FloorVibrationConfig {
 
 class FloorVibration {
  public:
-  static constexpr int kAxes = 2;                 // x, y
+  static constexpr int kAxes = 3;                 // x, y, z
   static constexpr int kBands = 20;               // 10^(n/10) Hz, n = 0..19: 1 .. 79.4 Hz
   static constexpr int kLinesPerBand = 8;
   static constexpr int kLines = kBands * kLinesPerBand;
@@ -86,7 +86,7 @@ class FloorVibration {
   FloorVibration(const FloorVibrationConfig& config, double tick_s, std::uint64_t seed);
 
   bool active() const { return active_; }
-  // The base's acceleration (x, y; m/s^2) to hold over the tick of length
+  // The base's acceleration (x, y, z; m/s^2) to hold over the tick of length
   // dt_s that starts now, then one tick on.
   void Next(double dt_s, double acc_m_per_s2[kAxes]);
   // At the midpoint of the next tick (tests): the base's displacement,

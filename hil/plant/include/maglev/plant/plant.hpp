@@ -276,7 +276,7 @@ class Plant {
   // Floor vibration (config.floor): the base's motion as the inertial force
   // -m u'' on the CoM (x, y, world), held over each tick.
   FloorVibration floor_;
-  double floor_force_N_[2] = {0.0, 0.0};
+  double floor_force_N_[FloorVibration::kAxes] = {};
   Eigen::Vector3d inertia_;
   double tick_s_;
   double side_force_per_A_;  // N * p
