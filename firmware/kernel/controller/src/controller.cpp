@@ -657,7 +657,7 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
     }
   }
   si.stage_profile_error = stage_profile_error_;
-  si.coil_current_cmd_A = last_current_A_;
+  si.coil_current_cmd_A = status_.coil_current_A;  // last tick's, as commanded
   for (int j = 0; j < io::kCoils; ++j) {
     si.coil_current_measured_A[j] =
         Traits::to_float(MonitorCodeToCurrent_A<Scalar>(sample.coil_current_adc[j], ap.allocation));
@@ -986,14 +986,10 @@ io::ActuatorCommand Controller<Scalar>::coil_currents_to_dac(const Tick& t) {
   if (enable) {
     for (int j = 0; j < io::kCoils; ++j) {
       cmd.dac_code[j] = CurrentToDacCode<Scalar>(t.out.current_A[j], ap.allocation);
-      last_current_A_[j] = Traits::to_float(t.out.current_A[j]);
-      status_.coil_current_A[j] = last_current_A_[j];
+      status_.coil_current_A[j] = Traits::to_float(t.out.current_A[j]);
     }
   } else {  // the safe command's codes are already 0
-    for (int j = 0; j < io::kCoils; ++j) {
-      last_current_A_[j] = 0.0f;
-      status_.coil_current_A[j] = 0.0f;
-    }
+    for (float& i : status_.coil_current_A) i = 0.0f;
   }
   cmd.amplifier_enable = enable;
   last_current_limited_ = enable && t.out.saturated;

@@ -242,6 +242,8 @@ struct ControllerStatus {
   FaultReaction reaction = FaultReaction::kNone;
   bool saturated = false;
   float scale_k = 1.0f;
+  // The currents commanded (0 with the amplifiers off); the supervisor's
+  // next tick reads them here (the controller keeps no second copy).
   float coil_current_A[io::kCoils] = {};
   float effort_A[kAxisCount] = {};          // U into the allocation (= total_effort_A)
   std::uint32_t tick = 0;
@@ -455,7 +457,6 @@ class Controller {
   std::int64_t pending_step_pm_[kAxisCount] = {};  // step() applies and reports it
   Pose64 measured_{};
   double profile_accel_[kAxisCount] = {};
-  float last_current_A_[io::kCoils] = {};
   bool last_current_limited_ = false;  // last tick's allocation scaled the currents down
   std::uint8_t stage_profile_error_ = 0;  // see set_stage_profile_error()
   std::uint32_t homing_ticks_ = 0;

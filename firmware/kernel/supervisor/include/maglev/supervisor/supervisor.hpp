@@ -135,7 +135,7 @@ struct SupervisorInputs {
   float pose[kSequencedAxes];      // measured, SI, Axis order
   float following_error[kSequencedAxes];  // reference - measured, SI
   // Last tick's commanded coil currents (io::kCoils of them), read in place
-  // from the caller's own copy (the controller's last_current_A_): no copy per tick.
+  // from the caller's own copy (the controller's status().coil_current_A): no copy per tick.
   const float* coil_current_cmd_A;
   float coil_current_measured_A[io::kCoils];
   bool current_limited;  // last tick's allocation scaled its currents down (k < 1)
