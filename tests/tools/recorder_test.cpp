@@ -22,7 +22,7 @@ kernel::ControllerStatus status_at(int n) {
   kernel::ControllerStatus st{};
   st.pose.pico[0] = static_cast<std::int64_t>(n) * 1000000;  // n um
   st.reference.pico[0] = st.pose.pico[0] + static_cast<std::int64_t>(n) * 1000;
-  st.total_effort_A[3] = 0.5f;
+  st.effort_A[3] = 0.5f;
   st.state = kernel::SequencerState::kReady;
   return st;
 }

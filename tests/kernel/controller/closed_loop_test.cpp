@@ -362,8 +362,8 @@ TEST(ClosedLoop, ExcitationMeasuresTheOpenLoopGainAndIsBounded) {
       const double co = std::cos(2 * 3.14159265358979323846 * f * t), si = std::sin(2 * 3.14159265358979323846 * f * t);
       lc += static_cast<double>(c.status().loop_effort_A[0]) * co;
       ls += static_cast<double>(c.status().loop_effort_A[0]) * si;
-      tc += static_cast<double>(c.status().total_effort_A[0]) * co;
-      ts += static_cast<double>(c.status().total_effort_A[0]) * si;
+      tc += static_cast<double>(c.status().effort_A[0]) * co;
+      ts += static_cast<double>(c.status().effort_A[0]) * si;
     }
   }
   CHECK(max_d <= 0.2 + 1e-6);

@@ -8,7 +8,7 @@ set -eu
 compare=$1
 host=$2
 work=$3
-record_bytes=256        # kr::kOutputRecordBytes (a change makes this test fail loudly: wrong tick/field)
+record_bytes=232        # kr::kOutputRecordBytes (a change makes this test fail loudly: wrong tick/field)
 effort0_offset=32       # tick, result/enable/state/mask, 8 dac codes, fault..pad, scale_k
 tick=7000
 offset=$((tick * record_bytes + effort0_offset))

@@ -1016,13 +1016,12 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
   if (enable) {
     for (int a = 0; a < kAxisCount; ++a) {
       status_.effort_A[a] = Traits::to_float(t.effort[a]);
-      status_.total_effort_A[a] = status_.effort_A[a];
       status_.loop_effort_A[a] = Traits::to_float(t.loop_out[a]);
       status_.applied_effort_A[a] = Traits::to_float(t.out.applied_effort_A[a]);
     }
   } else {
     for (int a = 0; a < kAxisCount; ++a) {
-      status_.effort_A[a] = status_.total_effort_A[a] = status_.loop_effort_A[a] = status_.applied_effort_A[a] = 0.0f;
+      status_.effort_A[a] = status_.loop_effort_A[a] = status_.applied_effort_A[a] = 0.0f;
     }
   }
   for (int a = 0; a < kAxisCount; ++a) {

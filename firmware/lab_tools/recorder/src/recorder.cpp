@@ -41,7 +41,7 @@ float signal_value(SignalRef s, const kernel::ControllerStatus& st, const io::Se
     case SignalGroup::kPose: return pico_to_si(st.pose.pico[i]);
     case SignalGroup::kReference: return pico_to_si(st.reference.pico[i]);
     case SignalGroup::kError: return pico_to_si(st.reference.pico[i] - st.pose.pico[i]);
-    case SignalGroup::kEffort: return st.total_effort_A[i];
+    case SignalGroup::kEffort: return st.effort_A[i];
     case SignalGroup::kLoopEffort: return st.loop_effort_A[i];
     case SignalGroup::kExcitation: return st.excitation_A[i];
     case SignalGroup::kRefInjection:

@@ -245,16 +245,15 @@ struct ControllerStatus {
   // The currents commanded (0 with the amplifiers off); the supervisor's
   // next tick reads them here (the controller keeps no second copy).
   float coil_current_A[io::kCoils] = {};
-  float effort_A[kAxisCount] = {};          // U into the allocation (= total_effort_A)
+  float effort_A[kAxisCount] = {};          // U = u_loop + d, into the allocation
   std::uint32_t tick = 0;
   ConfigError last_config_error = ConfigError::kOk;
   std::uint8_t config_axis = 0xFF;
   // --- added in round 2 ---
-  // Per axis: the loop's own effort (after its clamp, incl. its feed-forward),
-  // the total U = loop + excitation d that goes into the allocation, and k U
-  // (what was applied). Open-loop gain at the excitation line: L = -u_loop / u_total.
+  // Per axis: the loop's own effort (after its clamp, incl. its feed-forward)
+  // and k U (what was applied); the total U = loop + excitation d is effort_A.
+  // Open-loop gain at the excitation line: L = -u_loop / U.
   float loop_effort_A[kAxisCount] = {};
-  float total_effort_A[kAxisCount] = {};
   float applied_effort_A[kAxisCount] = {};
   float excitation_A[kAxisCount] = {};
   bool excitation_active = false;

@@ -26,7 +26,7 @@ namespace maglev::kernel_replay {
 inline constexpr char kMagic[8] = {'M', 'G', 'L', 'V', 'R', 'P', 'L', '1'};
 // v2: the header's last word is the size of the stage profile that follows
 // it (0: the kernel's default configuration).
-inline constexpr std::uint32_t kFormatVersion = 2;
+inline constexpr std::uint32_t kFormatVersion = 3;  // 3: total_effort_A (= effort_A) gone
 
 // --- byte-level little-endian helpers (both targets are little-endian; the
 // memcpy keeps it alignment- and aliasing-safe) ------------------------------
@@ -78,7 +78,7 @@ struct InputRecord {
 // --- output record: what one tick of Controller<float> produced ---------------
 // kNoCommand in command_result: no command was issued this tick.
 inline constexpr std::uint8_t kNoCommand = 0xFF;
-inline constexpr int kStatusFloats = 1 + 4 * kernel::kAxisCount + io::kCoils;  // scale_k, 4x6 efforts, 8 currents
+inline constexpr int kStatusFloats = 1 + 3 * kernel::kAxisCount + io::kCoils;  // scale_k, 3x6 efforts, 8 currents
 inline constexpr std::size_t kOutputRecordBytes =
     4 + 4 + 2 * io::kCoils + 4 + 4 * static_cast<std::size_t>(kStatusFloats) + 8 * 2 * kernel::kAxisCount;
 
@@ -110,7 +110,6 @@ inline constexpr FieldInfo kOutputFields[] = {
     {"scale_k", FieldKind::kF32, 1},
     {"effort_A", FieldKind::kF32, kernel::kAxisCount},
     {"loop_effort_A", FieldKind::kF32, kernel::kAxisCount},
-    {"total_effort_A", FieldKind::kF32, kernel::kAxisCount},
     {"applied_effort_A", FieldKind::kF32, kernel::kAxisCount},
     {"coil_current_A", FieldKind::kF32, io::kCoils},
     {"pose_pm_or_prad", FieldKind::kI64, kernel::kAxisCount},
@@ -220,7 +219,6 @@ inline void encode_output(const OutputRecord& r, std::uint8_t* out) {
   put<float>(p, s.scale_k);
   for (float v : s.effort_A) put<float>(p, v);
   for (float v : s.loop_effort_A) put<float>(p, v);
-  for (float v : s.total_effort_A) put<float>(p, v);
   for (float v : s.applied_effort_A) put<float>(p, v);
   for (float v : s.coil_current_A) put<float>(p, v);
   for (const kernel::Pose64* pose : {&s.pose, &s.reference}) {
