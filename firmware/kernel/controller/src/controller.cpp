@@ -910,6 +910,7 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
   // reference for the loops only, taken off again below (exact integers).
   const int inj_axis = injection_.axis;
   if (t.reference_injection_pm != 0) reference_.pico[inj_axis] += t.reference_injection_pm;
+#pragma GCC unroll 6
   for (int a = 0; a < kAxisCount; ++a) {
     AxisLoop<Scalar> l = loop(a);
     // Only the error (and this tick's explicit step) become Scalar: +-128 um.
@@ -968,6 +969,7 @@ void Controller<Scalar>::allocate_forces(Tick& t) {
     // The loops' anti-windup works in uncorrected efforts: what they got is k U.
     for (int a = 0; a < kAxisCount; ++a) t.out.applied_effort_A[a] = t.out.scale_k * t.effort[a];
   }
+#pragma GCC unroll 6
   for (int a = 0; a < kAxisCount; ++a) {
     AxisLoop<Scalar> l = loop(a);
     const bool closed = (t.so->closed_axes & (1u << a)) != 0;

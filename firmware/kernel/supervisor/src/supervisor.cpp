@@ -173,6 +173,7 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   std::uint32_t monitor_rail = 0;
   std::uint32_t max_run = 0;
   float max_measured = 0.0f, max_commanded = 0.0f, max_i2 = 0.0f;
+#pragma GCC unroll 8
   for (int j = 0; j < io::kCoils; ++j) {
     const float m = in.coil_current_measured_A[j];
     const float i = in.coil_current_cmd_A[j];
