@@ -130,7 +130,9 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
   hil::ApplyServoRate(static_cast<double>(o->controller.servo_rate_Hz), &o->plant);
   // noise = component | fitted: the fitted density (docs/BENCH.md) stays a
   // named option; nominal and as-built default to the component figures.
+  o->noise_fitted = o->plant_model == hil::PlantModel::kDefault;
   if (const auto it = sc.plant.find("noise"); it != sc.plant.end()) {
+    o->noise_fitted = it->second == "fitted";
     if (it->second == "fitted") {
       const hil::PlantConfig fitted{};
       o->plant.amplifier.current_noise_density_A_per_rtHz = fitted.amplifier.current_noise_density_A_per_rtHz;
@@ -253,6 +255,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     if (k == "floor" || k == "floor_band_velocity_m_per_s" || k == "floor_isolator_hz" || k == "floor_isolator_damping") {
       continue;
     }
+    if (k == "current_noise_scale" || k == "current_noise_density_A_per_rtHz") o->noise_fitted = false;  // its own
     if (k == "payload_kg") num("plant", k, v, Dim::kMass, &p.body.payload_kg);
     else if (k == "current_noise_scale") num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_scale);
     else if (k == "current_noise_density_A_per_rtHz")

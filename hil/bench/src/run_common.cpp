@@ -38,6 +38,7 @@ RunResult new_result(const scenario::Scenario& sc, const Overrides& ov) {
   R.profile = ov.profile_name;
   R.seed = ov.seed;
   R.paper = sc.paper;
+  R.noise_fitted = ov.noise_fitted;
   // Which plant ran, and (as-built) every error drawn: reproducible from
   // error_seed. The default model adds nothing (its metrics.json is the
   // regression oracle's).

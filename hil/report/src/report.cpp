@@ -147,29 +147,41 @@ bool write_trace_csv(const bench::Trace& t, const std::string& path, std::string
 }
 
 namespace {
-// How a measurement compares with the paper's figure. Noise, overshoot,
-// settling/peak times, tracking errors and CCQs are "smaller is better"
-// (ok when <= paper); loop figures (crossover, margins, bandwidths, peaks)
-// and measured step sizes are reproductions (ok within 20 %).
+// How a measurement compares with the paper's figure: always the ratio
+// measured / paper and whether it lies in a band, never "<= paper" (which
+// passed every row of a plant quieter and better damped than the paper's
+// stage, however far from it; issue 15). Loop figures (crossover, margins,
+// bandwidths, peaks), measured step sizes and the levitation time reproduce
+// a design or a plant: band 0.8-1.2x (20 %). Everything else -- noise,
+// overshoot, settling and peak times, tracking errors, CCQs -- is a
+// reproduction of the paper's measured stage: band 0.5-2x. A figure outside
+// says on which side, so a controller that beats the paper reads "below",
+// not "ok".
 std::string verdict(const std::string& k, double measured, double paper) {
-  // A CCQ is a reproduction of the paper's stage, not a bound: "<= paper"
-  // once passed every row of a plant with no coupling to measure (issue 15).
-  // Its verdict is the ratio against a 0.5-2x band.
-  if (k.find("_ccq_") != std::string::npos) {
-    const double ratio = paper != 0.0 ? measured / paper : 0.0;
-    std::ostringstream o;
-    o << "ratio " << std::setprecision(3) << ratio << (ratio >= 0.5 && ratio <= 2.0 ? " (within 0.5-2x)" : " (OUTSIDE 0.5-2x)");
-    return o.str();
-  }
-  static const char* kMatch[] = {"crossover", "phase_margin", "bandwidth", "_peak_dB", "_peak_Hz", "_measured_",
+  static const char* kTight[] = {"crossover", "phase_margin", "bandwidth", "_peak_dB", "_peak_Hz", "_measured_",
                                  "levitation_time"};
-  for (const char* m : kMatch) {
+  double lo = 0.5, hi = 2.0;
+  const char* band = "0.5-2x";
+  for (const char* m : kTight) {
     if (k.find(m) != std::string::npos) {
-      const double rel = paper != 0.0 ? std::fabs(measured - paper) / std::fabs(paper) : std::fabs(measured);
-      return rel <= 0.20 ? "ok (within 20 %)" : "DIFFERS (> 20 %)";
+      lo = 0.8;
+      hi = 1.2;
+      band = "0.8-1.2x";
     }
   }
-  return std::fabs(measured) <= std::fabs(paper) ? "ok (<= paper)" : "ABOVE paper";
+  std::ostringstream o;
+  if (paper == 0.0) {
+    o << "no ratio (paper 0)";
+    return o.str();
+  }
+  const double ratio = measured / paper;
+  o << "ratio " << std::setprecision(3) << ratio;
+  if (ratio >= lo && ratio <= hi) {
+    o << " (within " << band << ")";
+  } else {
+    o << " (OUTSIDE " << band << ", " << (ratio < lo ? "below" : "above") << ")";
+  }
+  return o.str();
 }
 }  // namespace
 
@@ -201,8 +213,11 @@ std::string format_table(const bench::RunResult& r) {
       if (m == r.metrics.end()) {
         o << std::setw(13) << "(missing)" << std::setw(13) << cell(p) << "  not measured\n";
       } else {
-        o << std::setw(13) << cell(m->second) << std::setw(13) << cell(p) << "  " << verdict(k, m->second, p)
-          << "\n";
+        o << std::setw(13) << cell(m->second) << std::setw(13) << cell(p) << "  " << verdict(k, m->second, p);
+        // A rest noise from the density identified from this very figure
+        // matches it by construction: labelled, not a result.
+        if (r.noise_fitted && k.find("_rms_noise_") != std::string::npos) o << " FITTED (noise = fitted)";
+        o << "\n";
       }
     }
   }

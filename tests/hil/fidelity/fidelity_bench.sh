@@ -82,4 +82,17 @@ assert on.get("lds_target_steps_repaired", 0) >= 1, "repair on: no target step r
 assert off["fault_code"] != 0 and "lds_target_steps_repaired" not in off, "repair off: the move did not fault on the target steps"
 print(f"LDS target steps: repaired {on['lds_target_steps_repaired']:.0f}, Ready; off: fault {off['fault_code']:.0f}")
 PYEOF
+# Verdicts against the paper are a ratio with a band, never "<= paper"; a
+# rest noise from the fitted density says so (the default plant's).
+sc="$DIR/../../../hil/scenarios/x_steps_10nm.scenario"
+"$HIL" run "$sc" --out "$OUT/v_default" --no-plots > "$OUT/v_default.log" 2>&1 || { cat "$OUT/v_default.log"; fail "run v_default"; }
+"$HIL" run "$sc" --plant as-built --out "$OUT/v_asbuilt" --no-plots > "$OUT/v_asbuilt.log" 2>&1 ||
+  { cat "$OUT/v_asbuilt.log"; fail "run v_asbuilt"; }
+grep -q "<= paper" "$OUT/v_default.log" "$OUT/v_asbuilt.log" && fail "a '<= paper' verdict"
+grep -Eq "x_rest_rms_noise_m .*ratio [0-9.]+ \(within 0.5-2x\) FITTED \(noise = fitted\)" "$OUT/v_default.log" ||
+  { cat "$OUT/v_default.log"; fail "the default plant's rest noise is not labelled fitted"; }
+grep -Eq "x_rest_rms_noise_m .*ratio 0\.[0-9]+ \(OUTSIDE 0.5-2x, below\)$" "$OUT/v_asbuilt.log" ||
+  { cat "$OUT/v_asbuilt.log"; fail "the as-built rest noise verdict"; }
+grep -q "FITTED" "$OUT/v_asbuilt.log" && fail "component noise labelled fitted"
+echo "verdicts: ok"
 echo "hil_fidelity_bench: passed"

@@ -35,6 +35,11 @@ struct Overrides {
   // [plant] model (docs/PLANT.md "Plant models and error sets"); the command
   // line's --plant / --error-seed win over the scenario's keys.
   hil::PlantModel plant_model = hil::PlantModel::kDefault;
+  // The plant's force-producing current noise is the density identified from
+  // paper 000's 3 nm (docs/BENCH.md, "Noise model"): the default model, or
+  // `noise = fitted`, and no density of the scenario's own. A rest-noise
+  // figure then matches the paper by construction; the report says so.
+  bool noise_fitted = false;
   std::optional<hil::PlantModel> plant_model_override;
   std::optional<std::uint64_t> error_seed_override;
   std::optional<std::string> floor_override;  // --floor CLASS: overrides [plant] floor

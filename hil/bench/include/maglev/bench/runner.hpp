@@ -86,6 +86,7 @@ struct RunResult {
   Trace trace;
   std::map<std::string, double> metrics;  // flat, SI units in the names
   std::map<std::string, double> paper;    // the scenario's [paper] values
+  bool noise_fitted = false;  // Overrides::noise_fitted: rest noise matches the paper by construction
   std::vector<CommandLog> commands;
   std::vector<std::string> warnings;
   double wall_s = 0.0;
