@@ -714,3 +714,39 @@ TEST(ClosedLoop, AFilterEnabledWhileLevitatedStartsFromTheSignal) {
   for (int n = 0; n < 2000; ++n) s.tick(c);
   CHECK(c.status().state == SequencerState::kReady);
 }
+
+// The lab injection at the kernel's boundary: clamped to its limit at the
+// reference and at the effort, and a NaN injects nothing (it used to reach the
+// int64 reference through a float -> int64 conversion of NaN, undefined).
+TEST(ClosedLoop, InjectionIsClampedAndANaNInjectsNothing) {
+  static Controller<float> c;
+  AxisStage s(5);
+  CHECK(levitate_to_ready(c, s));
+  for (int n = 0; n < 500; ++n) s.tick(c);
+  const int x = axis_index(Axis::kX);
+  Injection in{};
+  in.active = true;
+  in.axis = static_cast<std::uint8_t>(x);
+  in.at_reference = true;
+  in.value = 1.0f;  // 1 m: far above max_step
+  c.set_injection(in);
+  s.tick(c);
+  CHECK(c.status().injection_active);
+  DOUBLES_EQUAL(c.config().references.max_step[x], c.status().reference_injection, 0.0);
+  in.value = __builtin_nanf("");
+  c.set_injection(in);
+  s.tick(c);
+  CHECK(c.status().reference_injection == 0.0f);
+  in.at_reference = false;  // at the effort
+  c.set_injection(in);
+  s.tick(c);
+  CHECK(c.status().excitation_A[x] == 0.0f);
+  CHECK(c.status().effort_A[x] == c.status().effort_A[x]);  // not NaN
+  in.value = -10.0f;
+  c.set_injection(in);
+  s.tick(c);
+  DOUBLES_EQUAL(-c.config().excitation.max_amplitude_A, c.status().excitation_A[x], 0.0);
+  c.set_injection(Injection{});
+  for (int n = 0; n < 2000; ++n) s.tick(c);
+  CHECK(c.status().state == SequencerState::kReady);
+}

@@ -743,7 +743,9 @@ template <typename Scalar>
 void Controller<Scalar>::sequence(Tick& t) {
   SequencerInputs& qi = t.qi;
   qi.z_valid = t.sup->z_sensors_valid && (t.m.valid_axes & kPoseValidZ) != 0;
-  qi.z_m = pico_to_si(measured_.pico[3]);
+  // supervise()'s conversion of the same value: homing between them moves x
+  // and y only (ApplyHomingOffsets), never z.
+  qi.z_m = t.si.pose[axis_index(Axis::kZ)];
   qi.tilt_references_in_range = tilt_references_in_range_;
   qi.fault_reaction = t.sup->reaction;
   t.so = &sequencer_.step(qi);
@@ -880,16 +882,21 @@ void Controller<Scalar>::excite(Tick& t) {
   ex.tick += ex.active ? 1u : 0u;
   // External injection (lab wave generator): same rule as kExcite (motion
   // allowed), clamped here whatever the generator checked.
+  // A NaN value injects nothing (it would reach the loops, and the int64
+  // reference below, as no number).
   const Injection& in = injection_;
   if (in.active && t.so->motion_allowed && in.axis < kAxisCount) {
     t.injecting = true;
+    const float value = in.value == in.value ? in.value : 0.0f;
     if (in.at_reference) {
       const float lim = config_.references.max_step[in.axis];
-      t.reference_injection = in.value > lim ? lim : (in.value < -lim ? -lim : in.value);
-      t.reference_injection_pm = static_cast<std::int64_t>(static_cast<double>(t.reference_injection) * 1e12);
+      t.reference_injection = value > lim ? lim : (value < -lim ? -lim : value);
+      // Truncated toward zero as static_cast<int64_t> would, without its libgcc
+      // call (__aeabi_d2lz on the M7): |v| <= max_step * 1e12, far below 2^51.
+      t.reference_injection_pm = numeric::TruncToInt64(static_cast<double>(t.reference_injection) * 1e12);
     } else {
       const float lim = config_.excitation.max_amplitude_A;
-      const float d = in.value > lim ? lim : (in.value < -lim ? -lim : in.value);
+      const float d = value > lim ? lim : (value < -lim ? -lim : value);
       t.excitation[in.axis] += Traits::from_float(d);
     }
   }
