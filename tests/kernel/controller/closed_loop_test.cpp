@@ -27,6 +27,14 @@ bool levitate_to_ready(Controller<Scalar>& c, AxisStage& s) {
   return s.run_until(c, SequencerState::kReady, 40000);
 }
 
+// Levitated to Ready, then `ticks` more at rest.
+template <typename Scalar>
+bool settled_in_ready(Controller<Scalar>& c, AxisStage& s, int ticks) {
+  if (!levitate_to_ready(c, s)) return false;
+  for (int n = 0; n < ticks; ++n) s.tick(c);
+  return true;
+}
+
 [[maybe_unused]] MotionCommand step_cmd(Axis a, double delta) {
   MotionCommand m;
   m.type = MotionType::kStep;
@@ -683,8 +691,7 @@ TEST(ClosedLoop, CouplingCalibrationRefusedAbandonedAndFindsNoCouplingOnADecoupl
 TEST(ClosedLoop, AFilterEnabledWhileLevitatedStartsFromTheSignal) {
   static Controller<float> c;
   AxisStage s(3);
-  CHECK(levitate_to_ready(c, s));
-  for (int n = 0; n < 2000; ++n) s.tick(c);
+  CHECK(settled_in_ready(c, s, 2000));
   const int z = axis_index(Axis::kZ);
   KernelConfig off = c.config();
   off.live_tuning = true;
@@ -721,8 +728,7 @@ TEST(ClosedLoop, AFilterEnabledWhileLevitatedStartsFromTheSignal) {
 TEST(ClosedLoop, InjectionIsClampedAndANaNInjectsNothing) {
   static Controller<float> c;
   AxisStage s(5);
-  CHECK(levitate_to_ready(c, s));
-  for (int n = 0; n < 500; ++n) s.tick(c);
+  CHECK(settled_in_ready(c, s, 500));
   const int x = axis_index(Axis::kX);
   Injection in{};
   in.active = true;
