@@ -778,7 +778,7 @@ void Controller<Scalar>::advance_references(Tick& t) {
   for (int a = 0; a < kAxisCount; ++a) {
     if (!so.motion_allowed) profile_[a].kind = ProfileKind::kNone;
     t.step_pm[a] = 0;
-    profile_accel_[a] = 0.0;
+    status_.reference_acceleration[a] = 0.0;
     t.accel_ff[a] = Traits::zero();
     quiet |= (profile_[a].kind == ProfileKind::kNone && pending_step_pm_[a] == 0) ? 1u << a : 0u;
   }
@@ -845,7 +845,7 @@ void Controller<Scalar>::advance_references(Tick& t) {
       if (ref > tilt_max_pico_[k]) ref = (ref - tilt_max_pico_[k] > tilt_level_step_pico_) ? ref - tilt_level_step_pico_ : tilt_max_pico_[k];
       if (ref < tilt_min_pico_[k]) ref = (tilt_min_pico_[k] - ref > tilt_level_step_pico_) ? ref + tilt_level_step_pico_ : tilt_min_pico_[k];
     }
-    profile_accel_[a] = acc_now;
+    status_.reference_acceleration[a] = acc_now;
     // u_ff = (m or I) a / (2 b*) in double (a in SI, up to 1.5e6 um/s^2 would
     // not fit a Scalar), one rounding to A.
     // No profile sample: acc_now is 0 and (m or I) / (2 b*) > 0 (b* > 0 and
@@ -928,11 +928,13 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
     const Scalar v_loop = l.update(e_um, dr_um, ff);
     const Scalar v = filters_.update(a, ap.filter[a], ap.filtered[a], v_loop);
     t.aw_offset[a] = v_loop - v;
-    t.loop_out[a] = l.saturate(v);
+    const Scalar loop_out = l.saturate(v);
+    // Published as it is made (publish_status() zeroes it with the amplifiers off).
+    status_.loop_effort_A[a] = Traits::to_float(loop_out);
     const bool closed = (so.closed_axes & (1u << a)) != 0;
     // Open axis: no feedback, only the feed-forward (the gravity lift of z).
     // Closed axis: the loop plus the excitation d (zero unless kExcite runs).
-    t.effort[a] = closed ? t.loop_out[a] + t.excitation[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
+    t.effort[a] = closed ? loop_out + t.excitation[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
     if (!closed) l.reset(e_um);
   }
   filters_.end_tick();
@@ -1025,7 +1027,6 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
   if (enable) {
     for (int a = 0; a < kAxisCount; ++a) {
       status_.effort_A[a] = Traits::to_float(t.effort[a]);
-      status_.loop_effort_A[a] = Traits::to_float(t.loop_out[a]);
       status_.applied_effort_A[a] = Traits::to_float(t.out.applied_effort_A[a]);
     }
   } else {
@@ -1035,7 +1036,6 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
   }
   for (int a = 0; a < kAxisCount; ++a) {
     status_.excitation_A[a] = Traits::to_float(t.excitation[a]);
-    status_.reference_acceleration[a] = profile_accel_[a];
   }
   status_.injection_active = t.injecting;
   status_.injection_at_reference = injection_.at_reference;

@@ -404,7 +404,6 @@ class Controller {
     float reference_injection = 0.0f;  // the same, m or rad (status)
     bool injecting = false;
     Scalar effort[kAxisCount];     // run_axis_loops()
-    Scalar loop_out[kAxisCount];   // run_axis_loops()
     Scalar aw_offset[kAxisCount];  // loop output before the biquads minus after them
     AllocationOutput<Scalar> out;  // allocate_forces()
   };
@@ -455,7 +454,6 @@ class Controller {
   Pose64 reference_{};
   std::int64_t pending_step_pm_[kAxisCount] = {};  // step() applies and reports it
   Pose64 measured_{};
-  double profile_accel_[kAxisCount] = {};
   bool last_current_limited_ = false;  // last tick's allocation scaled the currents down
   std::uint8_t stage_profile_error_ = 0;  // see set_stage_profile_error()
   std::uint32_t homing_ticks_ = 0;
