@@ -167,7 +167,8 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   // or one OR, compared once after the loop. The tick where one does trips
   // attribute(), which finds the coil from the same values (coil_masks()).
   // fmax ignores a NaN operand and a NaN compares false: a NaN current trips
-  // neither form. (Per-coil bit masks cost ~50 M7 instructions a tick more.)
+  // neither form. (The per-coil masks this replaced cost 106 M7 instructions
+  // a tick more at the replay's Ready maximum.)
   const CoilLimits lim = coil_limits();
   const float mismatch_A = config_.current_mismatch_A;
   std::uint32_t monitor_rail = 0;
