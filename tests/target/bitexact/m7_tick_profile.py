@@ -23,6 +23,14 @@ whoever calls them, the harness included. --last N keeps the last N complete int
 (the replay's Ready ticks are its last 4 999). Printed: the kernel's mean per
 tick by function, then the --top largest intervals with the functions that
 exceed the median interval's.
+
+  --lines SUBSTRING  the kernel's mean per tick by source line (addr2line) in
+                     the functions whose name holds SUBSTRING: where inside a
+                     function the instructions go.
+  --loops            per kernel function, the instructions of blocks that run
+                     three or more times a tick: loops GCC left rolled (the
+                     eighth session of 2026-11-27 found the axis loops' spilled
+                     induction pointers this way).
 """
 import argparse
 import collections
@@ -74,7 +82,16 @@ def intervals(log, entry):
         for pc, n in c.items():
             by_fn[fn_of[pc]] += n * ninsn.get(pc, 0)
         out.append(by_fn)
-    return out
+    return out, [c for c in ticks[1:]], ninsn, fn_of
+
+
+def source_lines(elf, pcs):
+    """pc -> 'file:line' (the innermost inlined frame's), one addr2line call."""
+    if not pcs:
+        return {}
+    res = subprocess.run(['arm-none-eabi-addr2line', '-e', elf] + ['0x%x' % pc for pc in pcs],
+                         capture_output=True, text=True, check=True).stdout.splitlines()
+    return {pc: line.rsplit('/', 1)[-1].split(' ')[0] for pc, line in zip(pcs, res)}
 
 
 def main():
@@ -84,10 +101,13 @@ def main():
     ap.add_argument('--symbol', default='_ZN6maglev6kernel10ControllerIfE4stepE')
     ap.add_argument('--last', type=int, default=0, help='keep the last N intervals (0: all)')
     ap.add_argument('--top', type=int, default=5)
+    ap.add_argument('--lines', default='', help='per source line in the functions whose name holds this')
+    ap.add_argument('--loops', action='store_true', help='blocks run three or more times a tick, by function')
     a = ap.parse_args()
-    ticks = intervals(a.log, entry_address(a.elf, a.symbol))
+    ticks, blocks, ninsn, fn_of = intervals(a.log, entry_address(a.elf, a.symbol))
     if a.last > 0:
         ticks = ticks[-a.last:]
+        blocks = blocks[-a.last:]
     if not ticks:
         sys.exit('m7_tick_profile: no complete interval (is --symbol the tick function?)')
 
@@ -113,6 +133,28 @@ def main():
         for d, f in diffs:
             if d >= 10:
                 print('   %+6d  %s' % (d, f))
+    per_pc = collections.Counter()
+    for c in blocks:
+        per_pc.update(c)
+    if a.lines:
+        pcs = sorted(pc for pc in per_pc if a.lines in fn_of[pc])
+        where = source_lines(a.elf, pcs)
+        by_line = collections.Counter()
+        for pc in pcs:
+            by_line[where[pc]] += per_pc[pc] * ninsn.get(pc, 0) / n
+        print('by source line, functions holding %r (mean per tick):' % a.lines)
+        for line, v in sorted(by_line.items(), key=lambda kv: -kv[1]):
+            if v >= 0.5:
+                print('%9.1f  %s' % (v, line))
+    if a.loops:
+        rolled = collections.Counter()
+        for pc, cnt in per_pc.items():
+            f = fn_of[pc]
+            if cnt / n >= 3 and not any(h in f for h in HARNESS):
+                rolled[f] += cnt * ninsn.get(pc, 0) / n
+        print('instructions per tick in blocks run three or more times a tick (rolled loops):')
+        for f, v in rolled.most_common():
+            print('%9.1f  %s' % (v, f))
 
 
 if __name__ == '__main__':
