@@ -377,7 +377,7 @@ int run_seeds(const maglev::scenario::Scenario& sc, const Args& a) {
     double med = 0, lo = 0, hi = 0;
     stats(it->second, &med, &lo, &hi);
     const double ratio = paper != 0.0 ? med / paper : 0.0;
-    const bool ok = ratio >= 0.5 && ratio <= 2.0;
+    const bool ok = ratio >= maglev::report::kPaperBandLow && ratio <= maglev::report::kPaperBandHigh;
     in_band += ok;
     ++total;
     std::printf("  %-44s %12.4g %10.4g [%.3g, %.3g] %8.3g  %s\n", key.c_str(), paper, med, lo, hi, ratio,

@@ -160,7 +160,7 @@ namespace {
 std::string verdict(const std::string& k, double measured, double paper) {
   static const char* kTight[] = {"crossover", "phase_margin", "bandwidth", "_peak_dB", "_peak_Hz", "_measured_",
                                  "levitation_time"};
-  double lo = 0.5, hi = 2.0;
+  double lo = kPaperBandLow, hi = kPaperBandHigh;
   const char* band = "0.5-2x";
   for (const char* m : kTight) {
     if (k.find(m) != std::string::npos) {

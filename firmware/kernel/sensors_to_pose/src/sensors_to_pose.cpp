@@ -60,6 +60,20 @@ constexpr std::uint32_t UnsignedMagnitude(std::int32_t v) {
   return v < 0 ? 0u - static_cast<std::uint32_t>(v) : static_cast<std::uint32_t>(v);
 }
 
+// The counter's rule, ExtendCounter's and the tick's: the modular step from
+// last_raw to raw (reinterpreted as signed: correct across the 2^32 wrap in
+// both directions while |true step| < 2^31), taken when its magnitude is at
+// most max_step, else nothing.
+struct CounterStep {
+  std::int32_t moved;  // the step taken (0 when implausible)
+  bool plausible;
+};
+constexpr CounterStep StepCounter(std::uint32_t raw, std::uint32_t last_raw, std::uint32_t max_step) {
+  const auto delta = static_cast<std::int32_t>(raw - last_raw);
+  const bool plausible = UnsignedMagnitude(delta) <= max_step;
+  return {plausible ? delta : 0, plausible};
+}
+
 }  // namespace
 
 MAGLEV_CONFIG_CODE double HalbachHarmonicRatio(int n, double z_m, double delta_m, double pitch_m) {
@@ -247,13 +261,14 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
 
 bool ExtendCounter(std::uint32_t raw, std::uint32_t* last_raw, std::int64_t* counts,
                    std::int64_t max_counts_per_tick) {
-  // Modular difference reinterpreted as signed: correct across the 2^32 wrap
-  // in both directions as long as |true delta| < 2^31 per tick.
-  const auto delta = static_cast<std::int32_t>(raw - *last_raw);
-  const bool plausible = std::int64_t{UnsignedMagnitude(delta)} <= max_counts_per_tick;
-  *counts += plausible ? delta : 0;
-  *last_raw = plausible ? raw : *last_raw;
-  return plausible;
+  // A magnitude is at most 2^31: a bound at or above 2^32 - 1 is that bound,
+  // and a negative one takes nothing.
+  if (max_counts_per_tick < 0) return false;
+  const auto max_step = static_cast<std::uint32_t>(max_counts_per_tick < 0xFFFFFFFF ? max_counts_per_tick : 0xFFFFFFFF);
+  const CounterStep c = StepCounter(raw, *last_raw, max_step);
+  *counts += c.moved;
+  *last_raw = c.plausible ? raw : *last_raw;
+  return c.plausible;
 }
 
 std::int64_t CountsToPicometres(std::int64_t counts, const SensorsToPoseState& state) {
@@ -414,9 +429,9 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
     const bool glitch = armed && UnsignedMagnitude(step) <= max_step && change_mag > tolerance;
     const std::uint32_t used = glitch ? s.last_raw[b] + static_cast<std::uint32_t>(expected) : raw;
     // ExtendCounter's rule, with the step it took kept in int32.
-    const auto delta = static_cast<std::int32_t>(used - s.last_raw[b]);
-    const bool ok = UnsignedMagnitude(delta) <= max_step;
-    const std::int32_t moved = ok ? delta : 0;
+    const CounterStep counted = StepCounter(used, s.last_raw[b], max_step);
+    const bool ok = counted.plausible;
+    const std::int32_t moved = counted.moved;
     s.counts[b] += moved;
     s.last_raw[b] = glitch ? raw : (ok ? used : s.last_raw[b]);
     // The step per tick; after a stale gap (n > 1) the gap's mean step,

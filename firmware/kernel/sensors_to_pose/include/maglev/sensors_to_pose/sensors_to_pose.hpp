@@ -276,7 +276,8 @@ struct PoseMeasurement {
 // One tick. Constant work, no early exits.
 PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseState* state);
 
-// Interferometer counter extension alone (also used by the step above).
+// Interferometer counter extension alone (the step above applies the same
+// rule, StepCounter in sensors_to_pose.cpp, with its 32-bit bound).
 // Returns true if the sample's delta was plausible and absorbed.
 bool ExtendCounter(std::uint32_t raw, std::uint32_t* last_raw, std::int64_t* counts,
                    std::int64_t max_counts_per_tick);
