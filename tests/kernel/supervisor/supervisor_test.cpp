@@ -123,7 +123,7 @@ TEST(Supervisor, RmsCurrentFollowsTheThermalTimeConstant) {
   CHECK(r.sup.status().first_fault.code == FaultCode::kRmsCurrent);
   LONGS_EQUAL(4, r.sup.status().first_fault.axis);
   CHECK(r.sup.status().reaction == FaultReaction::kLand);
-  DOUBLES_EQUAL(3.0, r.sup.status().rms_current_A[4], 0.01);
+  DOUBLES_EQUAL(3.0, r.sup.rms_current_A(4), 0.01);
 }
 
 TEST(Supervisor, PeakCurrentCommandedLandsMeasuredCutsCurrents) {

@@ -321,6 +321,7 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
       // Applied on the next tick and handed to the loop as an explicit step, so
       // its setpoint weighting b acts on it (pid2dof.hpp).
       pending_step_pm_[a] += step.sample(0).step_pico;
+      maybe_busy_axes_ |= 1u << a;
       return CommandResult::kAccepted;
     }
     case MotionType::kMoveTo:
@@ -336,6 +337,7 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
       cancel_profile(a);
       move_[a] = m;
       profile_[a] = Profile{ProfileKind::kMove, 0};
+      maybe_busy_axes_ |= 1u << a;
       return CommandResult::kAccepted;
     }
     case MotionType::kSinusoid: {  // paper 002: p0 + A (1 - cos w t), w0 = 1.5 pi
@@ -345,6 +347,7 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
       cancel_profile(a);
       sinusoid_[a] = sref;
       profile_[a] = Profile{ProfileKind::kSinusoid, 0};
+      maybe_busy_axes_ |= 1u << a;
       return CommandResult::kAccepted;
     }
     case MotionType::kCircle: {  // paper 000 Fig. 8: x, y; starts on the circle, centre at -r in x
@@ -372,6 +375,7 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
       circle_ = c;
       profile_[ix] = Profile{ProfileKind::kCircle, 0};
       profile_[iy] = Profile{ProfileKind::kCircle, 0};
+      maybe_busy_axes_ |= (1u << ix) | (1u << iy);
       return CommandResult::kAccepted;
     }
     default: break;
@@ -773,16 +777,27 @@ void Controller<Scalar>::advance_references(Tick& t) {
   // and which axes are quiet: the general path then visits only the others,
   // in axis order (the circle's x before its y). A per-axis loop with a
   // quiet branch cost ~39 M7 instructions per quiet axis, mostly its own
-  // loop bookkeeping.
-  unsigned quiet = 0;
-  for (int a = 0; a < kAxisCount; ++a) {
-    if (!so.motion_allowed) profile_[a].kind = ProfileKind::kNone;
-    t.step_pm[a] = 0;
-    status_.reference_acceleration[a] = 0.0;
-    t.accel_ff[a] = Traits::zero();
-    quiet |= (profile_[a].kind == ProfileKind::kNone && pending_step_pm_[a] == 0) ? 1u << a : 0u;
+  // loop bookkeeping; finding the quiet axes from their profiles and int64
+  // pending steps each tick cost ~80 more than maybe_busy_axes_ (a superset
+  // of the busy axes is enough: the general path leaves a quiet axis as the
+  // quiet path does).
+  if (!so.motion_allowed) {
+    for (Profile& p : profile_) p.kind = ProfileKind::kNone;
   }
-  for (unsigned busy = ~(quiet & stays_closed) & ((1u << kAxisCount) - 1u); busy != 0; busy &= busy - 1u) {
+#pragma GCC unroll 6
+  for (int a = 0; a < kAxisCount; ++a) {
+    t.step_pm[a] = 0;
+    t.accel_ff[a] = Traits::zero();
+  }
+  const unsigned quiet = ~maybe_busy_axes_ & ((1u << kAxisCount) - 1u);
+  const unsigned busy_axes = ~(quiet & stays_closed) & ((1u << kAxisCount) - 1u);
+  // The general path writes the visited axes' accelerations; the others'
+  // are zero, and only those written nonzero before need it again.
+  for (unsigned m = reference_acceleration_set_ & ~busy_axes; m != 0; m &= m - 1u) {
+    status_.reference_acceleration[__builtin_ctz(m)] = 0.0;
+  }
+  reference_acceleration_set_ = busy_axes;
+  for (unsigned busy = busy_axes; busy != 0; busy &= busy - 1u) {
     const int a = __builtin_ctz(busy);
     const bool closed = (closed_axes & (1u << a)) != 0;
     Profile& p = profile_[a];
@@ -846,6 +861,7 @@ void Controller<Scalar>::advance_references(Tick& t) {
       if (ref < tilt_min_pico_[k]) ref = (tilt_min_pico_[k] - ref > tilt_level_step_pico_) ? ref + tilt_level_step_pico_ : tilt_min_pico_[k];
     }
     status_.reference_acceleration[a] = acc_now;
+    if (p.kind == ProfileKind::kNone) maybe_busy_axes_ &= ~(1u << a);  // its pending step is applied
     // u_ff = (m or I) a / (2 b*) in double (a in SI, up to 1.5e6 um/s^2 would
     // not fit a Scalar), one rounding to A.
     // No profile sample: acc_now is 0 and (m or I) / (2 b*) > 0 (b* > 0 and
@@ -1050,7 +1066,8 @@ void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
 template <typename Scalar>
 bool Controller<Scalar>::motion_active() const {
   if (excitation_.active || injection_.active) return true;
-  for (int a = 0; a < kAxisCount; ++a) {
+  for (unsigned m = maybe_busy_axes_; m != 0; m &= m - 1u) {
+    const int a = __builtin_ctz(m);
     if (profile_[a].kind != ProfileKind::kNone || pending_step_pm_[a] != 0) return true;
   }
   return false;

@@ -91,6 +91,7 @@ MAGLEV_CONFIG_CODE void Supervisor::reset() {
   stale_run_ = 0;
   identical_run_ = 0;
   for (auto& r : mismatch_run_) r = 0;
+  mismatch_running_ = false;
   overrun_run_ = 0;
   for (float& v : i2_filtered_) v = 0.0f;
 }
@@ -172,25 +173,34 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   const CoilLimits lim = coil_limits();
   const float mismatch_A = config_.current_mismatch_A;
   std::uint32_t monitor_rail = 0;
-  std::uint32_t max_run = 0;
+  std::uint32_t off_coils = 0;
   float max_measured = 0.0f, max_commanded = 0.0f, max_i2 = 0.0f;
 #pragma GCC unroll 8
   for (int j = 0; j < io::kCoils; ++j) {
     const float m = in.coil_current_measured_A[j];
     const float i = in.coil_current_cmd_A[j];
-    const bool off = abs_f(m - i) > mismatch_A;
-    const std::uint16_t run = next_run(off, mismatch_run_[j]);
-    mismatch_run_[j] = run;
-    max_run = run > max_run ? run : max_run;
+    off_coils |= abs_f(m - i) > mismatch_A ? 1u << j : 0u;
     // Thermal model: first-order low-pass of i^2 with the coil's time constant.
     const float i2 = i2_filtered_[j] + thermal_alpha_ * (i * i - i2_filtered_[j]);
     i2_filtered_[j] = i2;
-    status_.rms_current_A[j] = std::sqrt(i2);
     monitor_rail |= at_rail(s.coil_current_adc[j]) ? 1u : 0u;
     max_measured = std::fmax(max_measured, abs_f(m));
     max_commanded = std::fmax(max_commanded, abs_f(i));
     max_i2 = std::fmax(max_i2, i2);
   }
+  // The mismatch runs: while no coil is off and every run is zero (nearly
+  // every tick) each stays zero, and the per-coil counting (~50 M7
+  // instructions a tick) is skipped.
+  std::uint32_t max_run = 0;
+  if ((off_coils | (mismatch_running_ ? 1u : 0u)) != 0) {
+#pragma GCC unroll 8
+    for (int j = 0; j < io::kCoils; ++j) {
+      const std::uint16_t run = next_run((off_coils & (1u << j)) != 0, mismatch_run_[j]);
+      mismatch_run_[j] = run;
+      max_run = run > max_run ? run : max_run;
+    }
+  }
+  mismatch_running_ = max_run != 0;
   c.monitor_rail = monitor_rail != 0;
   c.mismatch = max_run >= config_.current_mismatch_ticks;
   c.peak_measured = max_measured > lim.measured_A;
@@ -239,6 +249,8 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   }
   return status_;
 }
+
+float Supervisor::rms_current_A(int j) const { return std::sqrt(i2_filtered_[j]); }
 
 Supervisor::CoilLimits Supervisor::coil_limits() const {
   return CoilLimits{config_.peak_current_A + config_.measured_current_margin_A, config_.peak_current_A * 1.001f,
@@ -310,7 +322,7 @@ Supervisor::Trip Supervisor::attribute(const SupervisorInputs& in, const Checks&
     note(t, bit(cm.peak_commanded, j), FaultCode::kPeakCurrentCommanded, u8(j), in.coil_current_cmd_A[j]);
   }
   for (int j = 0; j < io::kCoils; ++j) {
-    note(t, bit(cm.rms, j), FaultCode::kRmsCurrent, u8(j), status_.rms_current_A[j]);
+    note(t, bit(cm.rms, j), FaultCode::kRmsCurrent, u8(j), rms_current_A(j));
   }
   note(t, bit(c.limits, 0), FaultCode::kTravelX, 0, in.pose[0]);
   note(t, bit(c.limits, 1), FaultCode::kTravelY, 1, in.pose[1]);

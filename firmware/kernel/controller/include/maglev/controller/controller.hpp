@@ -453,6 +453,12 @@ class Controller {
   bool circle_y_last_ = false;
   Pose64 reference_{};
   std::int64_t pending_step_pm_[kAxisCount] = {};  // step() applies and reports it
+  // Bit a: axis a may have a profile or a pending step (a superset: command()
+  // sets the bit with either, advance_references() clears it once both are
+  // gone). The tick visits these axes only; a clear bit is a quiet axis.
+  std::uint32_t maybe_busy_axes_ = 0;
+  // Bit a: status_.reference_acceleration[a] may be nonzero (a superset).
+  std::uint32_t reference_acceleration_set_ = 0;
   Pose64 measured_{};
   bool last_current_limited_ = false;  // last tick's allocation scaled the currents down
   std::uint8_t stage_profile_error_ = 0;  // see set_stage_profile_error()
