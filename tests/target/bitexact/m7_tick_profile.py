@@ -24,9 +24,9 @@ whoever calls them, the harness included. --last N keeps the last N complete int
 tick by function, then the --top largest intervals with the functions that
 exceed the median interval's.
 
-  --lines SUBSTRING  the kernel's mean per tick by source line (addr2line) in
-                     the functions whose name holds SUBSTRING: where inside a
-                     function the instructions go.
+  --lines SUBSTRING  the kernel's mean per tick by source line (addr2line, each
+                     instruction at its own line) in the functions whose name
+                     holds SUBSTRING: where inside a function the instructions go.
   --loops            per kernel function, the instructions of blocks that run
                      three or more times a tick: loops GCC left rolled (the
                      eighth session of 2026-11-27 found the axis loops' spilled
@@ -50,6 +50,7 @@ def entry_address(elf, symbol):
 
 def intervals(log, entry):
     ninsn = {}
+    insns = {}  # block start -> the addresses of its instructions
     fn_of = {}
     ticks = []
     cur = collections.Counter()
@@ -69,10 +70,13 @@ def intervals(log, entry):
                 if cur_pc is None:
                     cur_pc = int(line[2:10], 16)
                     cur_n = 0
+                    cur_insns = []
                 cur_n += 1
+                cur_insns.append(int(line[2:10], 16))
             elif line.startswith('IN:') or line.strip() == '' or line.startswith('----'):
                 if cur_pc is not None:
                     ninsn[cur_pc] = cur_n
+                    insns[cur_pc] = cur_insns
                     cur_pc = None
     # ticks[0] is everything before the first entry; the open one after the
     # last entry runs to the end of the program: drop both.
@@ -82,7 +86,7 @@ def intervals(log, entry):
         for pc, n in c.items():
             by_fn[fn_of[pc]] += n * ninsn.get(pc, 0)
         out.append(by_fn)
-    return out, [c for c in ticks[1:]], ninsn, fn_of
+    return out, [c for c in ticks[1:]], ninsn, insns, fn_of
 
 
 def source_lines(elf, pcs):
@@ -104,7 +108,7 @@ def main():
     ap.add_argument('--lines', default='', help='per source line in the functions whose name holds this')
     ap.add_argument('--loops', action='store_true', help='blocks run three or more times a tick, by function')
     a = ap.parse_args()
-    ticks, blocks, ninsn, fn_of = intervals(a.log, entry_address(a.elf, a.symbol))
+    ticks, blocks, ninsn, insns, fn_of = intervals(a.log, entry_address(a.elf, a.symbol))
     if a.last > 0:
         ticks = ticks[-a.last:]
         blocks = blocks[-a.last:]
@@ -137,11 +141,14 @@ def main():
     for c in blocks:
         per_pc.update(c)
     if a.lines:
+        # Each instruction counts at its own source line (a block's
+        # instructions often come from several lines and inlined functions).
         pcs = sorted(pc for pc in per_pc if a.lines in fn_of[pc])
-        where = source_lines(a.elf, pcs)
+        where = source_lines(a.elf, sorted({i for pc in pcs for i in insns.get(pc, [pc])}))
         by_line = collections.Counter()
         for pc in pcs:
-            by_line[where[pc]] += per_pc[pc] * ninsn.get(pc, 0) / n
+            for i in insns.get(pc, [pc]):
+                by_line[where[i]] += per_pc[pc] / n
         print('by source line, functions holding %r (mean per tick):' % a.lines)
         for line, v in sorted(by_line.items(), key=lambda kv: -kv[1]):
             if v >= 0.5:
