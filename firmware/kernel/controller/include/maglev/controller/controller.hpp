@@ -335,14 +335,17 @@ class Controller {
     ProfileKind kind = ProfileKind::kNone;
     std::int64_t tick = 0;
   };
+  // In the tick's order of use, what every tick reads first: a VFP load
+  // reaches 1020 bytes past its base (the allocation's tick fields lead its
+  // state; the internal-model coefficients, read only by such axes, last).
   struct Applied {
     LoopType type[kAxisCount];
-    Pid2DofCoefficients<Scalar> pid[kAxisCount];
-    InternalModelCoefficients<Scalar> imr[kAxisCount];
-    BiquadCoefficients<Scalar> filter[kAxisCount][kMaxBiquadStages];
     bool filtered[kAxisCount];  // biquad_chain_enabled(filter[a])
-    ForceAllocationState<Scalar> allocation;
+    Pid2DofCoefficients<Scalar> pid[kAxisCount];
+    BiquadCoefficients<Scalar> filter[kAxisCount][kMaxBiquadStages];
     double inertia_over_two_b_star[kAxisCount];  // (m or I) / (2 b*): A per (m/s^2) or (rad/s^2)
+    ForceAllocationState<Scalar> allocation;
+    InternalModelCoefficients<Scalar> imr[kAxisCount];
   };
   // Excitation generator: integer phase accumulators (2^32 = one turn).
   struct Excitation {
@@ -375,7 +378,6 @@ class Controller {
     float from[kCouplingMatrixSize] = {};
   };
   // Axis a's loop, whichever type the config selected (AxisLoop dispatches).
-  AxisLoop<Scalar> loop(int a);
 
   // The locals of one step(), handed from stage to stage of the data path.
   // The arrays and results below are written in full by their stage every
@@ -431,26 +433,13 @@ class Controller {
   void set_coupling(const CouplingCorrection& c);  // with the ramp
   void radii(float r[kAxisCount]) const;
 
-  KernelConfig config_{};
-  Applied applied_[2]{};
+  // The tick's own state first, in the order of use: a VFP load or an LDRD
+  // reaches 1020 bytes past its base, and GCC addresses members as this +
+  // offset, so each one further away costs an address computation before
+  // its loads (issue 16; docs/PERFORMANCE.md, "Session of 2026-11-28").
   int active_ = 0;
-  SensorsToPoseState s2p_{};
-  Sequencer sequencer_{};
-  SequencerInputs sequencer_inputs_{};  // Tick::qi
-  Supervisor supervisor_{};
   Pid2DofState<Scalar> pid_state_[kAxisCount]{};
-  InternalModelState<Scalar> imr_state_[kAxisCount]{};
-  LoopType running_type_[kAxisCount] = {};  // detects a live loop-type switch (bumpless hand-over)
-  Excitation excitation_{};
-  Injection injection_{};
   BiquadBank<Scalar, kAxisCount> filters_{};
-  Profile profile_[kAxisCount]{};
-  MoveReference move_[kAxisCount]{};
-  SinusoidReference sinusoid_[kAxisCount]{};
-  CircleReference circle_{};  // drives x (its Profile) and y (kind kCircle, tick unused)
-  AxisReference circle_y_{};  // y's sample, produced with x's in the same tick
-  bool circle_y_valid_ = false;
-  bool circle_y_last_ = false;
   Pose64 reference_{};
   std::int64_t pending_step_pm_[kAxisCount] = {};  // step() applies and reports it
   // Bit a: axis a may have a profile or a pending step (a superset: command()
@@ -462,6 +451,24 @@ class Controller {
   Pose64 measured_{};
   bool last_current_limited_ = false;  // last tick's allocation scaled the currents down
   std::uint8_t stage_profile_error_ = 0;  // see set_stage_profile_error()
+  Profile profile_[kAxisCount]{};
+  Excitation excitation_{};
+  Injection injection_{};
+  SequencerInputs sequencer_inputs_{};  // Tick::qi
+  ControllerStatus status_{};
+  KernelConfig config_{};
+  Applied applied_[2]{};
+  SensorsToPoseState s2p_{};
+  Sequencer sequencer_{};
+  Supervisor supervisor_{};
+  InternalModelState<Scalar> imr_state_[kAxisCount]{};
+  LoopType running_type_[kAxisCount] = {};  // detects a live loop-type switch (bumpless hand-over)
+  MoveReference move_[kAxisCount]{};
+  SinusoidReference sinusoid_[kAxisCount]{};
+  CircleReference circle_{};  // drives x (its Profile) and y (kind kCircle, tick unused)
+  AxisReference circle_y_{};  // y's sample, produced with x's in the same tick
+  bool circle_y_valid_ = false;
+  bool circle_y_last_ = false;
   std::uint32_t homing_ticks_ = 0;
   std::uint32_t homing_needed_ticks_ = 1;
   // TiltLock levelling (apply_config): the theta_x / theta_y reference range
@@ -495,7 +502,6 @@ class Controller {
   HallRequest hall_job_request_{};
   HallResult hall_job_result_{};
   std::uint32_t hall_solves_in_tick_ = 0;
-  ControllerStatus status_{};
   CouplingCalibrationConfig calibration_config_{};
   Calibration cal_{};
   CouplingIdentifier identifier_{};

@@ -152,8 +152,10 @@ void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables&
 
 template <typename Scalar>
 struct ForceAllocationState {
-  ForceAllocationTablesDouble tables;
-  CommutationTables commutation;
+  // The tick's fields first: a VFP load reaches 1020 bytes past its base, and
+  // the configuration-time double tables (~1 KB) ahead of them cost an
+  // address computation before nearly every load in AllocateCurrents
+  // (issue 16; docs/PERFORMANCE.md, "Session of 2026-11-28").
   Scalar b[kForcerForces][kEfforts];
   // The coil-centre correction's arithmetic (AllocateCurrents): float for the
   // float kernel, double for fixed point.
@@ -177,6 +179,8 @@ struct ForceAllocationState {
   double monitor_A_per_code;
   std::int64_t monitor_raw_per_code_q16;  // Fixed only
   bool configured;
+  CommutationTables commutation;
+  ForceAllocationTablesDouble tables;
 };
 
 template <typename Scalar>
