@@ -419,14 +419,26 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
     const auto step = static_cast<std::int32_t>(raw - s.last_raw[b]);
     const std::int32_t last_step = s.last_step[b];
     const std::uint32_t speed_mag = UnsignedMagnitude(last_step);
-    // n = 1 on every tick but the first after a stale gap: no products then.
-    // (max_change + speed_mag < 2^31: both below 1e9.)
-    const std::int64_t expected = n == 1 ? std::int64_t{last_step} : std::int64_t{n} * last_step;
-    const std::int64_t tolerance = n == 1 ? std::int64_t{max_change} + speed_mag
-                                          : std::int64_t{max_change} * n * n + speed_mag;
-    const std::int64_t change = step - expected;
-    const std::int64_t change_mag = change < 0 ? -change : change;
-    const bool glitch = armed && UnsignedMagnitude(step) <= max_step && change_mag > tolerance;
+    const bool in_speed = UnsignedMagnitude(step) <= max_step;
+    std::int64_t expected, change;
+    bool glitch;
+    if (n == 1) {
+      // Every tick but the first after a stale gap, in 32 bits: within the
+      // speed bound |step| and |last_step| are below 1e9, so step - last_step
+      // is an exact int32 (the wrapped difference is read only then), and
+      // max_change + speed_mag < 2^31.
+      expected = last_step;
+      const auto change32 = static_cast<std::int32_t>(static_cast<std::uint32_t>(step) -
+                                                      static_cast<std::uint32_t>(last_step));
+      change = change32;
+      glitch = armed && in_speed && UnsignedMagnitude(change32) > max_change + speed_mag;
+    } else {
+      expected = std::int64_t{n} * last_step;
+      const std::int64_t tolerance = std::int64_t{max_change} * n * n + speed_mag;
+      change = step - expected;
+      const std::int64_t change_mag = change < 0 ? -change : change;
+      glitch = armed && in_speed && change_mag > tolerance;
+    }
     const std::uint32_t used = glitch ? s.last_raw[b] + static_cast<std::uint32_t>(expected) : raw;
     // ExtendCounter's rule, with the step it took kept in int32.
     const CounterStep counted = StepCounter(used, s.last_raw[b], max_step);
