@@ -312,7 +312,7 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
   };
   const double fs = static_cast<double>(config_.servo_rate_Hz);
   const AxisReferenceLimits lim = axis_limits(a);
-  const std::int64_t start = reference_.pico[a] + pending_step_pm_[a];
+  const std::int64_t start = status_.reference.pico[a] + pending_step_pm_[a];
   switch (cmd.type) {
     case MotionType::kStep: {
       StepReference step;
@@ -368,7 +368,7 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
       const double jerk = cmd.jerk > 0.0 ? cmd.jerk
                                          : 0.5 * (jlim - 3.0 * speed * at / r - speed * centripetal / r);
       CircleReference c;
-      const ReferenceError e = c.plan(reference_.pico[ix] + pending_step_pm_[ix], reference_.pico[iy] + pending_step_pm_[iy],
+      const ReferenceError e = c.plan(status_.reference.pico[ix] + pending_step_pm_[ix], status_.reference.pico[iy] + pending_step_pm_[iy],
                                       cmd.diameter_m, speed, cmd.turns, at, jerk, fs, lx, ly);
       if (e != ReferenceError::kOk) return result(e);
       cancel_profile(ix);
@@ -546,12 +546,12 @@ void Controller<Scalar>::calibration_accumulate() {
   if (!cal_.running) return;
   const int j = cal_.experiment % kAxisCount;
   if (cal_.tick == cal_.settle_ticks) {
-    cal_.start = measured_;
+    cal_.start = status_.pose;
     cal_.phase = 0;
   }
   if (cal_.tick >= cal_.settle_ticks) {
     float y[kAxisCount];
-    for (int a = 0; a < kAxisCount; ++a) y[a] = pico_to_si(measured_.pico[a] - cal_.start.pico[a]);
+    for (int a = 0; a < kAxisCount; ++a) y[a] = pico_to_si(status_.pose.pico[a] - cal_.start.pico[a]);
     identifier_.accumulate(cal_.phase, calib_effort_, y);
     cal_.phase += cal_.increment;
   }
@@ -608,7 +608,7 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
   ++status_.tick;
   // 1. sensors -> pose (integer, constant work).
   PoseMeasurement pose = SensorsToPoseStep(sample, &s2p_);
-  measured_ = pose.pose;
+  status_.pose = pose.pose;
   sequencer_inputs_.homing_done = false;
   sequencer_inputs_.homing_failed = false;
   Tick t(pose, sequencer_inputs_);
@@ -639,8 +639,8 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
   si.envelope_active = (prev.closed_axes & kAxisBitZ) != 0;
   si.closed_axes = prev.closed_axes;
   for (int a = 0; a < kAxisCount; ++a) {
-    si.pose[a] = pico_to_si(measured_.pico[a]);
-    si.following_error[a] = pico_to_si(reference_.pico[a] - measured_.pico[a]);
+    si.pose[a] = pico_to_si(status_.pose.pico[a]);
+    si.following_error[a] = pico_to_si(status_.reference.pico[a] - status_.pose.pico[a]);
     t.qi.abs_error[a] = std::fabs(si.following_error[a]);
   }
   si.current_limited = last_current_limited_;
@@ -710,7 +710,7 @@ void Controller<Scalar>::home(const io::SensorSample& sample, Tick& t) {
     // homed pose. (It used to run the whole sensors_to_pose step again on the
     // same sample, which also fed the glitch check a zero step.)
     ApplyHomingOffsets(s2p_, &t.m);
-    measured_ = t.m.pose;
+    status_.pose = t.m.pose;
     t.qi.homing_done = true;
   } else {
     t.qi.homing_failed = true;
@@ -834,24 +834,24 @@ void Controller<Scalar>::advance_references(Tick& t) {
         break;
     }
     if (sampled) {
-      reference_.pico[a] = r.position_pico;
+      status_.reference.pico[a] = r.position_pico;
       acc_now = static_cast<double>(r.acceleration);
     }
     t.step_pm[a] = closed ? pending_step_pm_[a] : 0;
-    reference_.pico[a] += t.step_pm[a];
+    status_.reference.pico[a] += t.step_pm[a];
     pending_step_pm_[a] = 0;
     const bool newly_closed = closed && (t.si.closed_axes & (1u << a)) == 0;
     if (!closed || newly_closed) {
-      reference_.pico[a] = measured_.pico[a];  // bumpless: close on the present position
+      status_.reference.pico[a] = status_.pose.pico[a];  // bumpless: close on the present position
     } else if (a == axis_index(Axis::kZ) && !so.motion_allowed) {
-      reference_.pico[a] = numeric::si_to_pico(static_cast<double>(so.z_reference_m));
+      status_.reference.pico[a] = numeric::si_to_pico(static_cast<double>(so.z_reference_m));
     } else if (a >= axis_index(Axis::kThetaX) && so.state == SequencerState::kTiltLock) {
       // The tilt loops closed on the tilt they found. A CoM offset c tilts
       // the lifting platen by m g c / k_t (57.5 urad/mm on the seed stage), so
       // a few mm put it beyond the reference range, where every tilt command
       // would be refused: ramp such a reference to the range's nearest end.
       const int k = a - axis_index(Axis::kThetaX);
-      std::int64_t& ref = reference_.pico[a];
+      std::int64_t& ref = status_.reference.pico[a];
       if (ref > tilt_max_pico_[k]) ref = (ref - tilt_max_pico_[k] > tilt_level_step_pico_) ? ref - tilt_level_step_pico_ : tilt_max_pico_[k];
       if (ref < tilt_min_pico_[k]) ref = (tilt_min_pico_[k] - ref > tilt_level_step_pico_) ? ref + tilt_level_step_pico_ : tilt_min_pico_[k];
     }
@@ -867,7 +867,7 @@ void Controller<Scalar>::advance_references(Tick& t) {
   }
   // Only TiltLock reads it (next tick); false elsewhere, so the first TiltLock
   // tick does not count as in range before it was checked.
-  const std::int64_t tx = reference_.pico[axis_index(Axis::kThetaX)], ty = reference_.pico[axis_index(Axis::kThetaY)];
+  const std::int64_t tx = status_.reference.pico[axis_index(Axis::kThetaX)], ty = status_.reference.pico[axis_index(Axis::kThetaY)];
   tilt_references_in_range_ = so.state == SequencerState::kTiltLock && tx >= tilt_min_pico_[0] &&
                               tx <= tilt_max_pico_[0] && ty >= tilt_min_pico_[1] && ty <= tilt_max_pico_[1];
 }
@@ -927,11 +927,11 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
   // the Scalar conversion and its +-128 um saturation): added to the stored
   // reference for the loops only, taken off again below (exact integers).
   const int inj_axis = injection_.axis;
-  if (t.reference_injection_pm != 0) reference_.pico[inj_axis] += t.reference_injection_pm;
+  if (t.reference_injection_pm != 0) status_.reference.pico[inj_axis] += t.reference_injection_pm;
   Pid2DofState<Scalar>* const pid_state = pid_state_;
   InternalModelState<Scalar>* const imr_state = imr_state_;
-  const std::int64_t* const reference_pm = reference_.pico;
-  const std::int64_t* const measured_pm = measured_.pico;
+  const std::int64_t* const reference_pm = status_.reference.pico;
+  const std::int64_t* const measured_pm = status_.pose.pico;
   BiquadBank<Scalar, kAxisCount>& filters = filters_;
   float* const loop_effort_A = status_.loop_effort_A;
 #pragma GCC unroll 6
@@ -955,7 +955,7 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
     if (!closed) l.reset(e_um);
   }
   filters.end_tick();
-  if (t.reference_injection_pm != 0) reference_.pico[inj_axis] -= t.reference_injection_pm;
+  if (t.reference_injection_pm != 0) status_.reference.pico[inj_axis] -= t.reference_injection_pm;
 }
 
 // 7. force allocation with the whole-vector current limit, then 8. the
@@ -974,7 +974,7 @@ void Controller<Scalar>::allocate_forces(Tick& t) {
     for (int a = 0; a < kAxisCount; ++a) calib_effort_[a] = Traits::to_float(t.effort[a]);
   }
   if (!coupled) {
-    AllocateCurrents<Scalar>(t.effort, measured_.pico[0], measured_.pico[1], ap.allocation, &t.out);
+    AllocateCurrents<Scalar>(t.effort, status_.pose.pico[0], status_.pose.pico[1], ap.allocation, &t.out);
   } else {
     float c[kCouplingMatrixSize];
     const float w = static_cast<float>(ramp_.left) / static_cast<float>(coupling_ramp_ticks_);  // weight of `from`
@@ -991,7 +991,7 @@ void Controller<Scalar>::allocate_forces(Tick& t) {
       for (int j = 0; j < kAxisCount; ++j) s += c[i * kAxisCount + j] * u[j];
       corrected[i] = Traits::from_float(s);
     }
-    AllocateCurrents<Scalar>(corrected, measured_.pico[0], measured_.pico[1], ap.allocation, &t.out);
+    AllocateCurrents<Scalar>(corrected, status_.pose.pico[0], status_.pose.pico[1], ap.allocation, &t.out);
     // The loops' anti-windup works in uncorrected efforts: what they got is k U.
     for (int a = 0; a < kAxisCount; ++a) t.out.applied_effort_A[a] = t.out.scale_k * t.effort[a];
   }
@@ -1032,8 +1032,8 @@ template <typename Scalar>
 void Controller<Scalar>::publish_status(const Tick& t, bool enable) {
   const SequencerOutput& so = *t.so;
   const SupervisorStatus& sup = *t.sup;
-  status_.pose = t.m.pose;
-  status_.reference = reference_;
+  // status_.pose and status_.reference are the tick's own pose and reference
+  // (written where they are made): nothing to copy.
   status_.pose_valid = t.m.valid_axes;
   status_.state = so.state;
   status_.last_reason = so.last_reason;

@@ -400,7 +400,7 @@ class Controller {
     Scalar accel_ff[kAxisCount];         // advance_references()
     std::int64_t step_pm[kAxisCount];    // advance_references()
     Scalar excitation[kAxisCount];       // excite()
-    // External injection at the reference: added to reference_ around the
+    // External injection at the reference: added to the reference around the
     // axis loops (no per-axis cost), in pm / prad.
     std::int64_t reference_injection_pm = 0;
     float reference_injection = 0.0f;  // the same, m or rad (status)
@@ -440,7 +440,6 @@ class Controller {
   int active_ = 0;
   Pid2DofState<Scalar> pid_state_[kAxisCount]{};
   BiquadBank<Scalar, kAxisCount> filters_{};
-  Pose64 reference_{};
   std::int64_t pending_step_pm_[kAxisCount] = {};  // step() applies and reports it
   // Bit a: axis a may have a profile or a pending step (a superset: command()
   // sets the bit with either, advance_references() clears it once both are
@@ -448,7 +447,6 @@ class Controller {
   std::uint32_t maybe_busy_axes_ = 0;
   // Bit a: status_.reference_acceleration[a] may be nonzero (a superset).
   std::uint32_t reference_acceleration_set_ = 0;
-  Pose64 measured_{};
   bool last_current_limited_ = false;  // last tick's allocation scaled the currents down
   std::uint8_t stage_profile_error_ = 0;  // see set_stage_profile_error()
   Profile profile_[kAxisCount]{};
