@@ -440,6 +440,7 @@ class Controller {
   int active_ = 0;
   Pid2DofState<Scalar> pid_state_[kAxisCount]{};
   BiquadBank<Scalar, kAxisCount> filters_{};
+  ControllerStatus status_{};  // the pose and the reference included
   std::int64_t pending_step_pm_[kAxisCount] = {};  // step() applies and reports it
   // Bit a: axis a may have a profile or a pending step (a superset: command()
   // sets the bit with either, advance_references() clears it once both are
@@ -453,7 +454,6 @@ class Controller {
   Excitation excitation_{};
   Injection injection_{};
   SequencerInputs sequencer_inputs_{};  // Tick::qi
-  ControllerStatus status_{};
   KernelConfig config_{};
   Applied applied_[2]{};
   SensorsToPoseState s2p_{};
