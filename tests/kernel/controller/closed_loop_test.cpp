@@ -756,3 +756,57 @@ TEST(ClosedLoop, InjectionIsClampedAndANaNInjectsNothing) {
   for (int n = 0; n < 2000; ++n) s.tick(c);
   CHECK(c.status().state == SequencerState::kReady);
 }
+
+// advance_references visits only the axes that may be busy (a superset kept
+// by command() and the tick): an axis whose profile ends or whose step is
+// applied must go quiet -- its reference kept, its published acceleration
+// zero, motion_active() false -- and a command after that must still reach it.
+TEST(ClosedLoop, AxesGoQuietWhenTheirProfilesEndAndWakeOnTheNextCommand) {
+  static Controller<float> c;
+  AxisStage s(9);
+  CHECK(settled_in_ready(c, s, 500));
+  const auto is_quiet = [&]() {
+    for (double a : c.status().reference_acceleration) {
+      if (a != 0.0) return false;
+    }
+    return !c.status().motion_active;
+  };
+  CHECK(is_quiet());
+  const double x0 = x_m(c.status().reference);
+  const double y0 = y_m(c.status().reference);
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kX, x0 + 1e-3, 0.02, 0.5)) == CommandResult::kAccepted);
+  CHECK(c.command(step_cmd(Axis::kY, 2e-6)) == CommandResult::kAccepted);
+  s.tick(c);
+  CHECK(c.status().motion_active);
+  CHECK(c.status().reference_acceleration[axis_index(Axis::kX)] > 0.0);
+  DOUBLES_EQUAL(y0 + 2e-6, y_m(c.status().reference), 1e-12);  // the step, applied on the next tick
+  int n = 0;
+  while (c.status().motion_active && n < 5000) {
+    s.tick(c);
+    ++n;
+  }
+  CHECK(n < 5000);
+  CHECK(is_quiet());
+  DOUBLES_EQUAL(x0 + 1e-3, x_m(c.status().reference), 1e-12);  // on the target
+  for (int k = 0; k < 100; ++k) s.tick(c);
+  DOUBLES_EQUAL(x0 + 1e-3, x_m(c.status().reference), 1e-12);  // and kept there
+  CHECK(is_quiet());
+  // A step on a quiet axis wakes it: applied on the next tick, quiet after it.
+  const double x1 = x_m(c.status().reference);
+  CHECK(c.command(step_cmd(Axis::kX, -1e-6)) == CommandResult::kAccepted);
+  CHECK(c.status().motion_active == false);  // published by the tick, not by command()
+  s.tick(c);
+  DOUBLES_EQUAL(x1 - 1e-6, x_m(c.status().reference), 1e-12);
+  CHECK(is_quiet());
+  // Hold in the middle of a move: the axis is quiet on the next tick, its
+  // reference where the move left it.
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kY, y0 + 1e-3, 0.02, 0.5)) == CommandResult::kAccepted);
+  for (int k = 0; k < 50; ++k) s.tick(c);  // 20 ms of a ~90 ms move
+  CHECK(c.status().motion_active);
+  CHECK(c.command(MotionCommand{MotionType::kHold}) == CommandResult::kAccepted);
+  const double y_held = y_m(c.status().reference);
+  s.tick(c);
+  CHECK(is_quiet());
+  DOUBLES_EQUAL(y_held, y_m(c.status().reference), 1e-12);
+  CHECK(c.status().state == SequencerState::kReady);
+}
