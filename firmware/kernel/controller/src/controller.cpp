@@ -9,7 +9,6 @@
 
 #include "maglev/io/stage_parameters.hpp"
 #include "maglev/numeric/int64_double.hpp"
-#include "maglev/numeric/opaque_pointer.hpp"
 #include "maglev/numeric/saturation.hpp"
 
 namespace maglev::kernel {
@@ -451,7 +450,7 @@ CommandResult Controller<Scalar>::start_excitation(const MotionCommand& cmd) {
 
 template <typename Scalar>
 void Controller<Scalar>::radii(float r[kAxisCount]) const {
-  const Applied& ap = *numeric::OpaquePointer(&applied_[active_]);
+  const Applied& ap = applied();
   for (int a = 0; a < kAxisCount; ++a) {
     r[a] = static_cast<float>(std::sqrt(ap.inertia_over_two_b_star[a] / ap.inertia_over_two_b_star[0]));
   }
@@ -629,7 +628,7 @@ io::ActuatorCommand Controller<Scalar>::step(const io::SensorSample& sample, boo
 // 2. supervisor: checks on this sample and last tick's commands.
 template <typename Scalar>
 void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_overrun, Tick& t) {
-  const Applied& ap = *numeric::OpaquePointer(&applied_[active_]);
+  const Applied& ap = applied();
   SupervisorInputs& si = t.si;
   si.sample = &sample;
   si.tick_overrun = tick_overrun;
@@ -755,7 +754,7 @@ void Controller<Scalar>::sequence(Tick& t) {
 // sequencer until Ready.
 template <typename Scalar>
 void Controller<Scalar>::advance_references(Tick& t) {
-  const Applied& ap = *numeric::OpaquePointer(&applied_[active_]);
+  const Applied& ap = applied();
   const SequencerOutput& so = *t.so;
   // A quiet axis -- closed this tick and the last, no profile, no pending
   // step, and neither the landed-z nor the TiltLock rule applies -- keeps
@@ -916,7 +915,7 @@ void Controller<Scalar>::excite(Tick& t) {
 // 6. axis loops (all run; outputs selected by the closed mask).
 template <typename Scalar>
 void Controller<Scalar>::run_axis_loops(Tick& t) {
-  const Applied& ap = *numeric::OpaquePointer(&applied_[active_]);
+  const Applied& ap = applied();
   const SequencerOutput& so = *t.so;
   const Scalar ff_fraction = Traits::from_float(so.feedforward_fraction);
   // The sequencer's fraction may exceed 1 (cable stiffness, payload margin),
@@ -928,33 +927,27 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
   // reference for the loops only, taken off again below (exact integers).
   const int inj_axis = injection_.axis;
   if (t.reference_injection_pm != 0) status_.reference.pico[inj_axis] += t.reference_injection_pm;
-  Pid2DofState<Scalar>* const pid_state = pid_state_;
-  InternalModelState<Scalar>* const imr_state = imr_state_;
-  const std::int64_t* const reference_pm = status_.reference.pico;
-  const std::int64_t* const measured_pm = status_.pose.pico;
-  BiquadBank<Scalar, kAxisCount>& filters = filters_;
-  float* const loop_effort_A = status_.loop_effort_A;
 #pragma GCC unroll 6
   for (int a = 0; a < kAxisCount; ++a) {
-    AxisLoop<Scalar> l(ap.type[a], &ap.pid[a], &pid_state[a], &ap.imr[a], &imr_state[a]);
+    AxisLoop<Scalar> l = loop(ap, a);
     // Only the error (and this tick's explicit step) become Scalar: +-128 um.
-    const Scalar e_um = numeric::pico_to_micro<Scalar>(reference_pm[a] - measured_pm[a]);
+    const Scalar e_um = numeric::pico_to_micro<Scalar>(status_.reference.pico[a] - status_.pose.pico[a]);
     // The explicit step is zero on almost every tick (0 pm is exactly 0).
     const Scalar dr_um = t.step_pm[a] == 0 ? Traits::zero() : numeric::pico_to_micro<Scalar>(t.step_pm[a]);
     const Scalar ff = a == axis_index(Axis::kZ) ? gravity_A + t.accel_ff[a] : t.accel_ff[a];
     const Scalar v_loop = l.update(e_um, dr_um, ff);
-    const Scalar v = filters.update(a, ap.filter[a], ap.filtered[a], v_loop);
+    const Scalar v = filters_.update(a, ap.filter[a], ap.filtered[a], v_loop);
     t.aw_offset[a] = v_loop - v;
     const Scalar loop_out = l.saturate(v);
     // Published as it is made (publish_status() zeroes it with the amplifiers off).
-    loop_effort_A[a] = Traits::to_float(loop_out);
+    status_.loop_effort_A[a] = Traits::to_float(loop_out);
     const bool closed = (so.closed_axes & (1u << a)) != 0;
     // Open axis: no feedback, only the feed-forward (the gravity lift of z).
     // Closed axis: the loop plus the excitation d (zero unless kExcite runs).
     t.effort[a] = closed ? loop_out + t.excitation[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
     if (!closed) l.reset(e_um);
   }
-  filters.end_tick();
+  filters_.end_tick();
   if (t.reference_injection_pm != 0) status_.reference.pico[inj_axis] -= t.reference_injection_pm;
 }
 
@@ -965,7 +958,7 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
 // clamp + current-limit loss: pass (k U - d) + (v_loop - v_filtered).
 template <typename Scalar>
 void Controller<Scalar>::allocate_forces(Tick& t) {
-  const Applied& ap = *numeric::OpaquePointer(&applied_[active_]);
+  const Applied& ap = applied();
   // Cross-coupling correction U' = C U (issue 15): only when one is set or
   // ramping, so the default kernel's arithmetic is untouched.
   const bool coupled = config_.coupling.enabled != 0 || ramp_.left != 0;
@@ -995,12 +988,10 @@ void Controller<Scalar>::allocate_forces(Tick& t) {
     // The loops' anti-windup works in uncorrected efforts: what they got is k U.
     for (int a = 0; a < kAxisCount; ++a) t.out.applied_effort_A[a] = t.out.scale_k * t.effort[a];
   }
-  Pid2DofState<Scalar>* const pid_state = pid_state_;
-  InternalModelState<Scalar>* const imr_state = imr_state_;
   const bool antiwindup = config_.antiwindup;
 #pragma GCC unroll 6
   for (int a = 0; a < kAxisCount; ++a) {
-    AxisLoop<Scalar> l(ap.type[a], &ap.pid[a], &pid_state[a], &ap.imr[a], &imr_state[a]);
+    AxisLoop<Scalar> l = loop(ap, a);
     const bool closed = (t.so->closed_axes & (1u << a)) != 0;
     const Scalar applied_loop = t.out.applied_effort_A[a] - t.excitation[a] + t.aw_offset[a];
     // Open axes (state reset) and anti-windup off: no correction.
@@ -1011,7 +1002,7 @@ void Controller<Scalar>::allocate_forces(Tick& t) {
 // 9. coil currents -> DAC codes; amplifiers only when the sequencer says so.
 template <typename Scalar>
 io::ActuatorCommand Controller<Scalar>::coil_currents_to_dac(const Tick& t) {
-  const Applied& ap = *numeric::OpaquePointer(&applied_[active_]);
+  const Applied& ap = applied();
   io::ActuatorCommand cmd = io::kSafeActuatorCommand;
   const bool enable = t.so->amplifier_enable;
   if (enable) {

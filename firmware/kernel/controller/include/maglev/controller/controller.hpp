@@ -24,6 +24,7 @@
 #include "maglev/io/actuator_command.hpp"
 #include "maglev/io/sensor_sample.hpp"
 #include "maglev/io/stage_parameters.hpp"
+#include "maglev/numeric/opaque_pointer.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
 #include "maglev/references/references.hpp"
 #include "maglev/sensors_to_pose/sensors_to_pose.hpp"
@@ -377,7 +378,15 @@ class Controller {
     std::uint32_t left = 0;
     float from[kCouplingMatrixSize] = {};
   };
-  // Axis a's loop, whichever type the config selected (AxisLoop dispatches).
+  // The active configuration, through numeric::OpaquePointer: GCC otherwise
+  // rebuilds this + 2272 * active_ + offset before nearly every float load
+  // of the unrolled per-axis code (docs/PERFORMANCE.md, "Session of
+  // 2026-11-28").
+  const Applied& applied() const { return *numeric::OpaquePointer(&applied_[active_]); }
+  // Axis a's loop, whichever type `ap` selected (AxisLoop dispatches).
+  AxisLoop<Scalar> loop(const Applied& ap, int a) {
+    return AxisLoop<Scalar>(ap.type[a], &ap.pid[a], &pid_state_[a], &ap.imr[a], &imr_state_[a]);
+  }
 
   // The locals of one step(), handed from stage to stage of the data path.
   // The arrays and results below are written in full by their stage every

@@ -1,6 +1,6 @@
 // A pointer the optimizer must keep as a value (issue 16).
 //
-// The controller is one large object (~12 KB): its configuration, states and
+// The controller is one large object (~15 KB): its configuration, states and
 // status sit at offsets that a VFP load cannot encode (VLDR reaches +-1020
 // bytes, ADDW 4095). Given `this + constant`, GCC rematerializes the address
 // (MOVW/MLA/ADDW, two or three instructions) before nearly every float load
