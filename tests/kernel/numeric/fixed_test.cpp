@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "CppUTest/TestHarness.h"
@@ -185,6 +186,94 @@ TEST(Fixed, DivideRoundsAndSaturates) {
   LONGS_EQUAL(kMax, (R(kMin) / R(-1)).raw());
 }
 
+// Rounded once: raw is the nearest integer to sum / 2^shift with ties away
+// from zero, i.e. the exact int64 residual sum - raw 2^shift lies in
+// [-half, half], and is -half only for a positive sum (ties up) and +half
+// only for a negative one (ties down); or raw saturated and beyond.
+static void CheckRoundedOnce(std::int64_t sum, int shift, std::int32_t raw) {
+  const std::int64_t half = std::int64_t{1} << (shift - 1);
+  const std::int64_t limit = std::int64_t{kMax} << shift;  // |sum| / 2^shift beyond kMax + 1/2 saturates
+  if (sum >= limit + half) {
+    LONGS_EQUAL(kMax, raw);
+    return;
+  }
+  if (sum <= -limit - half) {
+    LONGS_EQUAL(kMin, raw);
+    return;
+  }
+  const std::int64_t r = sum - std::int64_t{raw} * (std::int64_t{1} << shift);
+  CHECK(r >= -half && r <= half);
+  if (r == -half) CHECK(sum > 0);
+  if (r == half) CHECK(sum < 0);
+}
+
+TEST(Fixed, SumsOfProductsRoundOnce) {
+  std::uint64_t rng = 0x51u;
+  auto raw_below = [&rng](int bits) {
+    const auto v = static_cast<std::int64_t>(NextRandom(&rng) >> (64 - bits)) - (std::int64_t{1} << (bits - 1));
+    return static_cast<std::int32_t>(v < -kMax ? -kMax : v);
+  };
+  for (int n = 0; n < 20000; ++n) {
+    // Magnitudes from tiny to near the range, so sums of three stay below 2^63.
+    const int bits = 2 + n % 29;
+    const Q7_24 a0 = Q7_24::from_raw(raw_below(bits)), b0 = Q7_24::from_raw(raw_below(31));
+    const Q7_24 a1 = Q7_24::from_raw(raw_below(bits)), b1 = Q7_24::from_raw(raw_below(31));
+    const Q7_24 a2 = Q7_24::from_raw(raw_below(bits)), b2 = Q7_24::from_raw(raw_below(31));
+    const std::int64_t p0 = std::int64_t{a0.raw()} * b0.raw(), p1 = std::int64_t{a1.raw()} * b1.raw(),
+                       p2 = std::int64_t{a2.raw()} * b2.raw();
+    CheckRoundedOnce(p0 + p1, 24, Q7_24::dot2(a0, b0, a1, b1).raw());
+    CheckRoundedOnce(p0 + p1 + p2, 24, Q7_24::dot3(a0, b0, a1, b1, a2, b2).raw());
+    const Q3_28 c0 = Q3_28::from_raw(raw_below(bits)), c1 = Q3_28::from_raw(raw_below(bits));
+    const std::int64_t q = std::int64_t{c0.raw()} * b0.raw() + std::int64_t{c1.raw()} * b1.raw();
+    CheckRoundedOnce(q, 28, Q7_24::mul_sum2(c0, b0, c1, b1).raw());
+    // The float kernel's forms are its two macs, unchanged.
+    using Tf = maglev::numeric::ScalarTraits<float>;
+    const float fc0 = static_cast<float>(c0.to_double()), fv0 = b0.to_float();
+    const float fc1 = static_cast<float>(c1.to_double()), fv1 = b1.to_float();
+    double two_macs = 0.0;
+    Tf::mac(two_macs, fc0, fv0);
+    Tf::mac(two_macs, fc1, fv1);
+    const float fsum = Tf::mul_sum2(fc0, fv0, fc1, fv1);
+    const float fref = Tf::acc_to_scalar(two_macs);
+    CHECK(std::memcmp(&fsum, &fref, sizeof(float)) == 0);
+  }
+  // Products at full scale: exact sums beyond the range saturate on their side,
+  // cancelling ones do not.
+  const Q7_24 mx = Q7_24::max(), mn = Q7_24::min();
+  LONGS_EQUAL(kMax, Q7_24::dot3(mx, mx, mx, mx, mx, mx).raw());
+  LONGS_EQUAL(kMin, Q7_24::dot3(mx, mn, mx, mn, mn, mx).raw());
+  LONGS_EQUAL(kMax, Q7_24::dot2(mn, mn, mx, mx).raw());
+  LONGS_EQUAL(kMax, Q7_24::dot3(mx, mx, mx, mx, mn, mx).raw());  // int64 overflow on the way, still beyond
+  LONGS_EQUAL(Q7_24::from_double(3.0).raw(),
+              Q7_24::dot3(mx, mx, mn, mx, Q7_24::from_double(1.5), Q7_24::from_double(2.0)).raw());
+}
+
+TEST(Fixed, ToFloatEqualsRoundingTheExactDouble) {
+  std::uint64_t rng = 0x54u;
+  auto check = [](std::int32_t raw) {
+    const Q7_24 v = Q7_24::from_raw(raw);
+    const float a = v.to_float();
+    const float b = static_cast<float>(v.to_double());
+    CHECK(std::memcmp(&a, &b, sizeof a) == 0);
+    const Q3_28 c = Q3_28::from_raw(raw);
+    const float ca = c.to_float(), cb = static_cast<float>(c.to_double());
+    CHECK(std::memcmp(&ca, &cb, sizeof ca) == 0);
+  };
+  const std::int32_t edges[] = {0, 1, -1, kMax, kMin, (1 << 24) + 1, -(1 << 24) - 1, (1 << 25) + 3, 16777217, -16777217};
+  for (std::int32_t raw : edges) check(raw);
+  for (std::int32_t raw = -200000; raw <= 200000; ++raw) check(raw);
+  for (int n = 0; n < 200000; ++n) check(static_cast<std::int32_t>(NextRandom(&rng) >> 33) * ((n & 1) ? 1 : -1));
+  // Float's ties: above 2^e a float's ulp is 2^(e-23), so 2^e + k 2^(e-24) for
+  // odd k lies halfway between two floats (ties to even on both sides).
+  for (int e = 25; e <= 30; ++e) {
+    for (std::int32_t k = 1; k < 2000; k += 2) {
+      const std::int32_t tie = (std::int32_t{1} << e) + k * (std::int32_t{1} << (e - 24));
+      check(tie);
+      check(-tie);
+    }
+  }
+}
+
 TEST(Fixed, Comparisons) {
   CHECK(Q7_24::from_double(-1.0) < Q7_24::from_double(0.5));
   CHECK(Q7_24::from_double(0.5) == Q7_24::from_double(0.5));
@@ -207,6 +296,28 @@ TEST(Wide, MacIsExactAndNarrowingRounds) {
   LONGS_EQUAL(kMax, Q31_32::from_double(1000.0).to_fixed<24>().raw());
   LONGS_EQUAL(kMin, Q31_32::from_double(-1000.0).to_fixed<24>().raw());
   DOUBLES_EQUAL(1.5, Q31_32::from_fixed(Q7_24::from_double(1.5)).to_double(), 0.0);
+}
+
+TEST(Wide, MacSumRoundsTheExactSumOnce) {
+  std::uint64_t rng = 0x52u;
+  for (int n = 0; n < 20000; ++n) {
+    const auto c = Q3_28::from_raw(static_cast<std::int32_t>(NextRandom(&rng) >> 33) - (1 << 30));
+    const auto v0 = Q7_24::from_raw(static_cast<std::int32_t>(NextRandom(&rng) >> 33) - (1 << 30));
+    const auto v1 = Q7_24::from_raw(static_cast<std::int32_t>(NextRandom(&rng) >> 33) - (1 << 30));
+    Q31_32 acc{};
+    acc.mac_sum(c, v0, v1);
+    // The exact product has 52 fraction bits; Q31.32 keeps 32: shift by 20.
+    const std::int64_t p = std::int64_t{c.raw()} * (std::int64_t{v0.raw()} + v1.raw());
+    const std::int64_t half = std::int64_t{1} << 19;
+    const std::int64_t r = p - acc.raw() * (std::int64_t{1} << 20);
+    CHECK(r >= -half && r <= half);
+    if (r == -half) CHECK(p > 0);
+    if (r == half) CHECK(p < 0);
+  }
+  // At full scale the sum of the two signals is exact (no 32-bit saturation).
+  Q31_32 full{};
+  full.mac_sum(Q3_28::one(), Q7_24::max(), Q7_24::max());
+  CHECK(full.raw() == std::int64_t{kMax} * 2 * 256);
 }
 
 TEST(Wide, SaturatesInsteadOfWrapping) {
@@ -279,6 +390,46 @@ TEST(Saturation, PicoToMicroIsExactAndSaturates) {
   DOUBLES_EQUAL(127.999999, static_cast<double>(pico_to_micro<float>(INT64_MAX)), 1e-4);
   DOUBLES_EQUAL(-127.999999, static_cast<double>(pico_to_micro<float>(INT64_MIN)), 1e-4);
   DOUBLES_EQUAL(0.010, static_cast<double>(pico_to_micro<float>(10000)), 1e-9);
+  // The double form equals the exact integer form: every difference within
+  // 4e6 pm (2e5 on the M7) of 0 and of both saturation edges, the differences whose quotient
+  // lies closest to a half-integer (d 2^18 mod 15625 = 7812 or 7813), the
+  // extremes, and a random sweep over the whole int64 range and over +-2e8 pm.
+  using maglev::numeric::pico_to_micro_exact;
+  auto same = [](std::int64_t d) { return pico_to_micro<Q7_24>(d).raw() == pico_to_micro_exact<Q7_24>(d).raw(); };
+  const std::int64_t edge = 128000000;  // 128 um
+#if defined(__arm__)
+  constexpr std::int64_t kWindow = 200000;  // under QEMU: a part of the host's windows
+  constexpr int kRandom = 20000;
+#else
+  constexpr std::int64_t kWindow = 4000000;
+  constexpr int kRandom = 200000;
+#endif
+  for (std::int64_t centre : {std::int64_t{0}, edge, -edge}) {
+    for (std::int64_t d = centre - kWindow; d <= centre + kWindow; ++d) {
+      if (!same(d)) FAIL(("pico_to_micro differs from the exact form at " + std::to_string(d)).c_str());
+    }
+  }
+  int near_ties = 0;
+  for (std::int64_t target : {std::int64_t{7812}, std::int64_t{7813}}) {
+    std::int64_t first = 0;  // d 2^18 = target (mod 15625)
+    while (first * 262144 % 15625 != target) ++first;
+    for (std::int64_t d = first - 130000000 / 15625 * 15625; d <= 130000000; d += 15625) {
+      ++near_ties;
+      if (!same(d)) FAIL(("pico_to_micro differs near a tie at " + std::to_string(d)).c_str());
+    }
+  }
+  CHECK(near_ties > 30000);
+  for (std::int64_t d : {INT64_MAX, INT64_MIN, INT64_MIN + 1, std::int64_t{1} << 53, -(std::int64_t{1} << 53),
+                         (std::int64_t{1} << 53) + 1, std::int64_t{130000000}, std::int64_t{-130000000}}) {
+    CHECK(same(d));
+  }
+  std::uint64_t rng = 0x53u;
+  for (int n = 0; n < kRandom; ++n) {
+    const auto wide = static_cast<std::int64_t>(NextRandom(&rng));
+    const auto narrow = static_cast<std::int64_t>(NextRandom(&rng) % 400000001u) - 200000000;
+    CHECK(same(wide));
+    CHECK(same(narrow));
+  }
   CHECK(maglev::numeric::micro_to_pico(8.0) == 8000000);
   CHECK(maglev::numeric::si_to_pico(0.056) == 56000000000LL);
 }

@@ -162,8 +162,7 @@ class Pid2Dof {
     // Setpoint weighting of the step (see header comment).
     Terms::weight_step(s.integrator, s.prev_d_input, c.one_minus_b_kp, c.c, reference_step_um);
     // Integral: Tustin.
-    Traits::mac(s.integrator, c.ki_half_T, e);
-    Traits::mac(s.integrator, c.ki_half_T, s.prev_error);
+    Traits::mac_sum(s.integrator, c.ki_half_T, e, s.prev_error);
     s.prev_error = e;
     // Derivative, first-order filtered, on e minus the (1-c) part of steps.
     Terms::filtered_derivative(s.derivative, s.prev_d_input, c.a_d, c.b_d, e);

@@ -34,18 +34,32 @@ inline constexpr std::int64_t kPicoPerMicro = 1000000;
 // to a Scalar in um (urad). The result saturates cleanly at the Scalar range
 // (+-128 um for both float and Q7.24, see ScalarTraits<float>::kMaxMagnitude):
 // a huge difference (e.g. a lost interferometer count) gives +-max, never a
-// wrapped value. Q7.24: exact integer arithmetic, round half away from zero.
+// wrapped value. Q7.24: the exact quotient rounded half away from zero.
 template <typename Scalar>
 constexpr Scalar pico_to_micro(std::int64_t diff_pico) {
   using Traits = ScalarTraits<Scalar>;
-  // 2^31 / 2^24 um = 128 um = 1.28e8 pm; clamp first so the products below
-  // cannot overflow (1.28e8 * 2^24 ~ 2.1e15 << 2^63).
-  constexpr std::int64_t kClampPico = 130000000;
   if constexpr (Traits::kIsFixed) {
-    const std::int64_t d = diff_pico > kClampPico ? kClampPico : (diff_pico < -kClampPico ? -kClampPico : diff_pico);
+    // The same raw as the exact integer form (pico_to_micro_exact, below)
+    // from one double product and one 32-bit VCVT, with no int64 division
+    // estimate and remainder tests (~33 M7 instructions an axis, issue 16).
+    // Why it is exact: the quotient d 2^F / 10^6 = d 2^(F-6) / 5^6 has an odd
+    // denominator, so it is never a tie and lies at least 1/31250 = 3.2e-5
+    // from every half-integer; the double product (d exact below 2^53, the
+    // factor and the product each rounded once) and the + 0.5 are within
+    // 7.3e-7 of it wherever |q| < 2^31 (beyond, both saturate), so
+    // truncating q + 0.5 rounds as the exact form does, ties away from zero
+    // on both sides by symmetry. kernel_numeric_test compares the two over
+    // every boundary and a dense sweep.
     constexpr int F = Scalar::kFracBits;
-    const std::int64_t raw = detail::div_round(d * (std::int64_t{1} << F), kPicoPerMicro);
-    return Scalar::from_raw(detail::saturate32(raw));
+    static_assert(F >= 6, "the no-tie argument needs 2^F / 10^6 to have an odd denominator");
+    constexpr double kRawPerPico = detail::pow2(F) / 1e6;
+    const double q = Int64ToDouble(diff_pico) * kRawPerPico;
+    if (q >= 0.0) {
+      const double t = q + 0.5;
+      return Scalar::from_raw(t < 2147483648.0 ? static_cast<std::int32_t>(t) : detail::kRaw32Max);
+    }
+    const double t = 0.5 - q;
+    return Scalar::from_raw(t < 2147483648.0 ? -static_cast<std::int32_t>(t) : detail::kRaw32Min);
   } else {
     // No int64 clamp (two 64-bit compares and selects on the M7): the
     // conversion is exact below 2^53 pm, and from_double's own clamp at
@@ -53,6 +67,19 @@ constexpr Scalar pico_to_micro(std::int64_t diff_pico) {
     // bits are those of the clamped form for every diff (issue 16).
     return Traits::from_double(Int64ToDouble(diff_pico) * 1e-6);
   }
+}
+
+// The definition pico_to_micro's fixed-point form must agree with: the
+// difference clamped, then exact integer division, round half away from zero.
+template <typename Scalar>
+constexpr Scalar pico_to_micro_exact(std::int64_t diff_pico) {
+  // 2^31 / 2^24 um = 128 um = 1.28e8 pm; clamp first so the product below
+  // cannot overflow (1.3e8 * 2^24 ~ 2.2e15 << 2^63).
+  constexpr std::int64_t kClampPico = 130000000;
+  const std::int64_t d = diff_pico > kClampPico ? kClampPico : (diff_pico < -kClampPico ? -kClampPico : diff_pico);
+  constexpr int F = Scalar::kFracBits;
+  const std::int64_t raw = detail::div_round(d * (std::int64_t{1} << F), kPicoPerMicro);
+  return Scalar::from_raw(detail::saturate32(raw));
 }
 
 // Positions in um (urad) as double -> 64-bit pm (prad), round half away from

@@ -56,6 +56,19 @@ struct ScalarTraits<float> {
   static constexpr double acc_to_double(Acc a) { return a; }
   static constexpr Scalar acc_to_scalar(Acc a) { return from_double(a); }
   static constexpr void mac(Acc& acc, Coeff c, Scalar v) { acc += static_cast<double>(c) * static_cast<double>(v); }
+  // acc += c (v0 + v1) and c0 v0 + c1 v1: the fixed-point kernel rounds each
+  // once (Fixed::mac_sum, mul_sum2); here they are the two macs they always
+  // were, in the same order, so the float kernel keeps its bits.
+  static constexpr void mac_sum(Acc& acc, Coeff c, Scalar v0, Scalar v1) {
+    mac(acc, c, v0);
+    mac(acc, c, v1);
+  }
+  static constexpr Scalar mul_sum2(Coeff c0, Scalar v0, Coeff c1, Scalar v1) {
+    Acc acc = acc_zero();
+    mac(acc, c0, v0);
+    mac(acc, c1, v1);
+    return acc_to_scalar(acc);
+  }
   static constexpr Acc acc_mul(Acc a, Coeff c) { return a * static_cast<double>(c); }
 
   static constexpr SinCos<Scalar> sin_cos(std::uint32_t phase) {
@@ -96,6 +109,11 @@ struct ScalarTraits<Fixed<F>> {
   static constexpr double acc_to_double(Acc a) { return a.to_double(); }
   static constexpr Scalar acc_to_scalar(Acc a) { return a.template to_fixed<F>(); }
   static constexpr void mac(Acc& acc, Coeff c, Scalar v) { acc.mac(c, v); }
+  // Rounded once each (issue 16; fixed.hpp "Sums of products rounded ONCE").
+  static constexpr void mac_sum(Acc& acc, Coeff c, Scalar v0, Scalar v1) { acc.mac_sum(c, v0, v1); }
+  static constexpr Scalar mul_sum2(Coeff c0, Scalar v0, Coeff c1, Scalar v1) {
+    return Scalar::mul_sum2(c0, v0, c1, v1);
+  }
   static constexpr Acc acc_mul(Acc a, Coeff c) { return a.mul(c); }
 
   static constexpr SinCos<Scalar> sin_cos(std::uint32_t phase) {

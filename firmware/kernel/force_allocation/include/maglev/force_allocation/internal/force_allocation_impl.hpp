@@ -115,14 +115,21 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
   // exactly zero (checked at configuration). Summed from +0, a +-0 product
   // never changes a sum (x + -0 = x, +0 + -0 = +0), so the three terms give
   // the bits of the six: 24 multiply-adds instead of 48.
+  // Fixed point sums the three exact products and rounds once
+  // (Fixed::dot3); float keeps its product-by-product sum.
   Scalar g[kForcerForces];
 #pragma GCC unroll 8
   for (int r = 0; r < kForcerForces; ++r) {
     const int first = (r & 1) == 0 ? 0 : kHorizontalEfforts;
-    Scalar acc = Traits::zero();
+    if constexpr (Traits::kIsFixed) {
+      g[r] = Scalar::dot3(state.b[r][first], effort_A[first], state.b[r][first + 1], effort_A[first + 1],
+                          state.b[r][first + 2], effort_A[first + 2]);
+    } else {
+      Scalar acc = Traits::zero();
 #pragma GCC unroll 3
-    for (int c = first; c < first + kHorizontalEfforts; ++c) acc += state.b[r][c] * effort_A[c];
-    g[r] = acc;
+      for (int c = first; c < first + kHorizontalEfforts; ++c) acc += state.b[r][c] * effort_A[c];
+      g[r] = acc;
+    }
   }
   // i = 2 S_xy G, eq (24). Row j of S_xy (eq 23) is (sin psi_j, cos psi_j) on
   // its forcer's (F_h, F_z): the transpose of column j of eq (19). One table
@@ -134,19 +141,30 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
   // Per coil (sin psi_j, cos psi_j): one table lookup per forcer.
   // A forcer with the phase of an earlier one plus whole quarter turns
   // (CommutationTables::same_as) takes its table values rotated, exactly.
+  // Fixed point keeps the table's Q30 values (sin_q30, cos_q30) and rounds
+  // each coil's current once from them (below); float converts them.
   Scalar sin_psi[io::kCoils], cos_psi[io::kCoils];
+  std::int32_t sin_q30[io::kCoils], cos_q30[io::kCoils];
   numeric::SinCosQ30 table[kForcers];
 #pragma GCC unroll 4
   for (int k = 0; k < kForcers; ++k) {
     const int j = state.commutation.same_as[k];
     table[k] = j < 0 ? numeric::sin_cos_q30(phase[k])
                      : numeric::rotate_quarters(table[j], state.commutation.quarter_turns[k]);
-    const auto sc = Traits::from_q30(table[k]);
     const bool leads = state.commutation.second_coil_leads[k];
-    sin_psi[2 * k] = sc.sin;
-    cos_psi[2 * k] = sc.cos;
-    sin_psi[2 * k + 1] = leads ? sc.cos : -sc.cos;
-    cos_psi[2 * k + 1] = leads ? -sc.sin : sc.sin;
+    if constexpr (Traits::kIsFixed) {
+      const std::int32_t sn = table[k].sin, cs = table[k].cos;  // |.| <= 2^30: negation exact
+      sin_q30[2 * k] = sn;
+      cos_q30[2 * k] = cs;
+      sin_q30[2 * k + 1] = leads ? cs : -cs;
+      cos_q30[2 * k + 1] = leads ? -sn : sn;
+    } else {
+      const auto sc = Traits::from_q30(table[k]);
+      sin_psi[2 * k] = sc.sin;
+      cos_psi[2 * k] = sc.cos;
+      sin_psi[2 * k + 1] = leads ? sc.cos : -sc.cos;
+      cos_psi[2 * k + 1] = leads ? -sc.sin : sc.sin;
+    }
   }
   if (state.coil_centres_active) {
     // Coil j's vertical force (units of 2 b*) is h_j cos psi_j, acting at its
@@ -184,7 +202,14 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
 #pragma GCC unroll 4
       for (int k = 0; k < kForcers; ++k) {
         if (!state.arm_active[row][k]) continue;
-        const C s = to_c(sin_psi[2 * k]), c = to_c(cos_psi[2 * k]);
+        C s, c;
+        if constexpr (Traits::kIsFixed) {  // Q30, exact in double
+          s = static_cast<double>(sin_q30[2 * k]) * 0x1.0p-30;
+          c = static_cast<double>(cos_q30[2 * k]) * 0x1.0p-30;
+        } else {
+          s = sin_psi[2 * k];
+          c = cos_psi[2 * k];
+        }
         const C arm_a = state.coil_torque_arm[row][2 * k], arm_b = state.coil_torque_arm[row][2 * k + 1];
         const C qh = (arm_a - arm_b) * (s * c);
         const C qz = arm_a * (c * c) + arm_b * (s * s);
@@ -213,7 +238,13 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
     // Only the F_z rows: an F_h row's B[r][4], B[r][5] are +-0, and g - (+-0)
     // is g (g is never -0: it is a sum that started at +0).
 #pragma GCC unroll 4
-    for (int r = 1; r < kForcerForces; r += 2) g[r] = g[r] - state.b[r][4] * px - state.b[r][5] * py;
+    for (int r = 1; r < kForcerForces; r += 2) {
+      if constexpr (Traits::kIsFixed) {
+        g[r] = Scalar::dot3(g[r], Traits::one(), -state.b[r][4], px, -state.b[r][5], py);  // rounded once
+      } else {
+        g[r] = g[r] - state.b[r][4] * px - state.b[r][5] * py;
+      }
+    }
   }
   // Work with half-currents h = i / 2 until the limit is applied: doubles
   // the Q7.24 headroom (|h| < 128 A), so efforts up to ~20 A per axis never
@@ -223,7 +254,13 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
 #pragma GCC unroll 8
   for (int j = 0; j < io::kCoils; ++j) {
     const int f = j & ~1;
-    half_i[j] = sin_psi[j] * g[f] + cos_psi[j] * g[f + 1];
+    if constexpr (Traits::kIsFixed) {
+      // Q30 x Q24 products, exact sum below 2^62, rounded once to Q24.
+      half_i[j] = Scalar::template round_product_sum<30>(
+          numeric::detail::product_sum2(sin_q30[j], g[f].raw(), cos_q30[j], g[f + 1].raw()));
+    } else {
+      half_i[j] = sin_psi[j] * g[f] + cos_psi[j] * g[f + 1];
+    }
   }
   Scalar max_abs = Traits::zero();
 #pragma GCC unroll 8
@@ -231,8 +268,20 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
   // One common factor k <= 1 keeps the wrench direction: saturation never
   // becomes a cross-axis force. k = (peak/2) / max(max|h|, peak/2) is exactly
   // 1 when nothing is limited (x / x == 1 in float and in Fixed).
+  const bool saturated = state.half_peak_current_A < max_abs;
+  out->saturated = saturated;
+  if constexpr (Traits::kIsFixed) {
+    // Nothing limited (nearly every tick): k is exactly one (x / x), and a
+    // product with one() is exact in Fixed, so skipping the division and the
+    // 14 products (~17 M7 instructions each) gives the same bits.
+    if (!saturated) {
+      out->scale_k = Traits::one();
+      for (int j = 0; j < io::kCoils; ++j) out->current_A[j] = half_i[j] + half_i[j];
+      for (int c = 0; c < kEfforts; ++c) out->applied_effort_A[c] = effort_A[c];
+      return;
+    }
+  }
   const Scalar k = state.half_peak_current_A / detail_fa::MaxScalar(max_abs, state.half_peak_current_A);
-  out->saturated = state.half_peak_current_A < max_abs;
   out->scale_k = k;
   for (int j = 0; j < io::kCoils; ++j) {
     const Scalar scaled = k * half_i[j];
