@@ -407,9 +407,8 @@ class InternalModelRegulator {
     auto v = s.xi[0];
     v += Traits::acc_mul(s.xi[1], c.out_r[0]);
     v += Traits::acc_mul(s.xi[2], c.out_r[1]);
-    Traits::mac(v, c.k_e, e);
     Terms::filtered_derivative(s.derivative, s.prev_d_input, c.a_d, c.b_d, e);
-    s.last_output = Terms::finish_output(v, s.derivative, feedforward_A);
+    s.last_output = Terms::output(v, c.k_e, e, s.derivative, feedforward_A);  // + k_e e, one rounding
     // Advance the internal model (eq (14), exact discrete poles).
     Traits::mac(s.xi[0], c.in_xi0, e);
     s.xi[1] += Traits::acc_mul(s.xi[2], c.eps);

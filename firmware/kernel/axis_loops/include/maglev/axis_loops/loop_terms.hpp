@@ -9,7 +9,9 @@
 //   filtered_derivative()  D_k = a_d D_{k-1} + b_d (e_k - e_{k-1}) (Tustin,
 //                          first-order filtered), one rounding of the exact
 //                          sum in fixed point (Fixed::mul_sum2);
-//   finish_output()        v + D + u_ff in the wide accumulator, one rounding.
+//   finish_output()        v + D + u_ff in the wide accumulator, one rounding;
+//   output()               acc + k e + D + u_ff: in fixed point the exact
+//                          sum, rounded once.
 // The anti-windup (apply_limit) is NOT shared: the PID back-calculates one
 // integrator with gain T/Tt, the regulator feeds E (u - v) into all three
 // model states (paper 002 eq (17)).
@@ -39,6 +41,26 @@ struct LoopTerms {
   static void filtered_derivative(Scalar& derivative, Scalar& prev_d_input, Coeff a_d, Coeff b_d, Scalar e) {
     derivative = Traits::mul_sum2(a_d, derivative, b_d, e - prev_d_input);
     prev_d_input = e;
+  }
+
+  // v = acc + k e + D + u_ff. Fixed point, whenever |acc| < 2^40 raw (256 A;
+  // the PID bounds its integrator to 64 A): the exact sum in Q52 (acc 2^20,
+  // k e, (D + u_ff) 2^28: below 2^62 + 2^61), rounded once to the Scalar. The
+  // general form (mac, then finish_output) rounds k e to the accumulator first.
+  static Scalar output(Acc acc, Coeff k, Scalar e, Scalar derivative, Scalar feedforward) {
+    if constexpr (Traits::kIsFixed) {
+      constexpr int kAccToProduct = Coeff::kFracBits + Scalar::kFracBits - Acc::kFracBits;  // 20
+      constexpr int kScalarToProduct = Coeff::kFracBits;                                     // 28
+      static_assert(kAccToProduct >= 0 && kAccToProduct <= 22 && kScalarToProduct <= 28);
+      const std::int64_t raw = acc.raw();
+      if (static_cast<std::uint64_t>(raw) + (std::uint64_t{1} << 40) < (std::uint64_t{1} << 41)) {
+        const std::int64_t sum = raw * (std::int64_t{1} << kAccToProduct) + std::int64_t{k.raw()} * e.raw() +
+                                 (std::int64_t{derivative.raw()} + feedforward.raw()) * (std::int64_t{1} << kScalarToProduct);
+        return Scalar::template round_product_sum<Coeff::kFracBits>(sum);
+      }
+    }
+    Traits::mac(acc, k, e);
+    return finish_output(acc, derivative, feedforward);
   }
 
   static Scalar finish_output(Acc v, Scalar derivative, Scalar feedforward) {

@@ -166,10 +166,8 @@ class Pid2Dof {
     s.prev_error = e;
     // Derivative, first-order filtered, on e minus the (1-c) part of steps.
     Terms::filtered_derivative(s.derivative, s.prev_d_input, c.a_d, c.b_d, e);
-    // Sum in the wide accumulator, one rounding.
-    auto v = s.integrator;
-    Traits::mac(v, c.kp, e);
-    s.last_output = Terms::finish_output(v, s.derivative, feedforward_A);
+    // I + kp e + D + u_ff, one rounding (LoopTerms::output).
+    s.last_output = Terms::output(s.integrator, c.kp, e, s.derivative, feedforward_A);
     return s.last_output;
   }
 
