@@ -398,6 +398,33 @@ TEST(ForceAllocation, CurrentsProduceCommandedWrenchQ7_24) {
   }
 }
 
+// Q7.24: the unsaturated three-product sum (every |B| < 32) gives the bits of
+// Fixed::dot3, with and without the current limit, for every shipped layout.
+TEST(ForceAllocation, BoundedRowSumsEqualTheSaturatingForm) {
+  for (ForceLayout layout : {ForceLayout::kCross, ForceLayout::kSquare, ForceLayout::kTriangular}) {
+    ForceAllocationConfig cfg = DefaultForceAllocationConfig();
+    cfg.layout = layout;
+    static ForceAllocationState<Q7_24> fast, general;
+    CHECK(ApplyForceAllocationConfig<Q7_24>(cfg, &fast) == ForceAllocationError::kOk);
+    CHECK(fast.b_below_32);
+    general = fast;
+    general.b_below_32 = false;
+    std::mt19937 rng(11u + static_cast<unsigned>(layout));
+    std::uniform_real_distribution<double> pos(-0.03, 0.03);
+    std::uniform_real_distribution<double> eff(-6.0, 6.0);  // past the current limit too
+    for (int n = 0; n < 2000; ++n) {
+      const std::int64_t x_pm = std::llround(pos(rng) * 1e12), y_pm = std::llround(pos(rng) * 1e12);
+      Q7_24 u[6];
+      for (auto& v : u) v = Q7_24::from_double(eff(rng));
+      AllocationOutput<Q7_24> a{}, b{};
+      AllocateCurrents<Q7_24>(u, x_pm, y_pm, fast, &a);
+      AllocateCurrents<Q7_24>(u, x_pm, y_pm, general, &b);
+      for (int j = 0; j < 8; ++j) LONGS_EQUAL(b.current_A[j].raw(), a.current_A[j].raw());
+      LONGS_EQUAL(b.scale_k.raw(), a.scale_k.raw());
+    }
+  }
+}
+
 TEST(ForceAllocation, CurrentLimitKeepsDirectionAndReportsK) {
   ForceAllocationConfig cfg = DefaultForceAllocationConfig();
   static ForceAllocationState<float> st;

@@ -165,6 +165,10 @@ struct ForceAllocationState {
   CorrectionScalar coil_torque_arm[2][io::kCoils];
   CorrectionScalar b_tilt_columns[2][kForcerForces];  // B's theta_x, theta_y columns
   bool coil_centres_active;  // any offset non-zero: AllocateCurrents corrects
+  // Fixed point: every |B| entry below 32 (raw below 2^29), so a sum of three
+  // B x signal products stays below 2^62 and needs no saturating add
+  // (AllocateCurrents). True for every shipped layout (largest |B| 9.6).
+  bool b_below_32;
   // Per row, the forcers with a non-zero arm on either coil: the only ones
   // whose terms the correction sums.
   bool arm_active[2][kForcers];

@@ -51,11 +51,13 @@ MAGLEV_CONFIG_CODE ForceAllocationError ApplyForceAllocationConfig(const ForceAl
   // Every Scalar constant must be representable (Q7.24: |v| < 128) and not
   // lose more than 1e-4 of itself to quantisation when non-zero.
   const auto fits = [](double v) { return v < Traits::kMaxMagnitude && v > -Traits::kMaxMagnitude; };
+  s.b_below_32 = true;
   for (int r = 0; r < kForcerForces; ++r)
     for (int c = 0; c < kEfforts; ++c) {
       const double v = s.tables.b[r][c];
       if (!fits(v)) return ForceAllocationError::kScalarRange;
       s.b[r][c] = Traits::from_double(v);
+      s.b_below_32 = s.b_below_32 && v < 32.0 && v > -32.0;
     }
   s.coil_centres_active = false;
   using C = typename ForceAllocationState<Scalar>::CorrectionScalar;
@@ -122,8 +124,15 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
   for (int r = 0; r < kForcerForces; ++r) {
     const int first = (r & 1) == 0 ? 0 : kHorizontalEfforts;
     if constexpr (Traits::kIsFixed) {
-      g[r] = Scalar::dot3(state.b[r][first], effort_A[first], state.b[r][first + 1], effort_A[first + 1],
-                          state.b[r][first + 2], effort_A[first + 2]);
+      if (state.b_below_32) {  // the same value as dot3: three products below 2^60 sum exactly
+        g[r] = Scalar::template round_product_sum<Scalar::kFracBits>(
+            numeric::detail::product_sum2(state.b[r][first].raw(), effort_A[first].raw(), state.b[r][first + 1].raw(),
+                                          effort_A[first + 1].raw()) +
+            std::int64_t{state.b[r][first + 2].raw()} * effort_A[first + 2].raw());
+      } else {
+        g[r] = Scalar::dot3(state.b[r][first], effort_A[first], state.b[r][first + 1], effort_A[first + 1],
+                            state.b[r][first + 2], effort_A[first + 2]);
+      }
     } else {
       Scalar acc = Traits::zero();
 #pragma GCC unroll 3
