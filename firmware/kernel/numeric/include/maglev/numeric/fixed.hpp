@@ -219,8 +219,9 @@ class Fixed {
   // Sums of products rounded ONCE (issue 16): the exact int64 sum of the
   // raw products, then one shift with round half away from zero and one
   // saturation -- the value of rounding the exact sum, where a chain of
-  // operator* and operator+ rounds and saturates every product (about 17 M7
-  // instructions a product against 2 here). Each product of two raws in
+  // operator* and operator+ rounds and saturates every term (~17 M7
+  // instructions a product, ~5 a sum; a dot3 is about half of its chain).
+  // Each product of two raws in
   // [-INT32_MAX, INT32_MAX] is below 2^62 in magnitude, so two of them sum
   // exactly in int64; a third is added with saturation, and a sum that
   // saturated there is beyond the result's range on the same side, so the
@@ -238,8 +239,9 @@ class Fixed {
   static constexpr Fixed mul_sum2(Fixed<FB> c0, Fixed v0, Fixed<FB> c1, Fixed v1) {
     return round_product_sum<FB>(detail::product_sum2(c0.raw(), v0.raw_, c1.raw(), v1.raw_));
   }
-  // An exact sum of raw products with FracBits + FProduct fraction bits,
-  // rounded to this format and saturated.
+  // An exact sum of raw products whose LSB is 2^-(FracBits + FProduct)
+  // (a product of this format with one of FProduct fraction bits), rounded
+  // to this format and saturated.
   template <int FProduct>
   static constexpr Fixed round_product_sum(std::int64_t sum) {
     static_assert(FProduct >= 1 && FProduct <= 32);
