@@ -249,7 +249,13 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
 #pragma GCC unroll 4
     for (int r = 1; r < kForcerForces; r += 2) {
       if constexpr (Traits::kIsFixed) {
-        g[r] = Scalar::dot3(g[r], Traits::one(), -state.b[r][4], px, -state.b[r][5], py);  // rounded once
+        if (state.b_below_32) {  // g 2^24 < 2^55, |B p| < 2^60: exact, dot3's value
+          g[r] = Scalar::template round_product_sum<Scalar::kFracBits>(
+              std::int64_t{g[r].raw()} * (std::int64_t{1} << Scalar::kFracBits) +
+              numeric::detail::product_sum2(-state.b[r][4].raw(), px.raw(), -state.b[r][5].raw(), py.raw()));
+        } else {
+          g[r] = Scalar::dot3(g[r], Traits::one(), -state.b[r][4], px, -state.b[r][5], py);  // rounded once
+        }
       } else {
         g[r] = g[r] - state.b[r][4] * px - state.b[r][5] * py;
       }
