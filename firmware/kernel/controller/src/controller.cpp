@@ -657,12 +657,11 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
   si.stage_profile_error = stage_profile_error_;
   si.coil_current_cmd_A = status_.coil_current_A;  // last tick's, as commanded
   // The supervisor works in float: the measured current is converted to
-  // float directly (MonitorCodeToCurrent_A<float>'s arithmetic) for either
-  // kernel. Fixed point used to round it to Q7.24 first and convert that
-  // (~14 M7 instructions a coil more, and 3e-8 A less exact).
+  // float directly for either kernel. Fixed point used to round it to Q7.24
+  // first and convert that (~14 M7 instructions a coil more, 3e-8 A less exact).
   for (int j = 0; j < io::kCoils; ++j) {
     si.coil_current_measured_A[j] =
-        static_cast<float>(static_cast<double>(sample.coil_current_adc[j]) * ap.allocation.monitor_A_per_code);
+        MonitorCodeToCurrentFloat_A(sample.coil_current_adc[j], ap.allocation.monitor_A_per_code);
   }
   t.sup = &supervisor_.step(si);
 }

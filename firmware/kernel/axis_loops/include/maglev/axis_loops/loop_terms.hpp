@@ -64,18 +64,6 @@ struct LoopTerms {
   }
 
   static Scalar finish_output(Acc v, Scalar derivative, Scalar feedforward) {
-    if constexpr (Traits::kIsFixed) {
-      // The same value without the two saturating adds (~10 M7 instructions
-      // each) whenever they cannot saturate: |v| < 2^61 raw, and D + u_ff
-      // aligned to v is below 2^40, so the plain sum is exact and below 2^63.
-      constexpr int kAlign = Acc::kFracBits - Scalar::kFracBits;
-      static_assert(kAlign >= 0 && kAlign <= 8);
-      const std::int64_t raw = v.raw();
-      if (static_cast<std::uint64_t>(raw) + (std::uint64_t{1} << 61) < (std::uint64_t{1} << 62)) {
-        const std::int64_t tail = (std::int64_t{derivative.raw()} + feedforward.raw()) * (std::int64_t{1} << kAlign);
-        return Traits::acc_to_scalar(Acc::from_raw(raw + tail));
-      }
-    }
     v += Traits::acc_from_scalar(derivative);
     v += Traits::acc_from_scalar(feedforward);
     return Traits::acc_to_scalar(v);

@@ -224,6 +224,12 @@ std::int16_t CurrentToDacCode(Scalar current_A, const ForceAllocationState<Scala
 template <typename Scalar>
 Scalar MonitorCodeToCurrent_A(std::int16_t code, const ForceAllocationState<Scalar>& state);
 
+// The same in float for either kernel (the supervisor works in float): the
+// float kernel's MonitorCodeToCurrent_A is this.
+inline float MonitorCodeToCurrentFloat_A(std::int16_t code, double monitor_A_per_code) {
+  return static_cast<float>(static_cast<double>(code) * monitor_A_per_code);
+}
+
 }  // namespace maglev::kernel
 
 #include "maglev/force_allocation/internal/force_allocation_impl.hpp"

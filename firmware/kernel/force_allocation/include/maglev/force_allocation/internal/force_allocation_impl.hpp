@@ -37,6 +37,18 @@ constexpr Scalar MaxScalar(Scalar a, Scalar b) {
     return a < b ? b : a;
   }
 }
+// Fixed::dot3 for the allocation's sums of B x signal products. When every
+// |B| is below 32 (ForceAllocationState::b_below_32) each product is below
+// 2^60 (a g x one() term below 2^55), so the exact sum cannot overflow and
+// dot3's saturating add is skipped: the same value.
+template <typename Scalar>
+Scalar Dot3(bool b_below_32, Scalar a0, Scalar b0, Scalar a1, Scalar b1, Scalar a2, Scalar b2) {
+  if (b_below_32) {
+    return Scalar::template round_product_sum<Scalar::kFracBits>(
+        numeric::detail::product_sum2(a0.raw(), b0.raw(), a1.raw(), b1.raw()) + std::int64_t{a2.raw()} * b2.raw());
+  }
+  return Scalar::dot3(a0, b0, a1, b1, a2, b2);
+}
 }  // namespace detail_fa
 
 template <typename Scalar>
@@ -124,15 +136,8 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
   for (int r = 0; r < kForcerForces; ++r) {
     const int first = (r & 1) == 0 ? 0 : kHorizontalEfforts;
     if constexpr (Traits::kIsFixed) {
-      if (state.b_below_32) {  // the same value as dot3: three products below 2^60 sum exactly
-        g[r] = Scalar::template round_product_sum<Scalar::kFracBits>(
-            numeric::detail::product_sum2(state.b[r][first].raw(), effort_A[first].raw(), state.b[r][first + 1].raw(),
-                                          effort_A[first + 1].raw()) +
-            std::int64_t{state.b[r][first + 2].raw()} * effort_A[first + 2].raw());
-      } else {
-        g[r] = Scalar::dot3(state.b[r][first], effort_A[first], state.b[r][first + 1], effort_A[first + 1],
-                            state.b[r][first + 2], effort_A[first + 2]);
-      }
+      g[r] = detail_fa::Dot3(state.b_below_32, state.b[r][first], effort_A[first], state.b[r][first + 1],
+                             effort_A[first + 1], state.b[r][first + 2], effort_A[first + 2]);
     } else {
       Scalar acc = Traits::zero();
 #pragma GCC unroll 3
@@ -249,13 +254,7 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
 #pragma GCC unroll 4
     for (int r = 1; r < kForcerForces; r += 2) {
       if constexpr (Traits::kIsFixed) {
-        if (state.b_below_32) {  // g 2^24 < 2^55, |B p| < 2^60: exact, dot3's value
-          g[r] = Scalar::template round_product_sum<Scalar::kFracBits>(
-              std::int64_t{g[r].raw()} * (std::int64_t{1} << Scalar::kFracBits) +
-              numeric::detail::product_sum2(-state.b[r][4].raw(), px.raw(), -state.b[r][5].raw(), py.raw()));
-        } else {
-          g[r] = Scalar::dot3(g[r], Traits::one(), -state.b[r][4], px, -state.b[r][5], py);  // rounded once
-        }
+        g[r] = detail_fa::Dot3(state.b_below_32, g[r], Traits::one(), -state.b[r][4], px, -state.b[r][5], py);
       } else {
         g[r] = g[r] - state.b[r][4] * px - state.b[r][5] * py;
       }
@@ -354,7 +353,7 @@ Scalar MonitorCodeToCurrent_A(std::int16_t code, const ForceAllocationState<Scal
     return Scalar::from_raw(static_cast<std::int32_t>(
         numeric::detail::shift_round(std::int64_t{code} * state.monitor_raw_per_code_q16, 16)));
   } else {
-    return static_cast<float>(static_cast<double>(code) * state.monitor_A_per_code);
+    return MonitorCodeToCurrentFloat_A(code, state.monitor_A_per_code);
   }
 }
 
