@@ -110,6 +110,50 @@ TEST(VirtualBus, EveryOtherEndpointReceivesInOrderNotItself) {
   CHECK(PortStatus::kBadFrame == a->send(f));
 }
 
+// Threading::kOneThread (bench::run's private bus) takes no lock: it must
+// deliver exactly what a shared bus delivers, fault hook included, and a
+// receive with a timeout on an empty queue returns at once (no other thread
+// could send meanwhile) instead of sleeping.
+TEST(VirtualBus, OneThreadBusDeliversAsTheSharedOneAndNeverWaits) {
+  std::vector<std::vector<std::uint8_t>> got[2];
+  for (int mode = 0; mode < 2; ++mode) {
+    auto bus = std::make_shared<VirtualBus>(
+        "one-thread-" + std::to_string(mode),
+        mode == 0 ? VirtualBus::Threading::kShared : VirtualBus::Threading::kOneThread);
+    bus->set_fault_hook([](const CanFrame&, std::uint64_t seq) {
+      FaultAction a;
+      if (seq % 5 == 1) a.kind = FaultAction::kDrop;
+      if (seq % 5 == 2) a.kind = FaultAction::kDuplicate;
+      if (seq % 5 == 3) {
+        a.kind = FaultAction::kDelay;
+        a.delay_frames = 2;
+      }
+      if (seq % 5 == 4) {
+        a.kind = FaultAction::kCorrupt;
+        a.corrupt_bit = static_cast<std::uint16_t>(seq);
+      }
+      return a;
+    });
+    auto tx = bus->open_endpoint();
+    auto rx = bus->open_endpoint();
+    CanFrame f{};
+    for (int i = 0; i < 40; ++i) {
+      encode_sync(SyncFrame{static_cast<std::uint32_t>(i), 7}, static_cast<std::uint8_t>(i), f);
+      CHECK(PortStatus::kOk == tx->send(f));
+    }
+    LONGS_EQUAL(40, static_cast<long>(bus->frames_sent()));
+    CanFrame in{};
+    while (rx->receive(in, 0) == PortStatus::kOk) got[mode].emplace_back(in.data, in.data + in.len);
+    const auto t0 = std::chrono::steady_clock::now();
+    const PortStatus last = rx->receive(in, mode == 0 ? 1000u : 5'000'000u);  // 5 s if it waited
+    const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    CHECK(PortStatus::kTimeout == last);
+    if (mode == 1) CHECK_TRUE(waited_s < 1.0);
+  }
+  CHECK_TRUE(!got[0].empty());
+  CHECK_TRUE(got[0] == got[1]);
+}
+
 TEST(VirtualBus, OpenCanPortByName) {
   std::string err;
   auto p1 = open_can_port("virtual:named", &err);

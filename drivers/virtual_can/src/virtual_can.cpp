@@ -18,23 +18,23 @@ std::shared_ptr<VirtualBus> VirtualBus::get(const std::string& name) {
 
 std::unique_ptr<VirtualCanPort> VirtualBus::open_endpoint(std::size_t rx_queue_depth) {
   auto port = std::make_unique<VirtualCanPort>(shared_from_this(), rx_queue_depth);
-  std::lock_guard<std::mutex> lock(mu_);
+  const auto held = lock();
   endpoints_.push_back(port.get());
   return port;
 }
 
 void VirtualBus::set_fault_hook(FaultHook hook) {
-  std::lock_guard<std::mutex> lock(mu_);
+  const auto held = lock();
   hook_ = std::move(hook);
 }
 
 std::uint64_t VirtualBus::frames_sent() const {
-  std::lock_guard<std::mutex> lock(mu_);
+  const auto held = lock();
   return seq_;
 }
 
 void VirtualBus::detach(VirtualCanPort* p) {
-  std::lock_guard<std::mutex> lock(mu_);
+  const auto held = lock();
   std::erase(endpoints_, p);
   std::erase_if(delayed_, [p](const Delayed& d) { return d.sender == p; });
 }
@@ -52,7 +52,7 @@ void VirtualBus::deliver_locked(VirtualCanPort* sender, const CanFrame& f) {
 
 void VirtualBus::transmit(VirtualCanPort* sender, const CanFrame& f) {
   {
-    std::lock_guard<std::mutex> lock(mu_);
+    const auto held = lock();
     const std::uint64_t seq = seq_++;
     FaultAction action = hook_ ? hook_(f, seq) : FaultAction{};
     switch (action.kind) {
@@ -83,7 +83,7 @@ void VirtualBus::transmit(VirtualCanPort* sender, const CanFrame& f) {
       }
     }
   }
-  cv_.notify_all();
+  if (!one_thread_) cv_.notify_all();
 }
 
 VirtualCanPort::VirtualCanPort(std::shared_ptr<VirtualBus> bus, std::size_t depth)
@@ -102,11 +102,12 @@ PortStatus VirtualCanPort::send(const CanFrame& frame) {
 }
 
 PortStatus VirtualCanPort::receive(CanFrame& frame, std::uint32_t timeout_us) {
-  std::unique_lock<std::mutex> lock(bus_->mu_);
+  auto lock = bus_->lock();
   // A zero timeout is a poll: no condition-variable wait at all (a timed
   // futex wait, even an expired one, costs a syscall plus the kernel's 50 us
-  // timer slack -- it was most of a lockstep HIL tick's wall time).
-  const bool got = (timeout_us == 0 || !rx_.empty())
+  // timer slack -- it was most of a lockstep HIL tick's wall time). On a
+  // kOneThread bus nobody else can send while this thread waits: a poll too.
+  const bool got = (timeout_us == 0 || bus_->one_thread_ || !rx_.empty())
                        ? !rx_.empty()
                        : bus_->cv_.wait_for(lock, std::chrono::microseconds(timeout_us),
                                             [this] { return !rx_.empty(); });
@@ -121,7 +122,7 @@ PortStatus VirtualCanPort::receive(CanFrame& frame, std::uint32_t timeout_us) {
 }
 
 std::size_t VirtualCanPort::pending() const {
-  std::lock_guard<std::mutex> lock(bus_->mu_);
+  const auto held = bus_->lock();
   return rx_.size();
 }
 

@@ -66,7 +66,8 @@ Link open_link(const std::string& name, bool need_controller) {
   if (name == "virtual") {
     // Not the process-wide named registry: runs in one process never hear
     // each other and nothing outlives the run.
-    l.bus = std::make_shared<can::VirtualBus>("maglev-hil");
+    // One thread (bench::run's lockstep loop) uses both ports: no locks.
+    l.bus = std::make_shared<can::VirtualBus>("maglev-hil", can::VirtualBus::Threading::kOneThread);
     l.plant_port = l.bus->open_endpoint();
     if (need_controller) l.ctrl_port = l.bus->open_endpoint();
   } else {
@@ -148,19 +149,19 @@ void add_realtime_metrics(const can::PeriodicTimer& timer, std::map<std::string,
   }
 }
 
-void reserve(Trace* tr, std::size_t n) {
-  tr->t_s.reserve(n);
+void resize_rows(Trace* tr, std::size_t n) {
+  tr->t_s.resize(n);
   for (int i = 0; i < kAxes; ++i) {
-    tr->pose[i].reserve(n);
-    tr->reference[i].reserve(n);
-    tr->effort_A[i].reserve(n);
-    tr->disturbance_A[i].reserve(n);
+    tr->pose[i].resize(n);
+    tr->reference[i].resize(n);
+    tr->effort_A[i].resize(n);
+    tr->disturbance_A[i].resize(n);
   }
   for (int j = 0; j < 8; ++j) {
-    tr->current_cmd_A[j].reserve(n);
-    tr->current_A[j].reserve(n);
+    tr->current_cmd_A[j].resize(n);
+    tr->current_A[j].resize(n);
   }
-  tr->state.reserve(n);
+  tr->state.resize(n);
 }
 
 }  // namespace maglev::bench::internal

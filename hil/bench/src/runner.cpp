@@ -110,7 +110,8 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   const double dt = 1.0 / rate_Hz;
   const auto n_ticks = static_cast<std::uint64_t>(std::llround(sc.duration_s() / dt));
   Trace& tr = R.trace;
-  internal::reserve(&tr, n_ticks);
+  internal::resize_rows(&tr, n_ticks);
+  std::uint64_t rows = 0;
 
   std::unique_ptr<can::PeriodicTimer> timer;
   if (opt.mode == Mode::kRealtime) {
@@ -197,22 +198,24 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
 
     // --- record this tick (pose measured at t, currents at t).
     const auto& st = node.status();
-    tr.t_s.push_back(t);
+    tr.t_s[n] = t;
     for (Axis a : kernel::kAllAxes) {
-      tr.pose[index(a)].push_back(pose_si(st.pose, a));
-      tr.reference[index(a)].push_back(pose_si(st.reference, a));
-      tr.effort_A[index(a)].push_back(static_cast<double>(st.effort_A[index(a)]));
-      tr.disturbance_A[index(a)].push_back(a == ex_axis ? d_ex : 0.0);
+      tr.pose[index(a)][n] = pose_si(st.pose, a);
+      tr.reference[index(a)][n] = pose_si(st.reference, a);
+      tr.effort_A[index(a)][n] = static_cast<double>(st.effort_A[index(a)]);
+      tr.disturbance_A[index(a)][n] = a == ex_axis ? d_ex : 0.0;
     }
     for (int j = 0; j < 8; ++j) {
-      tr.current_cmd_A[j].push_back(static_cast<double>(st.coil_current_A[j]));
-      tr.current_A[j].push_back(current_before_A[j]);
+      tr.current_cmd_A[j][n] = static_cast<double>(st.coil_current_A[j]);
+      tr.current_A[j][n] = current_before_A[j];
     }
-    tr.state.push_back(static_cast<int>(st.state));
+    tr.state[n] = static_cast<int>(st.state);
+    rows = n + 1;
     if (ready_t < 0 && st.state == kernel::SequencerState::kReady) ready_t = t;
   }
   const auto wall1 = std::chrono::steady_clock::now();
   R.cpu_s = internal::thread_cpu_s() - cpu0;
+  internal::resize_rows(&tr, rows);  // an aborted run keeps the rows it recorded
   if (tap.port) {
     std::string err;
     if (!tap.log.close(&err)) {
