@@ -388,6 +388,8 @@ void Plant::BuildTriangleSides() {
 
 void Plant::set_body_state(const BodyState& state) {
   body_ = state;
+  lane_chain_left_ = 0;  // moved from outside: the next stage 1 from the library
+  hall_chain_.left = 0;  // and the next Hall sample
   body_.attitude.normalize();
   UpdateTruth();
 }
@@ -633,11 +635,14 @@ __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinema
     const V4 s = p_ax + (r_ax0 * rb0 + r_ax1 * rb1 + r_ax2 * rb2);
     const V4 gap = gap0 + (r20 * rb0 + r21 * rb1 + r22 * rb2) - rb2;
     V4 sin1, cos1, exp1;
-    if (q == 0 && lane_ref_mode_ == LaneRefMode::kFromStore) {
+    if (q == 0 && (lane_ref_mode_ == LaneRefMode::kFromStore || lane_ref_mode_ == LaneRefMode::kChain)) {
       // kFast, RK4 stages 2-4: the reference side moved by at most microns
       // since stage 1 (gamma_1 ds ~ 1e-3): its sin/cos/exp by angle addition
       // from stage 1's, as the other sides are derived from it (Taylor
       // branch, relative error < 1e-13; library calls past |x| = 0.02).
+      // kChain, stage 1: the same from the previous sub-step's stage 1 (at
+      // most 0.2 mm away), stored for this sub-step's stages 2-4 and the
+      // next stage 1.
       const V4 st_s = Load4(lane_ref_store_.s), st_gap = Load4(lane_ref_store_.gap);
       const V4 st_sin = Load4(lane_ref_store_.sin), st_cos = Load4(lane_ref_store_.cos);
       const V4 eps = g1 * (s - st_s);
@@ -650,6 +655,13 @@ __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinema
       ref_sin = st_sin * ce + st_cos * se;
       ref_cos = st_cos * ce - st_sin * se;
       ref_exp = Load4(lane_ref_store_.exp) * SmallExp4(xe, all_small);
+      if (lane_ref_mode_ == LaneRefMode::kChain) {
+        std::memcpy(lane_ref_store_.s, &ref_s, sizeof ref_s);
+        std::memcpy(lane_ref_store_.gap, &ref_gap, sizeof ref_gap);
+        std::memcpy(lane_ref_store_.sin, &ref_sin, sizeof ref_sin);
+        std::memcpy(lane_ref_store_.cos, &ref_cos, sizeof ref_cos);
+        std::memcpy(lane_ref_store_.exp, &ref_exp, sizeof ref_exp);
+      }
       sin1 = ref_sin;
       cos1 = ref_cos;
       exp1 = ref_exp;
@@ -1180,8 +1192,18 @@ void Plant::advance(double dt_s) {
       i2[j] = amplifiers_.RkCurrent(j, 2);
     }
     // kFast: stage 1 evaluates the reference sides' sin/cos/exp with the
-    // library and keeps them; stages 2-4 derive theirs from them.
-    if (fast) lane_ref_mode_ = LaneRefMode::kStore;
+    // library (or derives them from the previous sub-step's, see
+    // IntegrationConfig::field_chain_substeps) and keeps them; stages 2-4
+    // derive theirs from them.
+    if (fast) {
+      if (lane_chain_left_ > 0) {
+        --lane_chain_left_;
+        lane_ref_mode_ = LaneRefMode::kChain;
+      } else {
+        lane_chain_left_ = std::max(1, config_.integration.field_chain_substeps) - 1;
+        lane_ref_mode_ = LaneRefMode::kStore;
+      }
+    }
     const BodyDerivative k1 = Derivative(body_, i0);
     if (fast) lane_ref_mode_ = LaneRefMode::kFromStore;
     const BodyDerivative k2 = Derivative(Step(body_, k1, h / 2), i1);
@@ -1367,6 +1389,9 @@ io::SensorSample Plant::sample() {
   // --- Hall sensors: A.Bx, A.By, B.Bx, B.By -------------------------------------
   const auto& hc = config_.hall;
   const double hall_xy[2][2] = {{hc.a_x_m, hc.a_y_m}, {hc.b_x_m, hc.b_y_m}};
+  const double gamma1 = field_.gamma1_per_m();
+  const bool anchor = hall_chain_.left == 0;
+  hall_chain_.left = anchor ? std::max(1, config_.integration.field_chain_substeps) - 1 : hall_chain_.left - 1;
   for (int sensor = 0; sensor < 2; ++sensor) {
     Eigen::Vector3d rb(hall_xy[sensor][0], hall_xy[sensor][1], -com_arm_m_);
     if (as_built_) {
@@ -1375,9 +1400,36 @@ io::SensorSample Plant::sample() {
     }
     const Eigen::Vector3d w = body_.position_m + r * rb;
     const double height = hc.height_above_magnets_m + w.z() - rb.z();
-    const double decay = field_.PointDecay(height);
-    const FieldSZ bx = field_.PointFieldAt(w.x(), decay);
-    const FieldSZ by = field_.PointFieldAt(w.y(), decay);
+    const double th[2] = {gamma1 * w.x(), gamma1 * w.y()};
+    double sn[2], cs[2], decay;
+    if (anchor) {
+      decay = field_.PointDecay(height);
+      for (int a = 0; a < 2; ++a) {
+        sn[a] = std::sin(th[a]);
+        cs[a] = std::cos(th[a]);
+      }
+    } else {
+      // Angle addition from the last sample's (the platen moved < 0.2 mm:
+      // gamma_1 ds < 0.02, SmallSinCos's Taylor branch; the library's sin/cos
+      // of the step beyond).
+      decay = hall_chain_.decay[sensor] * SmallExp(-gamma1 * (height - hall_chain_.height[sensor]));
+      for (int a = 0; a < 2; ++a) {
+        double se, ce;
+        SmallSinCos(th[a] - hall_chain_.th[sensor][a], &se, &ce);
+        const double s0 = hall_chain_.sin[sensor][a], c0 = hall_chain_.cos[sensor][a];
+        sn[a] = s0 * ce + c0 * se;
+        cs[a] = c0 * ce - s0 * se;
+      }
+    }
+    hall_chain_.height[sensor] = height;
+    hall_chain_.decay[sensor] = decay;
+    for (int a = 0; a < 2; ++a) {
+      hall_chain_.th[sensor][a] = th[a];
+      hall_chain_.sin[sensor][a] = sn[a];
+      hall_chain_.cos[sensor][a] = cs[a];
+    }
+    const FieldSZ bx = field_.PointFieldFrom(sn[0], cs[0], decay);
+    const FieldSZ by = field_.PointFieldFrom(sn[1], cs[1], decay);
     const Eigen::Vector3d b_body = r.transpose() * Eigen::Vector3d(bx.b_s_T, by.b_s_T, bx.b_z_T + by.b_z_T);
     for (int c = 0; c < 2; ++c) {
       const double noise = noisy ? hc.noise_T * rng_.Normal() : 0.0;

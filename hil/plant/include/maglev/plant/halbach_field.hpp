@@ -87,7 +87,12 @@ class HalbachField {
   double PointDecay(double height_m) const { return std::exp(-gamma1_ * height_m); }
   FieldSZ PointFieldAt(double s_m, double decay) const {
     const double th = gamma1_ * s_m;
-    return SumHarmonicsFrom(point_amp_, harmonics_, std::sin(th), std::cos(th), decay);
+    return PointFieldFrom(std::sin(th), std::cos(th), decay);
+  }
+  // The same from sin/cos(gamma_1 s) already known (the plant derives the
+  // Hall sensors' from the previous sample's).
+  FieldSZ PointFieldFrom(double sin1, double cos1, double decay) const {
+    return SumHarmonicsFrom(point_amp_, harmonics_, sin1, cos1, decay);
   }
 
   // Field averaged over a coil side's cross-section (width a centred at s,

@@ -128,6 +128,7 @@ class Plant {
   void set_integrator(IntegrationConfig::Method method, int substeps_per_tick) {
     config_.integration.method = method;
     config_.integration.substeps_per_tick = substeps_per_tick;
+    lane_chain_left_ = 0;  // the next stage 1 from the library
   }
 
   double mass_kg() const { return mass_; }
@@ -232,7 +233,10 @@ class Plant {
   std::array<SideLanes, 4> side_lanes_{};
   // kFast (advance): the reference sides' values at RK4 stage 1, from which
   // stages 2-4 derive theirs (MagneticLanesBody). kLibrary everywhere else.
-  enum class LaneRefMode { kLibrary, kStore, kFromStore };
+  // Stage 1 itself: kStore (the library) or kChain (derived from the stored
+  // previous stage 1, then stored), IntegrationConfig::field_chain_substeps.
+  enum class LaneRefMode { kLibrary, kStore, kFromStore, kChain };
+  int lane_chain_left_ = 0;  // stage 1s left to derive before the library again
   mutable LaneRefMode lane_ref_mode_ = LaneRefMode::kLibrary;
   struct LaneRefStore {
     double s[4], gap[4], sin[4], cos[4], exp[4];
@@ -286,6 +290,15 @@ class Plant {
   // Interferometer counters.
   double lsb_m_;
   std::int64_t counter_adjust_[io::kInterferometerAxes] = {};
+  // The Hall sensors' field phases (sensor A, B; along x, y) and decays at
+  // the last sample: sample() derives the next ones by angle addition
+  // (IntegrationConfig::field_chain_substeps samples, then the library).
+  struct HallChain {
+    double th[2][2], sin[2][2], cos[2][2];  // gamma_1 s and its sin/cos
+    double height[2], decay[2];              // exp(-gamma_1 height)
+    int left = 0;                            // samples left to derive
+  };
+  HallChain hall_chain_{};
   std::int64_t last_count_[io::kInterferometerAxes] = {};
   bool lost_prev_[io::kInterferometerAxes] = {};
   bool manual_loss_[io::kInterferometerAxes] = {};

@@ -240,6 +240,16 @@ struct IntegrationConfig {
   // accuracy reference).
   enum class Method { kFast, kClassic };
   Method method = Method::kFast;
+  // kFast, forcer-lane field (Plant::MagneticLanesBody): RK4 stage 1 takes
+  // its reference sides' sin/cos/exp from the previous sub-step's stage 1 by
+  // angle addition (the platen moves < 0.2 mm a sub-step: gamma_1 ds < 0.02,
+  // the Taylor branch; further, the library's sin/cos of the step), and from
+  // the library once every field_chain_substeps sub-steps, which bounds the
+  // round-off carried along the chain (~3e-16 relative a link: < 2e-14
+  // after 64). 1: the library at every stage 1 (the form before). The Hall
+  // sensors' field (Plant::sample) the same way, from the previous sample,
+  // the library every field_chain_substeps samples.
+  int field_chain_substeps = 64;
 };
 
 // Initial state (world frame fixed to the magnets; z above landed rest).
