@@ -601,6 +601,16 @@ __attribute__((always_inline)) inline V4 SmallExp4(V4 x, bool all_small) {
   }
   return y;
 }
+// (sin, cos, exp) at phase ph0 + eps and decay exponent x0 + xe from
+// (s0, c0, e0) at (ph0, x0): angle addition, exp(x0) exp(xe).
+__attribute__((always_inline)) inline void Advance4(V4 s0, V4 c0, V4 e0, V4 eps, V4 xe, V4* s, V4* c, V4* e) {
+  const bool all_small = All4(Small4(eps) & Small4(xe));
+  V4 se, ce;
+  SmallSinCos4(eps, all_small, &se, &ce);
+  *s = s0 * ce + c0 * se;
+  *c = c0 * ce - s0 * se;
+  *e = e0 * SmallExp4(xe, all_small);
+}
 }  // namespace
 
 __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinematics& k, const double* currents_A,
@@ -635,47 +645,30 @@ __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinema
     const V4 s = p_ax + (r_ax0 * rb0 + r_ax1 * rb1 + r_ax2 * rb2);
     const V4 gap = gap0 + (r20 * rb0 + r21 * rb1 + r22 * rb2) - rb2;
     V4 sin1, cos1, exp1;
-    if (q == 0 && (lane_ref_mode_ == LaneRefMode::kFromStore || lane_ref_mode_ == LaneRefMode::kChain)) {
-      // kFast, RK4 stages 2-4: the reference side moved by at most microns
-      // since stage 1 (gamma_1 ds ~ 1e-3): its sin/cos/exp by angle addition
-      // from stage 1's, as the other sides are derived from it (Taylor
-      // branch, relative error < 1e-13; library calls past |x| = 0.02).
-      // kChain, stage 1: the same from the previous sub-step's stage 1 (at
-      // most 0.2 mm away), stored for this sub-step's stages 2-4 and the
-      // next stage 1.
-      const V4 st_s = Load4(lane_ref_store_.s), st_gap = Load4(lane_ref_store_.gap);
-      const V4 st_sin = Load4(lane_ref_store_.sin), st_cos = Load4(lane_ref_store_.cos);
-      const V4 eps = g1 * (s - st_s);
-      const V4 xe = neg_g1 * (gap - st_gap);
-      const bool all_small = All4(Small4(eps) & Small4(xe));
-      V4 se, ce;
-      SmallSinCos4(eps, all_small, &se, &ce);
+    if (q == 0) {
       ref_s = s;
       ref_gap = gap;
-      ref_sin = st_sin * ce + st_cos * se;
-      ref_cos = st_cos * ce - st_sin * se;
-      ref_exp = Load4(lane_ref_store_.exp) * SmallExp4(xe, all_small);
-      if (lane_ref_mode_ == LaneRefMode::kChain) {
-        std::memcpy(lane_ref_store_.s, &ref_s, sizeof ref_s);
-        std::memcpy(lane_ref_store_.gap, &ref_gap, sizeof ref_gap);
-        std::memcpy(lane_ref_store_.sin, &ref_sin, sizeof ref_sin);
-        std::memcpy(lane_ref_store_.cos, &ref_cos, sizeof ref_cos);
-        std::memcpy(lane_ref_store_.exp, &ref_exp, sizeof ref_exp);
+      if (lane_ref_mode_ == LaneRefMode::kFromStore || lane_ref_mode_ == LaneRefMode::kChain) {
+        // kFast, RK4 stages 2-4: the reference side moved by at most microns
+        // since stage 1 (gamma_1 ds ~ 1e-3): its sin/cos/exp by angle addition
+        // from stage 1's, as the other sides are derived from it (Taylor
+        // branch, relative error < 1e-13; library calls past |x| = 0.02).
+        // kChain, stage 1: the same from the previous sub-step's stage 1 (at
+        // most 0.2 mm away), stored for this sub-step's stages 2-4 and the
+        // next stage 1.
+        Advance4(Load4(lane_ref_store_.sin), Load4(lane_ref_store_.cos), Load4(lane_ref_store_.exp),
+                 g1 * (s - Load4(lane_ref_store_.s)), neg_g1 * (gap - Load4(lane_ref_store_.gap)), &ref_sin,
+                 &ref_cos, &ref_exp);
+      } else {
+        const V4 gs = g1 * s;
+        const V4 gg = neg_g1 * gap;
+        for (int f = 0; f < 4; ++f) {
+          ref_sin[f] = std::sin(gs[f]);
+          ref_cos[f] = std::cos(gs[f]);
+          ref_exp[f] = std::exp(gg[f]);
+        }
       }
-      sin1 = ref_sin;
-      cos1 = ref_cos;
-      exp1 = ref_exp;
-    } else if (q == 0) {
-      ref_s = s;
-      ref_gap = gap;
-      const V4 gs = g1 * s;
-      const V4 gg = neg_g1 * gap;
-      for (int f = 0; f < 4; ++f) {
-        ref_sin[f] = std::sin(gs[f]);
-        ref_cos[f] = std::cos(gs[f]);
-        ref_exp[f] = std::exp(gg[f]);
-      }
-      if (lane_ref_mode_ == LaneRefMode::kStore) {
+      if (lane_ref_mode_ == LaneRefMode::kStore || lane_ref_mode_ == LaneRefMode::kChain) {
         std::memcpy(lane_ref_store_.s, &ref_s, sizeof ref_s);
         std::memcpy(lane_ref_store_.gap, &ref_gap, sizeof ref_gap);
         std::memcpy(lane_ref_store_.sin, &ref_sin, sizeof ref_sin);
@@ -689,14 +682,8 @@ __attribute__((always_inline)) inline void Plant::MagneticLanesBody(const Kinema
       const V4 qc = Load4(c.qc), qs = Load4(c.qs);
       const V4 sq = ref_sin * qc + ref_cos * qs;
       const V4 cq = ref_cos * qc - ref_sin * qs;
-      const V4 eps = g1 * (s - ref_s) - Load4(c.q_half_pi);
-      const V4 xe = neg_g1 * (gap - ref_gap);
-      const bool all_small = All4(Small4(eps) & Small4(xe));
-      V4 se, ce;
-      SmallSinCos4(eps, all_small, &se, &ce);
-      sin1 = sq * ce + cq * se;
-      cos1 = cq * ce - sq * se;
-      exp1 = ref_exp * SmallExp4(xe, all_small);
+      Advance4(sq, cq, ref_exp, g1 * (s - ref_s) - Load4(c.q_half_pi), neg_g1 * (gap - ref_gap), &sin1, &cos1,
+               &exp1);
     }
     // n = 1, 5, 9, 13 (lanes_ok_ only with 4 harmonics).
     const V4 s2 = 2.0 * sin1 * cos1;
