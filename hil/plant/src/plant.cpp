@@ -244,6 +244,23 @@ void Plant::BuildArraySides() {
     c.qc = kQc[cs.quarter_turns & 3];
     c.qs = kQs[cs.quarter_turns & 3];
     c.q_half_pi = cs.quarter_turns * (kPi / 2.0);
+    // The side's phase offset from its forcer's reference side at rest is
+    // gamma_1 (rb - rb_ref) along the array: whole quarter turns in the
+    // nominal geometry (the exact 0 / +-1 above), plus a constant residual
+    // where the coils sit off their places (as built: coil_shift_m, sigma
+    // 0.1 mm = 0.012 rad). Folded in here, the residual leaves the
+    // per-evaluation eps at what rotation adds (micro-radians: the Taylor
+    // branch); left in eps it took the library's sin/cos on most
+    // evaluations of an as-built plant (3.5 k instructions a tick). The
+    // nominal layout's residuals (<= 6e-7 rad: its whole-quarter layout
+    // under the field's own gamma_1) stay in eps, as they always were.
+    const int ax = cs.array_axis;
+    const double offset = field_.gamma1_per_m() * (cs.r_body_m[ax] - sides_[idx - idx % 4].r_body_m[ax]);
+    if (std::fabs(offset - c.q_half_pi) > 1e-4) {
+      c.q_half_pi = offset;
+      c.qc = std::cos(offset);
+      c.qs = std::sin(offset);
+    }
     c.sel_x = cs.array_axis == 0 ? 1.0 : 0.0;
     c.sel_y = cs.array_axis == 0 ? 0.0 : 1.0;
     c.eps_t_x = c.sel_x * config_.forcer_errors.epsilon_tangential[cs.forcer];

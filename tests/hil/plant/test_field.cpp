@@ -142,3 +142,26 @@ TEST(PlantField, FastWrenchEqualsPerSideReference) {
   const auto w = plant.MagneticWrench(s, i);
   for (int a = 0; a < 3; ++a) DOUBLES_EQUAL(sum[a], w.force_world_N[a], 1e-12);
 }
+
+TEST(PlantField, FastWrenchEqualsPerSideReferenceWithShiftedCoils) {
+  // As built, the coils sit off their places along the array (a commutation
+  // phase error, 0.1 mm sigma): a side's phase is no longer its reference
+  // side's plus whole quarter turns. The force loop folds the constant
+  // residual into the side's offset (Plant's SideConstants::q_half_pi);
+  // per side the field is still the library's at the side's own place.
+  PlantConfig c = PlantConfig::Default();
+  c.as_built.active = true;
+  const double shift_m[8] = {1.5e-4, -0.8e-4, 2.1e-4, -1.2e-4, 0.4e-4, -2.4e-4, 0.9e-4, 1.8e-4};
+  for (int j = 0; j < 8; ++j) c.as_built.coil_shift_m[j] = shift_m[j];
+  const Plant plant(c, 1);
+  for (const double theta_z : {0.0, 2.5e-3, -3.7e-3}) {
+    BodyState s;
+    s.position_m = {0.0123, -0.0071, 25e-6};
+    s.attitude = Eigen::Quaterniond(Plant::RotationFromAngles(40e-6, -25e-6, theta_z));
+    const double i[8] = {0.7, -1.3, 0.4, 2.1, -0.9, 1.1, -1.7, 0.25};
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int j = 0; j < 8; ++j) sum += plant.CoilForceWorld(s, j, i[j]);
+    const auto w = plant.MagneticWrench(s, i);
+    for (int a = 0; a < 3; ++a) DOUBLES_EQUAL(sum[a], w.force_world_N[a], 1e-12);
+  }
+}

@@ -206,8 +206,9 @@ class Plant {
   struct SideConstants {
     double rb[3];        // r_body_m
     double ux, uy;       // u_body (u_z = 0)
-    double qc, qs;       // cos, sin of quarter_turns * pi/2 (exactly 0 or +-1)
-    double q_half_pi;    // quarter_turns * pi/2
+    double qc, qs;       // cos, sin of q_half_pi (exactly 0 or +-1 for whole quarter turns)
+    double q_half_pi;    // phase offset from the reference side: quarter_turns * pi/2, or
+                         // gamma_1 (rb - rb_ref) along the array where they differ
     double sel_x, sel_y;      // 1 for the tangential axis (X' or Y'), else 0
     double eps_t_x, eps_t_y;  // the forcer's paper-003 tangential error on X' / Y'
     double eps_z;             // its off-axis vertical error
