@@ -516,6 +516,13 @@ inline void SmallSinCos(double e, double* s, double* c) {
     *c = std::cos(e);
   }
 }
+// (sin, cos) of ph0 + e from (s0, c0) of ph0: angle addition.
+inline void RotateBy(double s0, double c0, double e, double* s, double* c) {
+  double se, ce;
+  SmallSinCos(e, &se, &ce);
+  *s = s0 * ce + c0 * se;
+  *c = c0 * ce - s0 * se;
+}
 inline double SmallExp(double x) {
   if (std::fabs(x) < 0.02) {
     return 1.0 + x * (1.0 + x * 0.5 *
@@ -835,11 +842,7 @@ void Plant::AddMagnetic(const Kinematics& k, const double* currents_A, Accum* ac
       // theta = theta_ref + q pi/2 + eps: exact quarter turns, then eps.
       const double sq = ref_sin * c.qc + ref_cos * c.qs;
       const double cq = ref_cos * c.qc - ref_sin * c.qs;
-      const double eps = gamma1 * (s - ref_s) - c.q_half_pi;
-      double se, ce;
-      SmallSinCos(eps, &se, &ce);
-      sin1 = sq * ce + cq * se;
-      cos1 = cq * ce - sq * se;
+      RotateBy(sq, cq, gamma1 * (s - ref_s) - c.q_half_pi, &sin1, &cos1);
       exp1 = ref_exp * SmallExp(-gamma1 * (gap - ref_gap));
     }
     FieldSZ b;
@@ -1199,15 +1202,7 @@ void Plant::advance(double dt_s) {
     // library (or derives them from the previous sub-step's, see
     // IntegrationConfig::field_chain_substeps) and keeps them; stages 2-4
     // derive theirs from them.
-    if (fast) {
-      if (lane_chain_left_ > 0) {
-        --lane_chain_left_;
-        lane_ref_mode_ = LaneRefMode::kChain;
-      } else {
-        lane_chain_left_ = std::max(1, config_.integration.field_chain_substeps) - 1;
-        lane_ref_mode_ = LaneRefMode::kStore;
-      }
-    }
+    if (fast) lane_ref_mode_ = ChainAnchor(&lane_chain_left_) ? LaneRefMode::kStore : LaneRefMode::kChain;
     const BodyDerivative k1 = Derivative(body_, i0);
     if (fast) lane_ref_mode_ = LaneRefMode::kFromStore;
     const BodyDerivative k2 = Derivative(Step(body_, k1, h / 2), i1);
@@ -1228,6 +1223,15 @@ void Plant::advance(double dt_s) {
     truth_.time_s += h;
   }
   UpdateTruth();
+}
+
+bool Plant::ChainAnchor(int* left) const {
+  if (*left > 0) {
+    --*left;
+    return false;
+  }
+  *left = std::max(1, config_.integration.field_chain_substeps) - 1;
+  return true;
 }
 
 void Plant::UpdateTruth() {
@@ -1394,8 +1398,7 @@ io::SensorSample Plant::sample() {
   const auto& hc = config_.hall;
   const double hall_xy[2][2] = {{hc.a_x_m, hc.a_y_m}, {hc.b_x_m, hc.b_y_m}};
   const double gamma1 = field_.gamma1_per_m();
-  const bool anchor = hall_chain_.left == 0;
-  hall_chain_.left = anchor ? std::max(1, config_.integration.field_chain_substeps) - 1 : hall_chain_.left - 1;
+  const bool anchor = ChainAnchor(&hall_chain_.left);
   for (int sensor = 0; sensor < 2; ++sensor) {
     Eigen::Vector3d rb(hall_xy[sensor][0], hall_xy[sensor][1], -com_arm_m_);
     if (as_built_) {
@@ -1418,11 +1421,8 @@ io::SensorSample Plant::sample() {
       // of the step beyond).
       decay = hall_chain_.decay[sensor] * SmallExp(-gamma1 * (height - hall_chain_.height[sensor]));
       for (int a = 0; a < 2; ++a) {
-        double se, ce;
-        SmallSinCos(th[a] - hall_chain_.th[sensor][a], &se, &ce);
-        const double s0 = hall_chain_.sin[sensor][a], c0 = hall_chain_.cos[sensor][a];
-        sn[a] = s0 * ce + c0 * se;
-        cs[a] = c0 * ce - s0 * se;
+        RotateBy(hall_chain_.sin[sensor][a], hall_chain_.cos[sensor][a], th[a] - hall_chain_.th[sensor][a], &sn[a],
+                 &cs[a]);
       }
     }
     hall_chain_.height[sensor] = height;

@@ -62,7 +62,7 @@ class VirtualBus : public std::enable_shared_from_this<VirtualBus> {
   }
 
   std::string name_;
-  bool one_thread_;
+  const bool one_thread_;
   mutable std::mutex mu_;
   std::condition_variable cv_;
   std::vector<VirtualCanPort*> endpoints_;

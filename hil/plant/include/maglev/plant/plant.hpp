@@ -238,6 +238,10 @@ class Plant {
   // previous stage 1, then stored), IntegrationConfig::field_chain_substeps.
   enum class LaneRefMode { kLibrary, kStore, kFromStore, kChain };
   int lane_chain_left_ = 0;  // stage 1s left to derive before the library again
+  // A chain's countdown (lane_chain_left_, hall_chain_.left): true when this
+  // value comes from the library (and the count restarts), false when it is
+  // derived from the previous one (IntegrationConfig::field_chain_substeps).
+  bool ChainAnchor(int* left) const;
   mutable LaneRefMode lane_ref_mode_ = LaneRefMode::kLibrary;
   struct LaneRefStore {
     double s[4], gap[4], sin[4], cos[4], exp[4];
