@@ -533,11 +533,13 @@ TEST(ForceAllocation, BStarFromMagnetisation) {
   DOUBLES_EQUAL(1.7037, st.two_b_star_N_per_A, 1e-9);
 }
 
-// The float kernel's DAC code: one sign test, one bound test (the M7's
-// tick converts eight a tick). The same code as the reference form it
-// replaced -- NaN -> 0, clamp to [-32768, 32767] in double, round half away
-// from zero -- for currents around every half code of the range and beyond
-// it (each float and its two neighbours), the bounds, signed zeros,
+// The float kernel's DAC code (the M7's tick converts eight a tick; on the
+// M7 it is VRINTA, a saturating VCVT and SSAT, on the host the portable
+// form: this test runs on both). The same code as the reference form --
+// NaN -> 0, clamp to [-32768, 32767] in double, round half away from zero
+// -- for currents around every half code of the range and beyond it (each
+// float and its two neighbours), the bounds, values beyond the int32 range
+// (where the M7's VCVT saturates before SSAT does), signed zeros,
 // infinities and NaN.
 TEST(ForceAllocation, DacCodeRoundsHalfAwayAndSaturates) {
   ForceAllocationConfig cfg = DefaultForceAllocationConfig();
@@ -547,7 +549,7 @@ TEST(ForceAllocation, DacCodeRoundsHalfAwayAndSaturates) {
     const double v = static_cast<double>(amps) * st.dac_codes_per_A;
     if (!(v == v)) return 0;
     const double c = v > 32767.0 ? 32767.0 : (v < -32768.0 ? -32768.0 : v);
-    return static_cast<int>(static_cast<std::int32_t>(c >= 0.0 ? c + 0.5 : c - 0.5));
+    return static_cast<int>(std::round(c));
   };
   auto check = [&](float amps) {
     const int got = maglev::kernel::CurrentToDacCode<float>(amps, st);
@@ -556,6 +558,14 @@ TEST(ForceAllocation, DacCodeRoundsHalfAwayAndSaturates) {
   const float special[] = {0.0f, -0.0f, INFINITY, -INFINITY, NAN, 1e30f, -1e30f,
                            static_cast<float>(32767.0 / st.dac_codes_per_A), static_cast<float>(-32768.0 / st.dac_codes_per_A)};
   for (float a : special) check(a);
+  for (double v : {2147483647.0, 2147483648.0, 4294967296.0, 1e15, 65535.5, 65536.0, 98304.0}) {
+    for (double sign : {1.0, -1.0}) {
+      const float a = static_cast<float>(sign * v / st.dac_codes_per_A);
+      check(a);
+      check(std::nextafter(a, INFINITY));
+      check(std::nextafter(a, -INFINITY));
+    }
+  }
   int checked = 0;
   for (int k = -33000; k <= 33000; ++k) {
     for (double d : {-0.5, -0.25, 0.0, 0.25, 0.5}) {

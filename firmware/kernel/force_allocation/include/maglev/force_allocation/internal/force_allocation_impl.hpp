@@ -1,6 +1,8 @@
 // Template bodies of force_allocation.hpp (included at its end).
 #pragma once
 
+#include <bit>
+
 #include "maglev/io/code_placement.hpp"
 #include <cstdint>
 #include <type_traits>
@@ -48,6 +50,30 @@ Scalar Dot3(bool b_below_32, Scalar a0, Scalar b0, Scalar a1, Scalar b1, Scalar 
         numeric::detail::product_sum2(a0.raw(), b0.raw(), a1.raw(), b1.raw()) + std::int64_t{a2.raw()} * b2.raw());
   }
   return Scalar::dot3(a0, b0, a1, b1, a2, b2);
+}
+// The AD5764 code of v = current * codes per A: round half away from zero,
+// saturate to [-32768, 32767], NaN -> 0 -- defined for every double, so the
+// two forms below give the same code by construction (test
+// ForceAllocation.DacCodeRoundsHalfAwayAndSaturates runs on the host and on
+// the M7: every half code and its neighbours, the bounds, infinities, NaN).
+// The M7's is its own instructions' definition of exactly that: VRINTA
+// rounds half away; VCVT.S32.F64 saturates out-of-range values and turns
+// NaN into 0 (ARMv7-M ARM, FPToFixed); SSAT saturates to 16 bits: four
+// instructions (the two-branch C++ form was ~19 a coil, eight a tick; issue
+// 16). C++ leaves a NaN or out-of-range double -> int conversion undefined,
+// so the portable form clamps first. (round() replaced trunc(v +- 0.5),
+// which differs only at v = +-(0.5 - 2^-54), where v +- 0.5 rounds to +-1.)
+inline std::int16_t DacCode(double v) {
+#if defined(__arm__) && defined(__ARM_FP) && (__ARM_FP & 8) && defined(__ARM_FEATURE_SAT)
+  const double r = __builtin_round(v);  // VRINTA
+  float bits;                           // the int32, in an S register
+  __asm__("vcvt.s32.f64 %0, %P1" : "=t"(bits) : "w"(r));
+  return static_cast<std::int16_t>(__builtin_arm_ssat(std::bit_cast<std::int32_t>(bits), 16));
+#else
+  if (!(v == v)) return 0;
+  const double c = __builtin_fmin(__builtin_fmax(__builtin_round(v), -32768.0), 32767.0);
+  return static_cast<std::int16_t>(static_cast<std::int32_t>(c));
+#endif
 }
 }  // namespace detail_fa
 
@@ -327,22 +353,7 @@ std::int16_t CurrentToDacCode(Scalar current_A, const ForceAllocationState<Scala
     code = code > 32767 ? 32767 : (code < -32768 ? -32768 : code);
     return static_cast<std::int16_t>(code);
   } else {
-    // Round half away from zero, then the DAC's range; NaN -> 0. The codes
-    // are those of rounding first and clamping the int64 after (the form
-    // this replaced). One sign test picks the side, one bound test the
-    // clamp, and the int32 VCVT truncates toward zero (an int64 one is a
-    // libgcc call on the M7). Values at the bounds: 32767 + 0.5 and
-    // -32768 - 0.5 truncate to the bounds themselves, so v = 32767 and
-    // v = -32768 may take either branch. NaN fails both sign tests. (Test
-    // ForceAllocation.DacCodeRoundsHalfAwayAndSaturates: every half code and
-    // its neighbours, the bounds, infinities and NaN, against the reference
-    // form clamp-then-round.)
-    const double v = static_cast<double>(current_A) * state.dac_codes_per_A;
-    if (v >= 0.0) {
-      return v < 32767.0 ? static_cast<std::int16_t>(static_cast<std::int32_t>(v + 0.5)) : std::int16_t{32767};
-    }
-    if (v > -32768.0) return static_cast<std::int16_t>(static_cast<std::int32_t>(v - 0.5));
-    return v <= -32768.0 ? std::int16_t{-32768} : std::int16_t{0};  // else NaN
+    return detail_fa::DacCode(static_cast<double>(current_A) * state.dac_codes_per_A);
   }
 }
 
