@@ -579,6 +579,51 @@ TEST(ForceAllocation, DacCodeRoundsHalfAwayAndSaturates) {
   CHECK(checked > 900000);
 }
 
+// The Q7.24 kernel's DAC code (one SMULL, the rounding in one 64-bit sum,
+// SSAT on the M7; this test runs on the host and on the M7) against the
+// form it replaced: shift_round of the exact product (half away from zero)
+// and an int64 clamp. Every raw value whose product lies within a few LSB
+// of a half code (the ties and their neighbours, both signs) over the DAC's
+// range and beyond, the Q7.24 extremes, and pseudo-random raws.
+// The default gains put exact ties only beyond the range; 0.8 A/V (4096
+// codes per A, q32 = 2^20) puts one in every code.
+static void CheckFixedDacCodes(double amplifier_gain_A_per_V, long min_checked) {
+  ForceAllocationConfig cfg = DefaultForceAllocationConfig();
+  cfg.amplifier_gain_A_per_V = amplifier_gain_A_per_V;
+  static ForceAllocationState<Q7_24> sq;
+  CHECK(ApplyForceAllocationConfig<Q7_24>(cfg, &sq) == ForceAllocationError::kOk);
+  auto reference = [&](std::int32_t raw) {
+    std::int64_t code = maglev::numeric::detail::shift_round(std::int64_t{raw} * sq.dac_q32_per_raw, 32);
+    code = code > 32767 ? 32767 : (code < -32768 ? -32768 : code);
+    return static_cast<int>(code);
+  };
+  long checked = 0;
+  auto check = [&](std::int64_t raw64) {
+    if (raw64 > INT32_MAX || raw64 < INT32_MIN) return;
+    const auto raw = static_cast<std::int32_t>(raw64);
+    const int got = maglev::kernel::CurrentToDacCode<Q7_24>(Q7_24::from_raw(raw), sq);
+    if (got != reference(raw)) CHECK_EQUAL(reference(raw), got);
+    ++checked;
+  };
+  const double raw_per_code = 4294967296.0 / static_cast<double>(sq.dac_q32_per_raw);
+  for (int k = -33000; k <= 33000; ++k) {
+    const auto tie = static_cast<std::int64_t>(std::floor((k + 0.5) * raw_per_code));
+    for (std::int64_t d = -3; d <= 3; ++d) check(tie + d);
+  }
+  for (std::int64_t raw : {std::int64_t{INT32_MAX}, std::int64_t{INT32_MIN}, std::int64_t{INT32_MIN} + 1, std::int64_t{0},
+                           std::int64_t{1}, std::int64_t{-1}}) {
+    check(raw);
+  }
+  std::mt19937 rng(16);
+  for (int n = 0; n < 200000; ++n) check(static_cast<std::int32_t>(rng()));
+  CHECK(checked > min_checked);
+}
+
+TEST(ForceAllocation, DacCodeFixedRoundsHalfAwayAndSaturates) {
+  CheckFixedDacCodes(DefaultForceAllocationConfig().amplifier_gain_A_per_V, 600000);
+  CheckFixedDacCodes(0.8, 600000);
+}
+
 TEST(ForceAllocation, DacCodesRoundAndSaturate) {
   ForceAllocationConfig cfg = DefaultForceAllocationConfig();
   static ForceAllocationState<float> st;

@@ -63,12 +63,22 @@ Scalar Dot3(bool b_below_32, Scalar a0, Scalar b0, Scalar a1, Scalar b1, Scalar 
 // 16). C++ leaves a NaN or out-of-range double -> int conversion undefined,
 // so the portable form clamps first. (round() replaced trunc(v +- 0.5),
 // which differs only at v = +-(0.5 - 2^-54), where v +- 0.5 rounds to +-1.)
+// An int32 saturated to the DAC's int16 range: SSAT on the M7 (GCC made
+// two compares and two conditional moves of the clamp).
+inline std::int16_t SaturateToInt16(std::int32_t v) {
+#if defined(__arm__) && defined(__ARM_FEATURE_SAT)
+  return static_cast<std::int16_t>(__builtin_arm_ssat(v, 16));
+#else
+  return static_cast<std::int16_t>(v > 32767 ? 32767 : (v < -32768 ? -32768 : v));
+#endif
+}
+
 inline std::int16_t DacCode(double v) {
 #if defined(__arm__) && defined(__ARM_FP) && (__ARM_FP & 8) && defined(__ARM_FEATURE_SAT)
   const double r = __builtin_round(v);  // VRINTA
   float bits;                           // the int32, in an S register
   __asm__("vcvt.s32.f64 %0, %P1" : "=t"(bits) : "w"(r));
-  return static_cast<std::int16_t>(__builtin_arm_ssat(std::bit_cast<std::int32_t>(bits), 16));
+  return SaturateToInt16(std::bit_cast<std::int32_t>(bits));
 #else
   if (!(v == v)) return 0;
   const double c = __builtin_fmin(__builtin_fmax(__builtin_round(v), -32768.0), 32767.0);
@@ -348,10 +358,16 @@ template <typename Scalar>
 std::int16_t CurrentToDacCode(Scalar current_A, const ForceAllocationState<Scalar>& state) {
   using Traits = numeric::ScalarTraits<Scalar>;
   if constexpr (Traits::kIsFixed) {
-    // raw (|.| < 2^31) * q32 (< 2^31) < 2^62: exact, then round half away from zero.
-    std::int64_t code = numeric::detail::shift_round(std::int64_t{current_A.raw()} * state.dac_q32_per_raw, 32);
-    code = code > 32767 ? 32767 : (code < -32768 ? -32768 : code);
-    return static_cast<std::int16_t>(code);
+    // raw (|.| < 2^31) * q32 (< 2^31, checked at configuration: one SMULL)
+    // < 2^62: exact. Round half away from zero: floor((p + 2^31) / 2^32)
+    // for p >= 0 and ceil((p - 2^31) / 2^32) = floor((p + 2^31 - 1) / 2^32)
+    // for p < 0 -- one 64-bit sum with p's sign (p >> 63 is 0 or -1) and the
+    // high word, an int32 below 2^30; then the DAC's range (SSAT on the M7).
+    // The value of shift_round(p, 32) and the int64 clamp it replaced
+    // (~20 M7 instructions a coil; issue 16).
+    const std::int64_t p = std::int64_t{current_A.raw()} * static_cast<std::int32_t>(state.dac_q32_per_raw);
+    const auto code = static_cast<std::int32_t>((p + (std::int64_t{1} << 31) + (p >> 63)) >> 32);
+    return detail_fa::SaturateToInt16(code);
   } else {
     return detail_fa::DacCode(static_cast<double>(current_A) * state.dac_codes_per_A);
   }
