@@ -61,7 +61,7 @@ Scalar Dot3(bool b_below_32, Scalar a0, Scalar b0, Scalar a1, Scalar b1, Scalar 
 // NaN into 0 (ARMv7-M ARM, FPToFixed); SSAT saturates to 16 bits: four
 // instructions (the two-branch C++ form was ~19 a coil, eight a tick; issue
 // 16). C++ leaves a NaN or out-of-range double -> int conversion undefined,
-// so the portable form clamps first. (round() replaced trunc(v +- 0.5),
+// so the portable form tests the range first. (round() replaced trunc(v +- 0.5),
 // which differs only at v = +-(0.5 - 2^-54), where v +- 0.5 rounds to +-1.)
 // An int32 saturated to the DAC's int16 range: SSAT on the M7 (GCC made
 // two compares and two conditional moves of the clamp).
@@ -80,9 +80,15 @@ inline std::int16_t DacCode(double v) {
   __asm__("vcvt.s32.f64 %0, %P1" : "=t"(bits) : "w"(r));
   return SaturateToInt16(std::bit_cast<std::int32_t>(bits));
 #else
+  // Without libm (x86-64's round, fmin and fmax are library calls): the
+  // range first, then the truncated integer and the exact remainder v - i
+  // decide the half away from zero.
   if (!(v == v)) return 0;
-  const double c = __builtin_fmin(__builtin_fmax(__builtin_round(v), -32768.0), 32767.0);
-  return static_cast<std::int16_t>(static_cast<std::int32_t>(c));
+  if (!(v < 32767.0)) return 32767;
+  if (!(v > -32768.0)) return -32768;
+  const auto i = static_cast<std::int32_t>(v);  // |v| < 32768: truncation toward zero
+  const double rest = v - static_cast<double>(i);  // exact
+  return static_cast<std::int16_t>(i + (rest >= 0.5 ? 1 : 0) - (rest <= -0.5 ? 1 : 0));
 #endif
 }
 }  // namespace detail_fa
