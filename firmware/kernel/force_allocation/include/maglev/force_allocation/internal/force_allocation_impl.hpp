@@ -1,13 +1,13 @@
 // Template bodies of force_allocation.hpp (included at its end).
 #pragma once
 
-#include <bit>
-
 #include "maglev/io/code_placement.hpp"
+#include <bit>
 #include <cstdint>
 #include <type_traits>
 
 #include "maglev/numeric/fixed.hpp"
+#include "maglev/numeric/saturation.hpp"
 #include "maglev/numeric/scalar_traits.hpp"
 
 namespace maglev::kernel {
@@ -51,6 +51,17 @@ Scalar Dot3(bool b_below_32, Scalar a0, Scalar b0, Scalar a1, Scalar b1, Scalar 
   }
   return Scalar::dot3(a0, b0, a1, b1, a2, b2);
 }
+
+// An int32 saturated to the DAC's int16 range: SSAT on the M7 (GCC made
+// two compares and two conditional moves of the clamp).
+inline std::int16_t SaturateToInt16(std::int32_t v) {
+#if defined(__arm__) && defined(__ARM_FEATURE_SAT)
+  return static_cast<std::int16_t>(__builtin_arm_ssat(v, 16));
+#else
+  return static_cast<std::int16_t>(numeric::clamp<std::int32_t>(v, -32768, 32767));
+#endif
+}
+
 // The AD5764 code of v = current * codes per A: round half away from zero,
 // saturate to [-32768, 32767], NaN -> 0 -- defined for every double, so the
 // two forms below give the same code by construction (test
@@ -63,16 +74,6 @@ Scalar Dot3(bool b_below_32, Scalar a0, Scalar b0, Scalar a1, Scalar b1, Scalar 
 // 16). C++ leaves a NaN or out-of-range double -> int conversion undefined,
 // so the portable form tests the range first. (round() replaced trunc(v +- 0.5),
 // which differs only at v = +-(0.5 - 2^-54), where v +- 0.5 rounds to +-1.)
-// An int32 saturated to the DAC's int16 range: SSAT on the M7 (GCC made
-// two compares and two conditional moves of the clamp).
-inline std::int16_t SaturateToInt16(std::int32_t v) {
-#if defined(__arm__) && defined(__ARM_FEATURE_SAT)
-  return static_cast<std::int16_t>(__builtin_arm_ssat(v, 16));
-#else
-  return static_cast<std::int16_t>(v > 32767 ? 32767 : (v < -32768 ? -32768 : v));
-#endif
-}
-
 inline std::int16_t DacCode(double v) {
 #if defined(__arm__) && defined(__ARM_FP) && (__ARM_FP & 8) && defined(__ARM_FEATURE_SAT)
   const double r = __builtin_round(v);  // VRINTA
@@ -91,6 +92,7 @@ inline std::int16_t DacCode(double v) {
   return static_cast<std::int16_t>(i + (rest >= 0.5 ? 1 : 0) - (rest <= -0.5 ? 1 : 0));
 #endif
 }
+
 }  // namespace detail_fa
 
 template <typename Scalar>
