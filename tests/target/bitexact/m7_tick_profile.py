@@ -31,6 +31,11 @@ exceed the median interval's.
                      three or more times a tick: loops GCC left rolled (the
                      eighth session of 2026-11-27 found the axis loops' spilled
                      induction pointers this way).
+  --classes          the kernel's mean per tick by instruction class (integer
+                     ALU, integer load/store, branch/IT, FP arithmetic, FP
+                     load/store/move, FP conversion, FP compare; mnemonics from
+                     objdump), in total and for the largest functions: how much
+                     of a tick is arithmetic and how much is bookkeeping.
 """
 import argparse
 import collections
@@ -48,7 +53,7 @@ def entry_address(elf, symbol):
     return int(hits[0], 16)
 
 
-def intervals(log, entry):
+def intervals(log, entry, step_only=False):
     ninsn = {}
     insns = {}  # block start -> the addresses of its instructions
     fn_of = {}
@@ -56,6 +61,7 @@ def intervals(log, entry):
     cur = collections.Counter()
     cur_pc = None
     cur_n = 0
+    inside = False
     with open(log, 'r', errors='replace') as f:
         for line in f:
             if line.startswith('Trace 0:'):
@@ -64,8 +70,12 @@ def intervals(log, entry):
                 if pc == entry:
                     ticks.append(cur)
                     cur = collections.Counter()
-                fn_of.setdefault(pc, line[line.index(']') + 2:].strip())
-                cur[pc] += 1
+                    inside = True
+                fn = fn_of.setdefault(pc, line[line.index(']') + 2:].strip())
+                if step_only and any(h in fn for h in HARNESS):
+                    inside = False  # back in the harness: step() has returned
+                if inside or not step_only:
+                    cur[pc] += 1
             elif line.startswith('0x'):
                 if cur_pc is None:
                     cur_pc = int(line[2:10], 16)
@@ -89,6 +99,41 @@ def intervals(log, entry):
     return out, [c for c in ticks[1:]], ninsn, insns, fn_of
 
 
+CLASSES = ('int-alu', 'int-ldst', 'branch/it', 'fp-arith', 'fp-ldst/move', 'fp-convert', 'fp-compare')
+
+
+def instruction_class(mnemonic):
+    base = mnemonic.split('.')[0]
+    if base.startswith('v'):
+        if base in ('vldr', 'vstr', 'vldmia', 'vstmia', 'vldmdb', 'vstmdb', 'vpush', 'vpop', 'vmov'):
+            return 'fp-ldst/move'
+        if base.startswith(('vcvt', 'vrint')):
+            return 'fp-convert'
+        if base in ('vcmp', 'vcmpe', 'vmrs'):
+            return 'fp-compare'
+        return 'fp-arith'
+    if base.startswith(('ldr', 'str', 'ldm', 'stm', 'push', 'pop')):
+        return 'int-ldst'
+    if base.startswith(('b', 'cb', 'it', 'tb')) and base not in ('bic', 'bics', 'bfi', 'bfc'):
+        return 'branch/it'
+    return 'int-alu'
+
+
+def mnemonics(elf):
+    """address -> mnemonic of every instruction in the ELF (one objdump call)."""
+    out = subprocess.run(['arm-none-eabi-objdump', '-d', '--no-show-raw-insn', elf],
+                         capture_output=True, text=True, check=True).stdout
+    m = {}
+    for line in out.splitlines():
+        parts = line.split('\t')
+        if len(parts) >= 2 and parts[0].strip().endswith(':'):
+            try:
+                m[int(parts[0].strip()[:-1], 16)] = parts[1].strip().split()[0]
+            except (ValueError, IndexError):
+                pass
+    return m
+
+
 def source_lines(elf, pcs):
     """pc -> 'file:line' (the innermost inlined frame's), one addr2line call."""
     if not pcs:
@@ -107,8 +152,13 @@ def main():
     ap.add_argument('--top', type=int, default=5)
     ap.add_argument('--lines', default='', help='per source line in the functions whose name holds this')
     ap.add_argument('--loops', action='store_true', help='blocks run three or more times a tick, by function')
+    ap.add_argument('--classes', action='store_true', help='mean per tick by instruction class')
+    ap.add_argument('--step-only', action='store_true',
+                    help='count only what runs inside the tick function (not command() between ticks)')
+    ap.add_argument('--kinds', action='store_true',
+                    help='(implies --step-only) min / median / max per tick by the reference work it did')
     a = ap.parse_args()
-    ticks, blocks, ninsn, insns, fn_of = intervals(a.log, entry_address(a.elf, a.symbol))
+    ticks, blocks, ninsn, insns, fn_of = intervals(a.log, entry_address(a.elf, a.symbol), a.step_only or a.kinds)
     if a.last > 0:
         ticks = ticks[-a.last:]
         blocks = blocks[-a.last:]
@@ -162,6 +212,42 @@ def main():
         print('instructions per tick in blocks run three or more times a tick (rolled loops):')
         for f, v in rolled.most_common():
             print('%9.1f  %s' % (v, f))
+    if a.classes:
+        mn = mnemonics(a.elf)
+        total = collections.Counter()
+        per_fn = collections.defaultdict(collections.Counter)
+        for pc, cnt in per_pc.items():
+            f = fn_of[pc]
+            if any(h in f for h in HARNESS):
+                continue
+            for i in insns.get(pc, [pc]):
+                c = instruction_class(mn.get(i, '?'))
+                total[c] += cnt / n
+                per_fn[f][c] += cnt / n
+        print('kernel instructions per tick by class (mean):')
+        for c in CLASSES:
+            print('%9.1f  %s' % (total[c], c))
+        print('%9.1f  all' % sum(total.values()))
+        print('%-60s' % 'largest functions' + ''.join('%13s' % c for c in CLASSES))
+        for f, c in sorted(per_fn.items(), key=lambda kv: -sum(kv[1].values()))[:12]:
+            print('%-60s' % f[:60] + ''.join('%13.1f' % c[k] for k in CLASSES))
+    if a.kinds:
+        # A tick's kind: the reference generator or excitation it ran (the
+        # ticks that set the replay's maximum are a kind, not noise).
+        kinds = (('circle', 'CircleReference'), ('move', 'MoveReference'), ('sinusoid', 'SinusoidReference'),
+                 ('excitation', 'excite'))
+        by_kind = collections.defaultdict(list)
+        for k, (total, _, b) in enumerate(totals):
+            kind = 'quiet'
+            for name, sub in kinds:
+                if any(sub in f and v >= 20 for f, v in kernel(b).items()):
+                    kind = name
+                    break
+            by_kind[kind].append(total)
+        print('%-12s %6s %8s %8s %8s' % ('tick kind', 'ticks', 'min', 'median', 'max'))
+        for kind, v in sorted(by_kind.items(), key=lambda kv: max(kv[1])):
+            v.sort()
+            print('%-12s %6d %8d %8d %8d' % (kind, len(v), v[0], v[len(v) // 2], v[-1]))
 
 
 if __name__ == '__main__':
