@@ -68,11 +68,8 @@ AxisReference StepReference::sample(std::int64_t tick) const {
 
 // --- Moves -----------------------------------------------------------------
 
-void MoveReference::evaluate(double t, double* s, double* v, double* a) const {
-  if (n_seg_ == 0) {
-    *s = *v = *a = 0.0;
-    return;
-  }
+__attribute__((always_inline)) inline MoveReference::State MoveReference::state_at(double t) const {
+  if (n_seg_ == 0) return State{0.0, 0.0, 0.0};
   if (t < 0.0) t = 0.0;
   if (t > duration_s_) t = duration_s_;
   // The last segment whose start is <= t (segment 0 below seg_[1].t0): the
@@ -82,9 +79,15 @@ void MoveReference::evaluate(double t, double* s, double* v, double* a) const {
   seg_hint_ = i;
   const Segment& g = seg_[i];
   const double tau = t - g.t0;
-  *s = g.s0 + g.v0 * tau + 0.5 * g.a0 * tau * tau + g.jerk * tau * tau * tau / 6.0;
-  *v = g.v0 + g.a0 * tau + 0.5 * g.jerk * tau * tau;
-  *a = g.a0 + g.jerk * tau;
+  return State{g.s0 + g.v0 * tau + 0.5 * g.a0 * tau * tau + g.jerk * tau * tau * tau / 6.0,
+               g.v0 + g.a0 * tau + 0.5 * g.jerk * tau * tau, g.a0 + g.jerk * tau};
+}
+
+void MoveReference::evaluate(double t, double* s, double* v, double* a) const {
+  const State st = state_at(t);
+  *s = st.s;
+  *v = st.v;
+  *a = st.a;
 }
 
 MAGLEV_CONFIG_CODE ReferenceError MoveReference::finish_plan(std::int64_t start_pico, std::int64_t target_pico, double servo_rate_Hz,
@@ -224,8 +227,8 @@ AxisReference MoveReference::sample(std::int64_t tick) const {
     r.position_pico = start_;
     return r;
   }
-  double s = 0, v = 0, a = 0;
-  evaluate(numeric::Int64ToDouble(tick) * period_s_, &s, &v, &a);
+  const State st = state_at(numeric::Int64ToDouble(tick) * period_s_);
+  const double s = st.s, v = st.v, a = st.a;
   const std::int64_t d_pico = target_ >= start_ ? target_ - start_ : start_ - target_;
   std::int64_t s_pico = numeric::si_to_pico(s);
   if (s_pico > d_pico) s_pico = d_pico;  // never past the target
@@ -286,14 +289,14 @@ void CircleReference::sample(std::int64_t tick, AxisReference* x, AxisReference*
   double sn = 0.0, c = 0.0;
   numeric::dsincos(theta, &sn, &c);
   const double v = static_cast<double>(s.velocity), at = static_cast<double>(s.acceleration);
-  *x = AxisReference{};
-  *y = AxisReference{};
-  x->position_pico = cx_ + numeric::si_to_pico(radius_m_ * c);
-  y->position_pico = cy_ + numeric::si_to_pico(radius_m_ * sn);
-  x->velocity = static_cast<float>(-sn * v);
-  y->velocity = static_cast<float>(c * v);
-  x->acceleration = static_cast<float>(-sn * at - c * v * v / radius_m_);
-  y->acceleration = static_cast<float>(c * at - sn * v * v / radius_m_);
+  // Each field written once (zeroing the two and then filling them in cost
+  // the stores twice: x and y may alias, so the compiler kept both).
+  const AxisReference rx{cx_ + numeric::si_to_pico(radius_m_ * c), static_cast<float>(-sn * v),
+                         static_cast<float>(-sn * at - c * v * v / radius_m_), 0};
+  const AxisReference ry{cy_ + numeric::si_to_pico(radius_m_ * sn), static_cast<float>(c * v),
+                         static_cast<float>(c * at - sn * v * v / radius_m_), 0};
+  *x = rx;
+  *y = ry;
 }
 
 // --- Sinusoid ----------------------------------------------------------------

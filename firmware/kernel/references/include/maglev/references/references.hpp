@@ -93,6 +93,12 @@ class MoveReference {
   struct Segment {
     double t0, s0, v0, a0, jerk;
   };
+  struct State {
+    double s, v, a;
+  };
+  // evaluate()'s body, inlined into sample() (the per-tick path: no call, no
+  // results through memory).
+  State state_at(double t) const;
   ReferenceError finish_plan(std::int64_t start_pico, std::int64_t target_pico, double servo_rate_Hz,
                              const AxisReferenceLimits& limits);
   Segment seg_[7] = {};
