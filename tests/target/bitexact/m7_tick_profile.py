@@ -36,6 +36,13 @@ exceed the median interval's.
                      load/store/move, FP conversion, FP compare; mnemonics from
                      objdump), in total and for the largest functions: how much
                      of a tick is arithmetic and how much is bookkeeping.
+  --step-only        count only the blocks run inside the tick function (from
+                     its entry to the next harness block), not command() and
+                     what it calls between ticks: then an interval is what the
+                     icount replay measures.
+  --kinds            (implies --step-only) min / median / max per tick by the
+                     reference work it did (circle, move, sinusoid, excitation,
+                     quiet): which ticks set the replay's maximum.
 """
 import argparse
 import collections
@@ -214,7 +221,7 @@ def main():
             print('%9.1f  %s' % (v, f))
     if a.classes:
         mn = mnemonics(a.elf)
-        total = collections.Counter()
+        by_class = collections.Counter()
         per_fn = collections.defaultdict(collections.Counter)
         for pc, cnt in per_pc.items():
             f = fn_of[pc]
@@ -222,12 +229,12 @@ def main():
                 continue
             for i in insns.get(pc, [pc]):
                 c = instruction_class(mn.get(i, '?'))
-                total[c] += cnt / n
+                by_class[c] += cnt / n
                 per_fn[f][c] += cnt / n
         print('kernel instructions per tick by class (mean):')
         for c in CLASSES:
-            print('%9.1f  %s' % (total[c], c))
-        print('%9.1f  all' % sum(total.values()))
+            print('%9.1f  %s' % (by_class[c], c))
+        print('%9.1f  all' % sum(by_class.values()))
         print('%-60s' % 'largest functions' + ''.join('%13s' % c for c in CLASSES))
         for f, c in sorted(per_fn.items(), key=lambda kv: -sum(kv[1].values()))[:12]:
             print('%-60s' % f[:60] + ''.join('%13.1f' % c[k] for k in CLASSES))
@@ -237,13 +244,13 @@ def main():
         kinds = (('circle', 'CircleReference'), ('move', 'MoveReference'), ('sinusoid', 'SinusoidReference'),
                  ('excitation', 'excite'))
         by_kind = collections.defaultdict(list)
-        for k, (total, _, b) in enumerate(totals):
+        for tick_total, _, b in totals:
             kind = 'quiet'
             for name, sub in kinds:
                 if any(sub in f and v >= 20 for f, v in kernel(b).items()):
                     kind = name
                     break
-            by_kind[kind].append(total)
+            by_kind[kind].append(tick_total)
         print('%-12s %6s %8s %8s %8s' % ('tick kind', 'ticks', 'min', 'median', 'max'))
         for kind, v in sorted(by_kind.items(), key=lambda kv: max(kv[1])):
             v.sort()
