@@ -228,14 +228,13 @@ AxisReference MoveReference::sample(std::int64_t tick) const {
     return r;
   }
   const State st = state_at(numeric::Int64ToDouble(tick) * period_s_);
-  const double s = st.s, v = st.v, a = st.a;
   const std::int64_t d_pico = target_ >= start_ ? target_ - start_ : start_ - target_;
-  std::int64_t s_pico = numeric::si_to_pico(s);
+  std::int64_t s_pico = numeric::si_to_pico(st.s);
   if (s_pico > d_pico) s_pico = d_pico;  // never past the target
   if (s_pico < 0) s_pico = 0;
   r.position_pico = direction_ > 0 ? start_ + s_pico : start_ - s_pico;
-  r.velocity = static_cast<float>(direction_ * v);
-  r.acceleration = static_cast<float>(direction_ * a);
+  r.velocity = static_cast<float>(direction_ * st.v);
+  r.acceleration = static_cast<float>(direction_ * st.a);
   return r;
 }
 

@@ -96,8 +96,8 @@ class MoveReference {
   struct State {
     double s, v, a;
   };
-  // evaluate()'s body, inlined into sample() (the per-tick path: no call, no
-  // results through memory).
+  // The profile at t, as evaluate() gives it; inlined into sample() (the
+  // per-tick path: no call, no results through memory).
   State state_at(double t) const;
   ReferenceError finish_plan(std::int64_t start_pico, std::int64_t target_pico, double servo_rate_Hz,
                              const AxisReferenceLimits& limits);
