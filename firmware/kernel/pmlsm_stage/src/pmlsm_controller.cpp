@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "maglev/numeric/dac_code.hpp"
 #include "maglev/numeric/sin_cos.hpp"
 
 namespace maglev::pmlsm_stage {
@@ -16,12 +17,10 @@ constexpr std::uint32_t kThirdTurn = 1431655765u;  // 2^32 / 3
 
 bool finite(float v) { return std::isfinite(v); }
 
+// The kernels' one DAC rounding, symmetric range. (Its own code + 0.5f and
+// truncation gave 1 for 0.49999997: the float sum rounded up.)
 std::int16_t to_dac(float amps, float amps_per_code) {
-  float code = amps / amps_per_code;
-  if (!(code == code)) code = 0.0f;
-  if (code > 32767.0f) code = 32767.0f;
-  if (code < -32767.0f) code = -32767.0f;
-  return static_cast<std::int16_t>(code >= 0.0f ? code + 0.5f : code - 0.5f);
+  return numeric::SymmetricDacCode(static_cast<double>(amps / amps_per_code));
 }
 
 bool positive_finite(float v) { return finite(v) && v > 0.0f; }

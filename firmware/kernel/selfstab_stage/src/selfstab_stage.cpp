@@ -3,6 +3,8 @@
 
 #include <cmath>
 
+#include "maglev/numeric/dac_code.hpp"
+
 namespace maglev::selfstab {
 
 MAGLEV_ENUM_TO_STRING(SelfstabConfigError, MAGLEV_SELFSTAB_CONFIG_ERRORS)
@@ -14,12 +16,11 @@ namespace {
 bool finite(float v) { return std::isfinite(v); }
 float clamp(float v, float lim) { return v > lim ? lim : (v < -lim ? -lim : v); }
 
-// Current -> DAC code, rounded to nearest and clamped to the int16 range.
+// Current -> DAC code: the quotient in float (as this stage always formed
+// it), rounded half away from zero into [-32767, 32767] by the kernels'
+// one DAC rounding (the same codes as the clamp and lround it replaced).
 std::int16_t dac_code(float current_A, float A_per_code) {
-  float c = current_A / A_per_code;
-  if (c > 32767.0f) c = 32767.0f;
-  if (c < -32767.0f) c = -32767.0f;
-  return static_cast<std::int16_t>(std::lround(c));
+  return numeric::SymmetricDacCode(static_cast<double>(current_A / A_per_code));
 }
 
 }  // namespace
