@@ -107,6 +107,24 @@ TEST(Wave, SweepEndsAfterItsDurationAtItsEndFrequency) {
   CHECK(crossings(4750, 250) >= 35);
 }
 
+// A positive duration shorter than a tick lasts one tick: it used to round to
+// 0 ticks, "until stopped", and the sweep's per-tick ratio (here 100) took
+// its frequency past Nyquist within two ticks and on to inf.
+TEST(Wave, ShortestSweepLastsOneTick) {
+  WaveConfig c{};
+  c.shape = WaveShape::kSweep;
+  c.amplitude = 0.1f;
+  c.f_start_Hz = 10.0f;
+  c.f_end_Hz = 1000.0f;
+  c.duration_s = 1e-4f;
+  CHECK(w->start(c, k) == WaveError::kOk);
+  const auto v = generate(*w, 3);
+  CHECK(w->state() == WaveState::kFinished);
+  CHECK(std::isfinite(v[0]));
+  CHECK(std::isnan(v[1]));
+  CHECK(std::isnan(v[2]));
+}
+
 TEST(Wave, NoiseStaysInsideItsAmplitude) {
   WaveConfig c{};
   c.shape = WaveShape::kNoise;

@@ -1,6 +1,6 @@
 #include "maglev/motion_commands/to_motion_command.hpp"
 
-#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 namespace maglev::motion_commands {
@@ -48,15 +48,28 @@ bool to_motion_command(const can::HostCommandFrame& h, const kernel::Pose64& ref
       c.diameter_m = a.circle.diameter_m; c.period_s = a.circle.period_s; c.turns = a.circle.turns;
       break;
     case C::kSinusoid:
-      // The kernel counts cycles (0 = until hold); the command says how long.
+      // The kernel counts cycles (0 = until hold) and ends only at rest, on
+      // a whole half cycle; the command says how long: at least that long,
+      // to the next half cycle (1 s at 1.2 Hz: 1.5 cycles, 1.25 s).
       c.type = MotionType::kSinusoid;
       c.amplitude = a.sinusoid.amplitude; c.frequency_Hz = a.sinusoid.frequency_Hz;
-      c.turns = a.sinusoid.duration_s * a.sinusoid.frequency_Hz;
+      // A positive duration is at least half a cycle; 0 stays "until hold";
+      // a negative or non-finite one stays what it is, for the kernel to refuse.
+      {
+        const double d = a.sinusoid.duration_s, f = a.sinusoid.frequency_Hz;
+        c.turns = d > 0.0 ? 0.5 * std::fmax(1.0, std::ceil(2.0 * d * f - 1e-9)) : d * f;
+      }
       break;
     case C::kExcite:
       c.type = MotionType::kExcite;
       c.amplitude = a.excite.amplitude; c.frequency_Hz = a.excite.frequency_Hz; c.duration_s = a.excite.duration_s;
-      c.harmonics = static_cast<std::uint8_t>(std::clamp(a.excite.harmonics, 1.0, 255.0));
+      // A whole number of lines, 1..255; anything else (0, -7, 300, 2.5,
+      // NaN) becomes 0, which the kernel refuses -- never silently another
+      // excitation than the one asked for.
+      {
+        const double lines = a.excite.harmonics;
+        c.harmonics = lines >= 1.0 && lines <= 255.0 && lines == std::floor(lines) ? static_cast<std::uint8_t>(lines) : 0u;
+      }
       break;
     case C::kStopExcitation: c.type = MotionType::kStopExcitation; break;
     case C::kCalibrateCoupling: c.type = MotionType::kCalibrateCoupling; break;

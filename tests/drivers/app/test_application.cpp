@@ -510,10 +510,32 @@ TEST(Application, HostCommandMappingIsTheBenchOne) {
   CHECK(c.type == kernel::MotionType::kMoveJerkLimited);
   DOUBLES_EQUAL(0.75e-6, c.target, 1e-18);
   DOUBLES_EQUAL(40.0, c.jerk, 0.0);
-  h = can::make_host_command(0, 2, can::ExciteArgs{0.1, 5.0, 2.0, 300.0});  // harmonics clamp to 255
+  h = can::make_host_command(0, 2, can::ExciteArgs{0.1, 5.0, 2.0, 255.0});
   CHECK(motion_commands::to_motion_command(h, ref, &c));
   CHECK(c.type == kernel::MotionType::kExcite);
   LONGS_EQUAL(255, c.harmonics);
+  // Not a whole number of lines in 1..255: 0, which the kernel refuses
+  // (it used to be clamped into another excitation than the one asked for).
+  for (double bad : {300.0, 0.0, -7.0, 2.5}) {
+    h = can::make_host_command(0, 2, can::ExciteArgs{0.1, 5.0, 2.0, bad});
+    CHECK(motion_commands::to_motion_command(h, ref, &c));
+    LONGS_EQUAL(0, c.harmonics);
+  }
+  // A sinusoid's duration becomes whole half cycles, at least as long: the
+  // kernel ends a sinusoid only at rest.
+  h = can::make_host_command(0, 0, can::SinusoidArgs{1e-6, 1.2, 1.0});
+  CHECK(motion_commands::to_motion_command(h, ref, &c));
+  CHECK(c.type == kernel::MotionType::kSinusoid);
+  DOUBLES_EQUAL(1.5, c.turns, 0.0);
+  h = can::make_host_command(0, 0, can::SinusoidArgs{1e-6, 0.75, 4.0});  // paper 002's 3 cycles
+  CHECK(motion_commands::to_motion_command(h, ref, &c));
+  DOUBLES_EQUAL(3.0, c.turns, 0.0);
+  h = can::make_host_command(0, 0, can::SinusoidArgs{1e-6, 2.0, 1e-12});  // at least half a cycle
+  CHECK(motion_commands::to_motion_command(h, ref, &c));
+  DOUBLES_EQUAL(0.5, c.turns, 0.0);
+  h = can::make_host_command(0, 0, can::SinusoidArgs{1e-6, 2.0, -0.3});  // stays negative: refused by the kernel
+  CHECK(motion_commands::to_motion_command(h, ref, &c));
+  CHECK(c.turns < 0.0);
   h.code = can::HostCommandCode::kShutdown;
   c.target = 42.0;
   CHECK_FALSE(motion_commands::to_motion_command(h, ref, &c));

@@ -407,6 +407,23 @@ MotionCommand move_cmd(MotionType type, Axis a, double target, double v, double 
 
 double x_m(const Pose64& p) { return static_cast<double>(p[maglev::kernel::Axis::kX]) * 1e-12; }
 double y_m(const Pose64& p) { return static_cast<double>(p[maglev::kernel::Axis::kY]) * 1e-12; }
+MotionCommand circle_cmd(double diameter_m, double period_s, double turns) {
+  MotionCommand m;
+  m.type = MotionType::kCircle;
+  m.diameter_m = diameter_m;
+  m.period_s = period_s;
+  m.turns = turns;
+  return m;
+}
+MotionCommand sinusoid_cmd(Axis a, double amplitude, double frequency_Hz, double turns) {
+  MotionCommand m;
+  m.type = MotionType::kSinusoid;
+  m.axis = a;
+  m.amplitude = amplitude;
+  m.frequency_Hz = frequency_Hz;
+  m.turns = turns;
+  return m;
+}
 
 // Paper 000 Fig. 10(a): 12 mm in x at 60 mm/s and 0.6 m/s^2, with and without
 // the acceleration feed-forward m a / (2 b*). Returns the peak |e_x| (um).
@@ -798,15 +815,183 @@ TEST(ClosedLoop, AxesGoQuietWhenTheirProfilesEndAndWakeOnTheNextCommand) {
   s.tick(c);
   DOUBLES_EQUAL(x1 - 1e-6, x_m(c.status().reference), 1e-12);
   CHECK(is_quiet());
-  // Hold in the middle of a move: the axis is quiet on the next tick, its
-  // reference where the move left it.
+  // Hold in the middle of a move: the axis comes to rest at its max
+  // acceleration (20 mm/s at 1.5 m/s^2: 14 ticks), then is quiet, its
+  // reference where the stop left it.
   CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kY, y0 + 1e-3, 0.02, 0.5)) == CommandResult::kAccepted);
   for (int k = 0; k < 50; ++k) s.tick(c);  // 20 ms of a ~90 ms move
   CHECK(c.status().motion_active);
   CHECK(c.command(MotionCommand{MotionType::kHold}) == CommandResult::kAccepted);
   const double y_held = y_m(c.status().reference);
-  s.tick(c);
+  for (int k = 0; k < 40; ++k) s.tick(c);
   CHECK(is_quiet());
-  DOUBLES_EQUAL(y_held, y_m(c.status().reference), 1e-12);
+  const double y_rest = y_m(c.status().reference);
+  CHECK(y_rest > y_held && y_rest < y0 + 1e-3);
+  for (int k = 0; k < 100; ++k) s.tick(c);
+  DOUBLES_EQUAL(y_rest, y_m(c.status().reference), 1e-12);
+  CHECK(c.status().state == SequencerState::kReady);
+}
+
+// kHold at full speed -- a 0.15 m/s move, a circle, a sinusoid that runs
+// until held -- brings each reference to rest within its axis' max
+// acceleration, inside travel, and the stage stays Ready (a dead stop at
+// 0.15 m/s faulted it on its following error).
+TEST(ClosedLoop, HoldBringsEveryMovingReferenceToRestWithinItsLimits) {
+  static Controller<float> c;
+  AxisStage s(24);
+  CHECK(settled_in_ready(c, s, 500));
+  const ReferenceLimits& lim = c.config().references;
+  const int ix = axis_index(Axis::kX), iy = axis_index(Axis::kY);
+  const double x0 = x_m(c.status().reference);
+  // Follows the references through a hold: the largest second difference
+  // (acceleration) and where they end.
+  auto hold_and_watch = [&](int ticks_before, double* max_acc_x, double* max_acc_y) {
+    for (int n = 0; n < ticks_before; ++n) s.tick(c);
+    CHECK(c.status().motion_active);
+    CHECK(c.command(MotionCommand{MotionType::kHold}) == CommandResult::kAccepted);
+    double px[3] = {x_m(c.status().reference), x_m(c.status().reference), x_m(c.status().reference)};
+    double py[3] = {y_m(c.status().reference), y_m(c.status().reference), y_m(c.status().reference)};
+    *max_acc_x = *max_acc_y = 0.0;
+    for (int n = 0; n < 1000; ++n) {
+      s.tick(c);
+      px[0] = px[1]; px[1] = px[2]; px[2] = x_m(c.status().reference);
+      py[0] = py[1]; py[1] = py[2]; py[2] = y_m(c.status().reference);
+      if (n >= 1) {
+        *max_acc_x = std::fmax(*max_acc_x, std::fabs(px[2] - 2 * px[1] + px[0]) * kFs * kFs);
+        *max_acc_y = std::fmax(*max_acc_y, std::fabs(py[2] - 2 * py[1] + py[0]) * kFs * kFs);
+      }
+    }
+    CHECK_FALSE(c.status().motion_active);
+    CHECK(c.status().state == SequencerState::kReady);
+    LONGS_EQUAL(0, static_cast<long>(c.status().fault));
+  };
+  double ax = 0.0, ay = 0.0;
+  // 20 mm at the axis' max velocity and acceleration, held while cruising
+  // (20 ms after the acceleration ends).
+  const double vx = static_cast<double>(lim.max_velocity[ix]), accx = static_cast<double>(lim.max_acceleration[ix]);
+  const double dir = x0 < 0.0 ? 1.0 : -1.0;  // towards the middle of travel
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kX, x0 + dir * 20e-3, vx, accx)) == CommandResult::kAccepted);
+  hold_and_watch(static_cast<int>(vx / accx * kFs) + 50, &ax, &ay);
+  CHECK(ax <= accx * 1.01);
+  const double x_gone = dir * (x_m(c.status().reference) - x0);
+  CHECK(x_gone > 1e-3 && x_gone < 20e-3);
+  // A 6 mm circle at 2 s a turn, held half-way round its first turn (y
+  // first 8 mm towards the middle: homing left this stage near the y edge).
+  const double y0 = y_m(c.status().reference);
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kY, y0 + (y0 < 0.0 ? 8e-3 : -8e-3), 0.05, 0.5)) ==
+        CommandResult::kAccepted);
+  for (int n = 0; n < 2500; ++n) s.tick(c);
+  CHECK(c.command(circle_cmd(6e-3, 2.0, 2.0)) == CommandResult::kAccepted);
+  hold_and_watch(2500, &ax, &ay);
+  CHECK(ax <= static_cast<double>(lim.max_acceleration[ix]) * 1.01);
+  CHECK(ay <= static_cast<double>(lim.max_acceleration[iy]) * 1.01);
+  // A sinusoid that runs until held: 1 mm at 5 Hz (31 mm/s).
+  CHECK(c.command(sinusoid_cmd(Axis::kY, 1e-3, 5.0, 0.0)) == CommandResult::kAccepted);
+  hold_and_watch(1000, &ax, &ay);
+  CHECK(ay <= static_cast<double>(lim.max_acceleration[iy]) * 1.01);
+  for (int a = 0; a < kAxisCount; ++a) {
+    const double r = static_cast<double>(c.status().reference.pico[a]) * 1e-12;
+    CHECK(r >= static_cast<double>(lim.position_min[a]) && r <= static_cast<double>(lim.position_max[a]));
+  }
+}
+
+// What a host may send never takes a reference beyond its axis' limits
+// (each case took the stage to a following-error or envelope fault before):
+// a NaN step; steps adding up past max_step within a tick; a step and a
+// profile on the same axis in one tick; any command on an axis whose profile
+// runs; a sinusoid ending in motion; a reference injection past travel; an
+// effort injection on top of a running excitation; a sub-tick excitation.
+TEST(ClosedLoop, CommandsNeverTakeTheReferenceBeyondItsLimits) {
+  static Controller<float> c;
+  AxisStage s(23);
+  CHECK(settled_in_ready(c, s, 500));
+  const int ix = axis_index(Axis::kX), iz = axis_index(Axis::kZ);
+  const ReferenceLimits& lim = c.config().references;
+  const double x0 = x_m(c.status().reference);
+  // NaN step: refused (it used to become a 0 pm step, accepted).
+  CHECK(c.command(step_cmd(Axis::kX, __builtin_nan(""))) == CommandResult::kRefusedOutOfRange);
+  // Steps within one tick add up, and the sum is what max_step bounds.
+  const double big = 0.99 * static_cast<double>(lim.max_step[ix]);
+  CHECK(c.command(step_cmd(Axis::kX, big)) == CommandResult::kAccepted);
+  CHECK(c.command(step_cmd(Axis::kX, big)) == CommandResult::kRefusedOutOfRange);
+  CHECK(c.command(step_cmd(Axis::kX, -big)) == CommandResult::kAccepted);  // sum 0
+  s.tick(c);
+  DOUBLES_EQUAL(x0, x_m(c.status().reference), 1e-12);
+  for (int n = 0; n < 500; ++n) s.tick(c);
+  // A step, then a move in the same tick: the move starts from the stepped
+  // reference and ends on its target (the step was counted twice before).
+  CHECK(c.command(step_cmd(Axis::kX, 50e-6)) == CommandResult::kAccepted);
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kX, x0 + 1e-3, 0.02, 0.5)) == CommandResult::kAccepted);
+  double x_max_seen = -1.0;
+  for (int n = 0; n < 2000; ++n) {
+    s.tick(c);
+    x_max_seen = std::fmax(x_max_seen, x_m(c.status().reference));
+  }
+  DOUBLES_EQUAL(x0 + 1e-3, x_m(c.status().reference), 1e-12);
+  CHECK(x_max_seen <= x0 + 1e-3 + 1e-12);
+  // While a profile runs on an axis, nothing else may start there (nor a
+  // circle while x or y moves); other axes take commands.
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kX, x0, 0.02, 0.5)) == CommandResult::kAccepted);
+  s.tick(c);
+  CHECK(c.command(move_cmd(MotionType::kMoveTo, Axis::kX, x0 + 2e-3, 0.02, 0.5)) == CommandResult::kRefusedBusy);
+  CHECK(c.command(step_cmd(Axis::kX, 1e-6)) == CommandResult::kRefusedBusy);
+  CHECK(c.command(circle_cmd(1e-3, 1.0, 1.0)) == CommandResult::kRefusedBusy);
+  CHECK(c.command(step_cmd(Axis::kY, 1e-6)) == CommandResult::kAccepted);
+  for (int n = 0; n < 2000; ++n) s.tick(c);
+  DOUBLES_EQUAL(x0, x_m(c.status().reference), 1e-12);
+  // A sinusoid of a quarter cycle would end at full speed: refused. Half
+  // cycles end at rest: accepted.
+  CHECK(c.command(sinusoid_cmd(Axis::kX, 10e-6, 5.0, 0.25)) == CommandResult::kRefusedBadProfile);
+  CHECK(c.command(sinusoid_cmd(Axis::kX, 10e-6, 5.0, 0.5)) == CommandResult::kAccepted);
+  for (int n = 0; n < 1000; ++n) s.tick(c);
+  DOUBLES_EQUAL(x0 + 20e-6, x_m(c.status().reference), 1e-9);
+  // A reference injection stays inside travel: z at 30 um, travel to
+  // position_max, max_step 10 um.
+  const double z_ref = static_cast<double>(c.status().reference.pico[iz]) * 1e-12;
+  const double room = static_cast<double>(lim.position_max[iz]) - z_ref;
+  CHECK(room < static_cast<double>(lim.max_step[iz]));
+  Injection in{};
+  in.active = true;
+  in.axis = static_cast<std::uint8_t>(iz);
+  in.at_reference = true;
+  in.value = lim.max_step[iz];
+  c.set_injection(in);
+  s.tick(c);
+  CHECK(c.status().injection_active);
+  DOUBLES_EQUAL(room, static_cast<double>(c.status().reference_injection), 1e-9);
+  c.set_injection(Injection{});
+  for (int n = 0; n < 1000; ++n) s.tick(c);
+  // An effort injection on an axis that a kExcite drives: the sum stays
+  // within max_amplitude_A.
+  const float amax = c.config().excitation.max_amplitude_A;
+  MotionCommand ex;
+  ex.type = MotionType::kExcite;
+  ex.axis = Axis::kX;
+  ex.amplitude = static_cast<double>(amax);
+  ex.frequency_Hz = 20.0;
+  ex.harmonics = 1;
+  ex.duration_s = 0.2;
+  CHECK(c.command(ex) == CommandResult::kAccepted);
+  in = Injection{};
+  in.active = true;
+  in.axis = static_cast<std::uint8_t>(ix);
+  in.value = amax;
+  c.set_injection(in);
+  float peak = 0.0f;
+  for (int n = 0; n < 500; ++n) {
+    s.tick(c);
+    peak = std::fmax(peak, std::fabs(c.status().excitation_A[ix]));
+  }
+  CHECK(peak <= amax);
+  DOUBLES_EQUAL(amax, peak, 1e-6);  // reached: the sum is held, not dropped
+  c.set_injection(Injection{});
+  // A positive excitation duration below one tick lasts one tick, not
+  // "until stopped".
+  ex.amplitude = 0.01;
+  ex.duration_s = 1e-5;
+  CHECK(c.command(ex) == CommandResult::kAccepted);
+  for (int n = 0; n < 3; ++n) s.tick(c);
+  CHECK_FALSE(c.status().excitation_active);
+  for (int n = 0; n < 1000; ++n) s.tick(c);
   CHECK(c.status().state == SequencerState::kReady);
 }

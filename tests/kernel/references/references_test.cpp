@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 
 #include "CppUTest/TestHarness.h"
 #include "maglev/io/stage_parameters.hpp"
@@ -212,6 +213,21 @@ TEST(References, SinusoidOfPaper002) {
   CHECK(s.plan(kMm, 1e-3, 100.0, 1.0, kFs, lim) == ReferenceError::kAccelerationLimit);
   CHECK(s.plan(27 * kMm + 999 * 1000000, 30e-6, f, 1.0, kFs, stage_limits_x()) == ReferenceError::kOutsideTravel);
   CHECK(s.plan(kMm, 30e-6, 2000.0, 1.0, kFs, stage_limits_x()) == ReferenceError::kBadParameter);
+  // A finite sinusoid ends at rest: whole half cycles only (the reference
+  // holds its last sample, so a moving end would be a velocity step).
+  CHECK(s.plan(kMm, 30e-6, f, 0.25, kFs, stage_limits_x()) == ReferenceError::kBadParameter);
+  CHECK(s.plan(kMm, 30e-6, f, 1.2, kFs, stage_limits_x()) == ReferenceError::kBadParameter);
+  CHECK(s.plan(kMm, 30e-6, f, 0.5, kFs, stage_limits_x()) == ReferenceError::kOk);
+  const std::int64_t half = 1667;  // ceil(0.5 / 0.75 Hz x 2500 Hz)
+  CHECK(!s.done(half - 1));
+  CHECK(s.done(half));
+  // p0 + 2 A, at rest (the last tick lies 0.13 ms past the half cycle: 6 pm short of it)
+  CHECK(std::llabs(s.sample(half).position_pico - (kMm + 60000000)) <= 100);
+  DOUBLES_EQUAL(0.0, static_cast<double>(s.sample(half).velocity), 1e-12);
+  // The shortest: half a cycle just below fs / 2 lasts two ticks, never 0 ("until kHold").
+  CHECK(s.plan(kMm, 1e-9, 1249.0, 0.5, kFs, stage_limits_x()) == ReferenceError::kOk);
+  CHECK(!s.done(1));
+  CHECK(s.done(2));
 }
 
 TEST(References, StepAndRejectedMoves) {

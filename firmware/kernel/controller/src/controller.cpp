@@ -287,8 +287,7 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
     default: break;
   }
   if (cmd.type == MotionType::kHold) {
-    for (Profile& p : profile_) p.kind = ProfileKind::kNone;
-    excitation_.active = false;
+    hold();
     return CommandResult::kAccepted;
   }
   if (cmd.type == MotionType::kStopExcitation) {
@@ -311,16 +310,31 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
   };
   const double fs = static_cast<double>(config_.servo_rate_Hz);
   const AxisReferenceLimits lim = axis_limits(a);
+  // A running profile owns its axis (a circle both x and y) until it ends or
+  // kHold stops it: a new profile would start from the running one's
+  // position at zero velocity, a step would jump a moving reference -- a
+  // reference deceleration of ~370 m/s^2 from 0.15 m/s, against limits of a
+  // few m/s^2, and the stage faults on its following error.
+  if (profile_[a].kind != ProfileKind::kNone ||
+      (cmd.type == MotionType::kCircle && (profile_[axis_index(Axis::kX)].kind != ProfileKind::kNone ||
+                                           profile_[axis_index(Axis::kY)].kind != ProfileKind::kNone))) {
+    return CommandResult::kRefusedBusy;
+  }
   const std::int64_t start = status_.reference.pico[a] + pending_step_pm_[a];
   switch (cmd.type) {
     case MotionType::kStep: {
+      // A NaN step would become 0 pm (si_to_pico) and be accepted.
+      if (!std::isfinite(cmd.target)) return CommandResult::kRefusedOutOfRange;
+      // Steps given before the next tick add up into one step of the
+      // reference: the sum is what max_step and the travel bound, so it is
+      // planned from the reference as it stands.
       StepReference step;
-      const ReferenceError e = step.plan(start, numeric::si_to_pico(cmd.target), lim);
+      const ReferenceError e =
+          step.plan(status_.reference.pico[a], pending_step_pm_[a] + numeric::si_to_pico(cmd.target), lim);
       if (e != ReferenceError::kOk) return result(e);
-      cancel_profile(a);
       // Applied on the next tick and handed to the loop as an explicit step, so
       // its setpoint weighting b acts on it (pid2dof.hpp).
-      pending_step_pm_[a] += step.sample(0).step_pico;
+      pending_step_pm_[a] = step.sample(0).step_pico;
       maybe_busy_axes_ |= 1u << a;
       return CommandResult::kAccepted;
     }
@@ -334,7 +348,6 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
               ? m.plan_trapezoid(start, target, cmd.velocity, cmd.acceleration, fs, lim)  // paper 000 Fig. 10
               : m.plan_scurve(start, target, cmd.velocity, cmd.acceleration, cmd.jerk, fs, lim);
       if (e != ReferenceError::kOk) return result(e);
-      cancel_profile(a);
       move_[a] = m;
       profile_[a] = Profile{ProfileKind::kMove, 0};
       maybe_busy_axes_ |= 1u << a;
@@ -344,7 +357,6 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
       SinusoidReference sref;
       const ReferenceError e = sref.plan(start, cmd.amplitude, cmd.frequency_Hz, cmd.turns, fs, lim);
       if (e != ReferenceError::kOk) return result(e);
-      cancel_profile(a);
       sinusoid_[a] = sref;
       profile_[a] = Profile{ProfileKind::kSinusoid, 0};
       maybe_busy_axes_ |= 1u << a;
@@ -370,8 +382,6 @@ CommandResult Controller<Scalar>::command(const MotionCommand& cmd) {
       const ReferenceError e = c.plan(status_.reference.pico[ix] + pending_step_pm_[ix], status_.reference.pico[iy] + pending_step_pm_[iy],
                                       cmd.diameter_m, speed, cmd.turns, at, jerk, fs, lx, ly);
       if (e != ReferenceError::kOk) return result(e);
-      cancel_profile(ix);
-      cancel_profile(iy);
       circle_ = c;
       profile_[ix] = Profile{ProfileKind::kCircle, 0};
       profile_[iy] = Profile{ProfileKind::kCircle, 0};
@@ -396,14 +406,46 @@ AxisReferenceLimits Controller<Scalar>::axis_limits(int a) const {
   return l;
 }
 
+// kHold: every moving reference comes to rest at its axis' max
+// acceleration, from where it is and as fast as it goes (it used to stop
+// dead: from 0.15 m/s that is ~370 m/s^2 of reference deceleration, and the
+// stage faulted on its following error); the excitation stops at once.
 template <typename Scalar>
-void Controller<Scalar>::cancel_profile(int a) {
-  // A circle drives x and y together: cancelling either cancels both.
-  if (profile_[a].kind == ProfileKind::kCircle) {
-    profile_[axis_index(Axis::kX)].kind = ProfileKind::kNone;
-    profile_[axis_index(Axis::kY)].kind = ProfileKind::kNone;
+void Controller<Scalar>::hold() {
+  excitation_.active = false;
+  const double fs = static_cast<double>(config_.servo_rate_Hz);
+  float velocity[kAxisCount] = {};
+  const int ix = axis_index(Axis::kX), iy = axis_index(Axis::kY);
+  for (int a = 0; a < kAxisCount; ++a) {
+    const Profile& p = profile_[a];
+    switch (p.kind) {
+      case ProfileKind::kMove: velocity[a] = move_[a].sample(p.tick).velocity; break;
+      case ProfileKind::kSinusoid: velocity[a] = sinusoid_[a].sample(p.tick).velocity; break;
+      case ProfileKind::kStop: velocity[a] = stop_[a].sample(p.tick).velocity; break;
+      case ProfileKind::kCircle:
+        if (a == ix) {  // x's tick counts the circle; y's sample is made with it
+          AxisReference rx, ry;
+          circle_.sample(profile_[ix].tick, &rx, &ry);
+          velocity[ix] = rx.velocity;
+          velocity[iy] = ry.velocity;
+        }
+        break;
+      case ProfileKind::kNone: break;
+    }
   }
-  profile_[a].kind = ProfileKind::kNone;
+  circle_y_valid_ = false;
+  circle_y_last_ = false;
+  for (int a = 0; a < kAxisCount; ++a) {
+    Profile& p = profile_[a];
+    if (p.kind == ProfileKind::kNone) continue;
+    StopReference stop;
+    if (stop.plan(status_.reference.pico[a], static_cast<double>(velocity[a]), fs, axis_limits(a)) == ReferenceError::kOk) {
+      stop_[a] = stop;
+      p = Profile{ProfileKind::kStop, 0};
+    } else {
+      p.kind = ProfileKind::kNone;  // (limits validated at configuration: not reached)
+    }
+  }
 }
 
 template <typename Scalar>
@@ -438,7 +480,10 @@ CommandResult Controller<Scalar>::start_excitation(const MotionCommand& cmd) {
     ex.amplitude[k] = used ? Traits::from_double(cmd.amplitude / n) : Traits::zero();
   }
   ex.tick = 0;
-  ex.duration_ticks = static_cast<std::uint32_t>(std::llround(cmd.duration_s * fs));
+  // 0 runs until stopped; any positive duration lasts at least one tick (a
+  // 0.1 ms one rounded to 0 and ran until stopped).
+  const long long ticks = std::llround(cmd.duration_s * fs);
+  ex.duration_ticks = static_cast<std::uint32_t>(cmd.duration_s > 0.0 && ticks < 1 ? 1 : ticks);
   ex.active = true;
   excitation_ = ex;
   status_.excitation_frequency_Hz = static_cast<float>(inc1 * fs / kTurn);
@@ -832,6 +877,11 @@ void Controller<Scalar>::advance_references(Tick& t) {
           }
         }
         break;
+      case ProfileKind::kStop:
+        r = stop_[a].sample(++p.tick);
+        sampled = true;
+        if (stop_[a].done(p.tick)) p.kind = ProfileKind::kNone;
+        break;
       case ProfileKind::kNone:
         break;
     }
@@ -840,7 +890,9 @@ void Controller<Scalar>::advance_references(Tick& t) {
       acc_now = static_cast<double>(r.acceleration);
     }
     t.step_pm[a] = closed ? pending_step_pm_[a] : 0;
-    status_.reference.pico[a] += t.step_pm[a];
+    // A profile planned in the tick its axis' step was given starts from the
+    // stepped reference (command()): its sample holds the step already.
+    if (!sampled) status_.reference.pico[a] += t.step_pm[a];
     pending_step_pm_[a] = 0;
     const bool newly_closed = closed && (t.si.closed_axes & (1u << a)) == 0;
     if (!closed || newly_closed) {
@@ -903,14 +955,33 @@ void Controller<Scalar>::excite(Tick& t) {
     const float value = in.value == in.value ? in.value : 0.0f;
     if (in.at_reference) {
       const float lim = config_.references.max_step[in.axis];
-      t.reference_injection = value > lim ? lim : (value < -lim ? -lim : value);
+      const float v = value > lim ? lim : (value < -lim ? -lim : value);
       // Truncated toward zero as static_cast<int64_t> would, without its libgcc
       // call (__aeabi_d2lz on the M7): |v| <= max_step * 1e12, far below 2^51.
-      t.reference_injection_pm = numeric::TruncToInt64(static_cast<double>(t.reference_injection) * 1e12);
+      const std::int64_t asked_pm = numeric::TruncToInt64(static_cast<double>(v) * 1e12);
+      std::int64_t pm = asked_pm;
+      // The injected reference stays inside the axis' travel, as every
+      // planned reference does (a +9.9 um injection on a z reference of
+      // 37.9 um took the stage to 40.2 um, out of its envelope).
+      const std::int64_t ref = status_.reference.pico[in.axis];
+      const std::int64_t up = numeric::si_to_pico(static_cast<double>(config_.references.position_max[in.axis])) - ref;
+      const std::int64_t down = numeric::si_to_pico(static_cast<double>(config_.references.position_min[in.axis])) - ref;
+      if (pm > up) pm = up > 0 ? up : 0;
+      if (pm < down) pm = down < 0 ? down : 0;
+      t.reference_injection_pm = pm;
+      t.reference_injection = pm == asked_pm ? v : static_cast<float>(numeric::Int64ToDouble(pm) * 1e-12);
     } else {
+      // The sum with a running kExcite (or a calibration's excitation) on the
+      // same axis is held to the same bound as each: alone, each was within
+      // it and the sum reached twice it.
       const float lim = config_.excitation.max_amplitude_A;
       const float d = value > lim ? lim : (value < -lim ? -lim : value);
-      t.excitation[in.axis] += Traits::from_float(d);
+      if (t.excitation[in.axis] == Traits::zero()) {
+        t.excitation[in.axis] += Traits::from_float(d);  // (+= keeps the sign of a zero as before)
+      } else {
+        const float sum = Traits::to_float(t.excitation[in.axis]) + d;
+        t.excitation[in.axis] = Traits::from_float(sum > lim ? lim : (sum < -lim ? -lim : sum));
+      }
     }
   }
 }

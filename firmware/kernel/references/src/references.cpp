@@ -319,12 +319,23 @@ MAGLEV_CONFIG_CODE ReferenceError SinusoidReference::plan(std::int64_t start_pic
   if (!inside(start_pico, limits) || !inside(hi, limits) || !inside(lo, limits)) return ReferenceError::kOutsideTravel;
   const double n = cycles * servo_rate_Hz / frequency_Hz;
   if (n > static_cast<double>(kMaxProfileTicks)) return ReferenceError::kTooLong;
+  // A finite sinusoid ends where its velocity is zero (whole half cycles of
+  // the paper's p0 + A (1 - cos w t)): the reference holds its last sample,
+  // so ending elsewhere stops a moving reference in one tick (0.25 cycles
+  // of 19.7 mm at 1.2 Hz: 371 m/s^2 against a 1.5 m/s^2 limit).
+  if (cycles > 0.0) {
+    double s_end = 0.0, c_end = 1.0;
+    numeric::dsincos(2.0 * kPi * cycles + phase_rad, &s_end, &c_end);
+    if (std::fabs(c_end) > 1e-6) return ReferenceError::kBadParameter;
+  }
   start_ = start_pico;
   amplitude_ = amplitude_m;
   omega_ = w;
   phase_ = phase_rad;
   sin_phase_ = s0;
   period_s_ = 1.0 / servo_rate_Hz;
+  // (Whole half cycles below fs / 2 last at least two ticks: a positive
+  // count never becomes 0, "until kHold".)
   total_ticks_ = cycles > 0.0 ? ticks_for(cycles / frequency_Hz, servo_rate_Hz) : 0;
   return ReferenceError::kOk;
 }
@@ -342,6 +353,38 @@ AxisReference SinusoidReference::sample(std::int64_t tick) const {
   if (!finished) {
     r.velocity = static_cast<float>(amplitude_ * omega_ * c);
     r.acceleration = static_cast<float>(-amplitude_ * omega_ * omega_ * s);
+  }
+  return r;
+}
+
+// --- Stop --------------------------------------------------------------------
+
+MAGLEV_CONFIG_CODE ReferenceError StopReference::plan(std::int64_t start_pico, double velocity,
+                                                      double servo_rate_Hz, const AxisReferenceLimits& limits) {
+  if (!finite_all({velocity, servo_rate_Hz})) return ReferenceError::kNonFinite;
+  if (!limits_valid(limits) || servo_rate_Hz <= 0.0) return ReferenceError::kBadParameter;
+  // Whole ticks at no more than max_acceleration; a reference at rest stops
+  // in one tick where it is.
+  const double t_stop = std::fabs(velocity) / limits.max_acceleration;
+  const double n = std::ceil(t_stop * servo_rate_Hz - 1e-9);
+  if (n > static_cast<double>(kMaxProfileTicks)) return ReferenceError::kTooLong;
+  start_ = start_pico;
+  v0_ = velocity;
+  period_s_ = 1.0 / servo_rate_Hz;
+  total_ticks_ = n < 1.0 ? 1 : static_cast<std::int64_t>(n);
+  decel_ = velocity / (static_cast<double>(total_ticks_) * period_s_);  // signed, |.| <= max_acceleration
+  return ReferenceError::kOk;
+}
+
+AxisReference StopReference::sample(std::int64_t tick) const {
+  AxisReference r;
+  if (tick < 0) tick = 0;
+  const bool finished = tick >= total_ticks_;
+  const double t = numeric::Int64ToDouble(finished ? total_ticks_ : tick) * period_s_;
+  r.position_pico = start_ + numeric::si_to_pico(v0_ * t - 0.5 * decel_ * t * t);
+  if (!finished) {
+    r.velocity = static_cast<float>(v0_ - decel_ * t);
+    r.acceleration = static_cast<float>(-decel_);
   }
   return r;
 }

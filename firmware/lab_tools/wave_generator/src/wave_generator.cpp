@@ -58,7 +58,11 @@ WaveError WaveGenerator::start(const WaveConfig& c, const kernel::KernelConfig& 
   servo_rate_Hz_ = k.servo_rate_Hz;
   const double fs = static_cast<double>(k.servo_rate_Hz);
   tick_ = 0;
-  duration_ticks_ = static_cast<std::uint32_t>(std::llround(static_cast<double>(c.duration_s) * fs));
+  // 0 runs until stopped; any positive duration lasts at least one tick (a
+  // 0.1 ms sweep rounded to 0, ran forever and multiplied its frequency by
+  // f_end / f_start every tick, past Nyquist and on to inf).
+  const long long ticks = std::llround(static_cast<double>(c.duration_s) * fs);
+  duration_ticks_ = static_cast<std::uint32_t>(c.duration_s > 0.0f && ticks < 1 ? 1 : ticks);
   phase_ = 0;
   index_ = 0;
   tones_generated_ = 0;

@@ -332,7 +332,7 @@ class Controller {
  private:
   // The generator driving an axis (firmware/kernel/references), sampled at
   // its own tick counter from the reference it started on.
-  enum class ProfileKind : std::uint8_t { kNone = 0, kMove, kSinusoid, kCircle };
+  enum class ProfileKind : std::uint8_t { kNone = 0, kMove, kSinusoid, kCircle, kStop };
   struct Profile {
     ProfileKind kind = ProfileKind::kNone;
     std::int64_t tick = 0;
@@ -450,7 +450,7 @@ class Controller {
 
   bool levitated_or_busy() const;
   MAGLEV_CONFIG_CODE AxisReferenceLimits axis_limits(int a) const;
-  void cancel_profile(int a);
+  void hold();
   MAGLEV_CONFIG_CODE CommandResult start_excitation(const MotionCommand& cmd);
   MAGLEV_CONFIG_CODE CommandResult start_calibration();
   void calibrate(Tick& t);            // before excite(): aborts, starts each experiment
@@ -494,6 +494,7 @@ class Controller {
   AxisReference circle_y_{};  // y's sample, produced with x's in the same tick
   bool circle_y_valid_ = false;
   bool circle_y_last_ = false;
+  StopReference stop_[kAxisCount]{};  // kHold: a moving reference brought to rest
   std::uint32_t homing_ticks_ = 0;
   std::uint32_t homing_needed_ticks_ = 1;
   // TiltLock levelling (apply_config): the theta_x / theta_y reference range

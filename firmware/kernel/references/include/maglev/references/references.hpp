@@ -1,5 +1,5 @@
 // Per-axis reference generators: explicit step, trapezoidal-velocity move,
-// jerk-limited (S-curve) move, xy circle, sinusoid.
+// jerk-limited (S-curve) move, xy circle, sinusoid, stop.
 //
 // Output per tick (AxisReference):
 //   position_pico      int64, 1 pm (lengths) or 1 prad (angles) per LSB,
@@ -153,6 +153,26 @@ class SinusoidReference {
   std::int64_t start_ = 0;
   double amplitude_ = 0.0, omega_ = 0.0, phase_ = 0.0, period_s_ = 0.0;
   double sin_phase_ = 0.0;  // dsin(phase_), planned once
+  std::int64_t total_ticks_ = 0;
+};
+
+// --- Stop (kHold) -------------------------------------------------------------
+// A moving reference brought to rest at constant deceleration, at most the
+// axis' max_acceleration, from its present position and velocity:
+// p(t) = p0 + v0 t - a t^2 / 2 (a = v0 / T, T whole ticks), then held at rest.
+// The acceleration steps from the running profile's to -a, as a trapezoid's
+// does at its corners (an S-curve's jerk limit is not kept by a stop).
+class StopReference {
+ public:
+  ReferenceError plan(std::int64_t start_pico, double velocity, double servo_rate_Hz,
+                      const AxisReferenceLimits& limits);
+  AxisReference sample(std::int64_t tick) const;
+  bool done(std::int64_t tick) const { return tick >= total_ticks_; }
+  std::int64_t total_ticks() const { return total_ticks_; }
+
+ private:
+  std::int64_t start_ = 0;
+  double v0_ = 0.0, decel_ = 0.0, period_s_ = 0.0;
   std::int64_t total_ticks_ = 0;
 };
 
