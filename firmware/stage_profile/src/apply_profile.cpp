@@ -204,6 +204,10 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
     return r;
   };
   if (p.name[0] == '\0' || p.name[kNameLength - 1] != '\0') return fail(ProfileError::kBadName);
+  // A stored record's counts bound every loop below (a sensor_count of 13
+  // read and wrote past the 12-row observation matrix).
+  if (p.sensor_count > kMaxSensors) return fail(ProfileError::kUnsupportedSensors);
+  if (p.actuator_count > kMaxActuators) return fail(ProfileError::kBadActuatorParameters);
   if (!io::stage::is_supported_servo_rate(p.servo_rate_Hz)) return fail(ProfileError::kBadServoRate);
   if (!(p.body.mass_kg > 0.0) || !(p.body.inertia_kgm2[0] > 0.0) || !(p.body.inertia_kgm2[1] > 0.0) ||
       !(p.body.inertia_kgm2[2] > 0.0)) {
@@ -290,6 +294,7 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
   for (int i = 0; i < 5; ++i) {
     if (p.startup[i] != kPaper000[i]) return fail(ProfileError::kBadStartup);
   }
+  if (p.startup[5] != StartupStep::kEnd) return fail(ProfileError::kBadStartup);  // nothing after Ready
   // Allocation: A (6 x 8) of the layout, rank and condition on the active rows.
   kernel::ForceAllocationTablesDouble t{};
   if (kernel::ComputeForceAllocationTables(allocation_of(p), &t) != kernel::ForceAllocationError::kOk) {
@@ -342,6 +347,26 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
     const kernel::ExcitationLimits& ex = c.excitation;
     if (!(ex.max_amplitude_A <= sv.peak_current_A) || !(ex.max_frequency_Hz < 0.5f * c.servo_rate_Hz)) {
       return fail(ProfileError::kLimitsOutsideHardware);
+    }
+    // The measurement and every axis' loop and filters, designed as the
+    // kernel's apply_config designs them (kernel::DesignAxis), in the
+    // stricter fixed point: a derivative filter at or above half the servo
+    // rate, or an LDS target cell under twice the sensors' window, passed
+    // this check and the kernel refused the profile.
+    {
+      static kernel::SensorsToPoseState s2p;  // ~2 kB: static, as the profile record is
+      s2p = kernel::SensorsToPoseState{};
+      if (kernel::ApplySensorsToPoseConfig(c.measurement, &s2p) != kernel::SensorsToPoseError::kOk) {
+        return fail(ProfileError::kKernelRefused);
+      }
+      for (int a = 0; a < kA; ++a) {
+        kernel::Pid2DofCoefficients<numeric::Q7_24> pid{};
+        kernel::InternalModelCoefficients<numeric::Q7_24> imr{};
+        kernel::BiquadCoefficients<numeric::Q7_24> filter[kernel::kMaxBiquadStages]{};
+        const kernel::ConfigError e = kernel::DesignAxis<numeric::Q7_24>(c, a, &pid, &imr, filter);
+        if (e == kernel::ConfigError::kUnstableLoop) return fail(ProfileError::kUnstableLoop, a);
+        if (e != kernel::ConfigError::kOk) return fail(ProfileError::kKernelRefused, a);
+      }
     }
   }
   // Every PID loop must cross over once with a positive phase margin.

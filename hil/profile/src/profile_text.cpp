@@ -8,6 +8,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace maglev::profile {
@@ -412,6 +413,7 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
   std::string section;
   std::map<std::string, int> seen_sections;
   std::map<std::string, int> seen_keys;
+  std::set<std::string> halbach_set;  // keys given in [halbach]
   std::istringstream in(text);
   std::string raw;
   int line = 0;
@@ -426,7 +428,10 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
         keys.clear();
         continue;
       }
-      section = trim(s.substr(1, s.size() - 2));
+      // One spelling per section: "[axis  x]" is "[axis x]" (the repeated-
+      // section check used to compare the raw text and let it through).
+      section.clear();
+      for (const std::string& word : words(s.substr(1, s.size() - 2))) section += (section.empty() ? "" : " ") + word;
       seen_keys.clear();
       if (seen_sections.count(section) != 0) {
         err(line, "[" + section + "]", "repeated section (first at line " + std::to_string(seen_sections[section]) + ")");
@@ -491,6 +496,7 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
       continue;
     }
     seen_keys[k] = line;
+    if (section == "halbach") halbach_set.insert(k);
     const std::string why = it->second(v);
     if (!why.empty()) err(line, k, why);
   }
@@ -516,6 +522,19 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
     }
     if (ax.mode == sp::AxisMode::kActive && !(ax.travel_max > ax.travel_min)) {
       err(at, n + ".travel", "missing (travel = MIN MAX)");
+    }
+  }
+  // The Halbach family's geometry has no defaults: a key left out was 0 (or
+  // the cross layout) and the profile passed, then never levitated.
+  if (p.family == sp::ActuatorFamily::kHalbachLorentz) {
+    std::vector<const char*> required = {"layout", "pitch_m", "magnet_thickness_m", "two_b_star_N_per_A",
+                                         "coil_effective_length_m", "coil_side_width_m", "coil_thickness_m",
+                                         "coil_turns", "rest_gap_m"};
+    if (p.halbach.layout != sp::ForcerLayout::kCustom) required.push_back("lever_arm_m");
+    if (p.halbach.layout == sp::ForcerLayout::kTriangle) required.push_back("triangle_alpha_rad");
+    const int at = seen_sections.count("halbach") ? seen_sections["halbach"] : end;
+    for (const char* k : required) {
+      if (halbach_set.count(k) == 0) err(at, k, "missing in [halbach]");
     }
   }
   if (p.limits.peak_current_A > p.limits.hardware_current_A) {

@@ -796,6 +796,7 @@ PROFILE_ERRORS = (
     (14, "kUnknownProfile", "no such profile"),
     (15, "kUnsupportedSensors", "sensor set not supported by this firmware's pose solver"),
     (16, "kBadActuatorParameters", "actuator parameters missing or not positive"),
-    (17, "kCount", "?"),
+    (17, "kKernelRefused", "the kernel refuses the configuration it yields"),
+    (18, "kCount", "?"),
 )
 # END GENERATED FIRMWARE TABLES

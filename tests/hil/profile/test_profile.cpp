@@ -1,8 +1,10 @@
 // Stage profiles: the shipped profiles parse; the default profile IS the
 // kernel's default configuration; malformed text gets file:line: field:
 // reason for every bad field; the firmware's check refuses what cannot run.
+#include <cstdio>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include "maglev/controller/controller.hpp"
 #include "maglev/plant/plant_profile.hpp"
@@ -268,4 +270,55 @@ TEST(Profiles, TheCheckerAppliesTheAllocationAsTheKernelDoes) {
   const kernel::KernelConfig before = kc;
   CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == c.error);
   MEMCMP_EQUAL(&before, &kc, sizeof kc);
+}
+
+// Review findings, each reproduced first: what the checker accepts, the
+// kernel takes; a stored record's counts cannot walk past the tables; the
+// parser reports a Halbach key left out and a section repeated under
+// another spelling; nothing may follow "ready" in the start-up.
+TEST(Profiles, TheCheckerRefusesWhatTheKernelWouldAndTheParserWhatIsMissing) {
+  const auto base = shipped("nk2017-cross").profile;
+  sp::StageProfile p = base;
+  p.axis[0].controller.derivative_filter_Hz = 5000.0;  // above half the 2.5 kHz servo rate
+  sp::ProfileCheck c = sp::CheckStageProfile(p);
+  CHECK_TRUE(c.error == sp::ProfileError::kKernelRefused);
+  LONGS_EQUAL(0, c.axis);
+  p = base;
+  p.halbach.pitch_m = 0.008;  // the LDS target cell under twice the sensors' window
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kKernelRefused);
+  p = base;
+  p.sensor_count = sp::kMaxSensors + 1;  // read and wrote past the observation matrix
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kUnsupportedSensors);
+  p = base;
+  p.actuator_count = sp::kMaxActuators + 1;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kBadActuatorParameters);
+  p = base;
+  p.startup[5] = sp::StartupStep::kLiftFeedforward;  // a step after ready
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kBadStartup);
+  CHECK_TRUE(sp::CheckStageProfile(base).error == sp::ProfileError::kOk);
+
+  // The parser, on the shipped text.
+  std::string text;
+  {
+    std::FILE* f = std::fopen(MAGLEV_PROFILE_DIR "/nk2017-cross.profile", "rb");
+    CHECK_TRUE(f != nullptr);
+    char buf[4096];
+    for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) text.append(buf, n);
+    std::fclose(f);
+  }
+  auto errors_of = [](const std::string& t) { return profile::parse_profile(t, "lab.profile").errors; };
+  auto has = [](const std::vector<std::string>& errors, const char* what) {
+    for (const auto& e : errors) {
+      if (e.find(what) != std::string::npos) return true;
+    }
+    return false;
+  };
+  CHECK_TRUE(errors_of(text).empty());
+  const auto repeated = errors_of(text + "[axis  x]\nkp = 30000\n");
+  CHECK_TRUE(has(repeated, "[axis x]: repeated section"));
+  std::string no_turns = text;
+  const auto at = no_turns.find("coil_turns");
+  CHECK_TRUE(at != std::string::npos);
+  no_turns.erase(at, no_turns.find('\n', at) - at + 1);
+  CHECK_TRUE(has(errors_of(no_turns), "coil_turns: missing in [halbach]"));
 }

@@ -58,6 +58,41 @@ MAGLEV_CONFIG_CODE KernelConfig default_kernel_config() {
 }
 
 template <typename Scalar>
+ConfigError DesignAxis(const KernelConfig& c, int a, Pid2DofCoefficients<Scalar>* pid,
+                       InternalModelCoefficients<Scalar>* imr, BiquadCoefficients<Scalar> filter[kMaxBiquadStages]) {
+  const double rate = static_cast<double>(c.servo_rate_Hz);
+  const LoopType type = c.axis[a].type;
+  if (type != LoopType::kPid2Dof && type != LoopType::kInternalModel) return ConfigError::kUnsupportedLoopType;
+  // Gains the loop check finds unstable on this axis' plant are refused
+  // (a z.kp of 1e7 once saturated the coils while the status said Ready).
+  if (type == LoopType::kPid2Dof) {
+    const InternalModelConfig& plant = c.axis[a].imr;  // the axis plant the kernel designs against
+    const LoopPlant lp{static_cast<double>(plant.plant_gain), static_cast<double>(plant.plant_damping_per_s),
+                       static_cast<double>(plant.plant_stiffness_per_s2)};
+    if (!LoopIsAcceptable(Pid2DofLoopMargins(c.axis[a].pid, lp, rate, c.axis[a].filters, kMaxBiquadStages))) {
+      return ConfigError::kUnstableLoop;
+    }
+  }
+  // Only the selected loop must design; the other keeps zero coefficients.
+  const LoopDesignError de = type == LoopType::kPid2Dof
+                                 ? design_pid2dof<Scalar>(c.axis[a].pid, rate, pid)
+                                 : design_internal_model<Scalar>(c.axis[a].imr, rate, imr);  // paper 002 (14)-(17)
+  if (de != LoopDesignError::kOk) return ConfigError::kAxisLoop;
+  for (int f = 0; f < kMaxBiquadStages; ++f) {
+    if (design_biquad<Scalar>(c.axis[a].filters[f], rate, &filter[f]) != LoopDesignError::kOk) {
+      return ConfigError::kAxisLoop;
+    }
+  }
+  return ConfigError::kOk;
+}
+
+template ConfigError DesignAxis<float>(const KernelConfig&, int, Pid2DofCoefficients<float>*,
+                                       InternalModelCoefficients<float>*, BiquadCoefficients<float>*);
+template ConfigError DesignAxis<numeric::Q7_24>(const KernelConfig&, int, Pid2DofCoefficients<numeric::Q7_24>*,
+                                                InternalModelCoefficients<numeric::Q7_24>*,
+                                                BiquadCoefficients<numeric::Q7_24>*);
+
+template <typename Scalar>
 Controller<Scalar>::Controller() {
   sequencer_.reset();
   supervisor_.reset();
@@ -90,38 +125,12 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
   }
   Applied& scratch = applied_[1 - active_];
   for (int a = 0; a < kAxisCount; ++a) {
-    const LoopType type = c.axis[a].type;
-    if (type != LoopType::kPid2Dof && type != LoopType::kInternalModel) {
+    const ConfigError de = DesignAxis<Scalar>(c, a, &scratch.pid[a], &scratch.imr[a], scratch.filter[a]);
+    if (de != ConfigError::kOk) {
       status_.config_axis = static_cast<std::uint8_t>(a);
-      return refuse(ConfigError::kUnsupportedLoopType);
+      return refuse(de);
     }
-    scratch.type[a] = type;
-    // Gains the loop check finds unstable on this axis' plant are refused
-    // (a z.kp of 1e7 once saturated the coils while the status said Ready).
-    if (type == LoopType::kPid2Dof) {
-      const InternalModelConfig& plant = c.axis[a].imr;  // the axis plant the kernel designs against
-      const LoopPlant lp{static_cast<double>(plant.plant_gain), static_cast<double>(plant.plant_damping_per_s),
-                         static_cast<double>(plant.plant_stiffness_per_s2)};
-      if (!LoopIsAcceptable(Pid2DofLoopMargins(c.axis[a].pid, lp, rate, c.axis[a].filters, kMaxBiquadStages))) {
-        status_.config_axis = static_cast<std::uint8_t>(a);
-        return refuse(ConfigError::kUnstableLoop);
-      }
-    }
-    // Only the selected loop must design; the other keeps zero coefficients.
-    const LoopDesignError de =
-        type == LoopType::kPid2Dof
-            ? design_pid2dof<Scalar>(c.axis[a].pid, rate, &scratch.pid[a])
-            : design_internal_model<Scalar>(c.axis[a].imr, rate, &scratch.imr[a]);  // paper 002 (14)-(17)
-    if (de != LoopDesignError::kOk) {
-      status_.config_axis = static_cast<std::uint8_t>(a);
-      return refuse(ConfigError::kAxisLoop);
-    }
-    for (int f = 0; f < kMaxBiquadStages; ++f) {
-      if (design_biquad<Scalar>(c.axis[a].filters[f], rate, &scratch.filter[a][f]) != LoopDesignError::kOk) {
-        status_.config_axis = static_cast<std::uint8_t>(a);
-        return refuse(ConfigError::kAxisLoop);
-      }
-    }
+    scratch.type[a] = c.axis[a].type;
     scratch.filtered[a] = biquad_chain_enabled(scratch.filter[a]);
   }
   if (!(c.payload_mass_kg >= 0.0f && c.payload_mass_kg <= 1.5f)) return refuse(ConfigError::kPayload);

@@ -163,8 +163,14 @@ ConfigImage ControllerDevice<Scalar>::boot() {
     boot_status_.flags = static_cast<std::uint16_t>((boot_status_.flags & ~(kLoadedBankA | kLoadedBankB)) |
                                                     kRefused | kLoadedDefaults);
     boot_status_.reason = static_cast<std::uint16_t>(persistence::Reason::kValueOutOfRange);
-    // The profile's own defaults (CheckStageProfile passed them).
-    (void)controller_.apply_config(base);
+    // The profile's own defaults (CheckStageProfile passed them, with the
+    // kernel's own designs). Should the kernel refuse them all the same, the
+    // stage stays landed with the reason latched, as for a refused profile.
+    if (controller_.apply_config(base) != kernel::ConfigError::kOk) {
+      controller_.set_stage_profile_error(static_cast<std::uint8_t>(stage_profile::ProfileError::kKernelRefused));
+      active_profile_ = 0;
+      return loaded.config;
+    }
     active_profile_ = index;
     ConfigImage image = image_from_kernel(base);
     set_stage_profile(image, index);

@@ -242,7 +242,8 @@ struct StageProfile {
   X(kUnknownProfile, 14, "no such profile") /* the selected index is not in the database */ \
   X(kUnsupportedSensors, 15, "sensor set not supported by this firmware's pose solver") \
   X(kBadActuatorParameters, 16, "actuator parameters missing or not positive") \
-  X(kCount, 17, "?")
+  X(kKernelRefused, 17, "the kernel refuses the configuration it yields") /* measurement or loop design */ \
+  X(kCount, 18, "?")
 
 enum class ProfileError : std::uint8_t {
   MAGLEV_PROFILE_ERRORS(MAGLEV_ENUMERATOR)

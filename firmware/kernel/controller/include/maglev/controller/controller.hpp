@@ -162,6 +162,17 @@ enum class ConfigError : std::uint8_t {
   MAGLEV_CONFIG_ERRORS(MAGLEV_ENUMERATOR)
 };
 
+// One axis' loop and filters as apply_config designs them, from the
+// configuration alone: the loop check (PID axes), the selected loop's design
+// and each biquad. kOk, kUnsupportedLoopType, kUnstableLoop or kAxisLoop.
+// apply_config designs every axis with it; the stage-profile check calls it
+// on the configuration a profile yields, so that what it accepts the kernel
+// takes.
+template <typename Scalar>
+MAGLEV_CONFIG_CODE ConfigError DesignAxis(const KernelConfig& c, int axis, Pid2DofCoefficients<Scalar>* pid,
+                                          InternalModelCoefficients<Scalar>* imr,
+                                          BiquadCoefficients<Scalar> filter[kMaxBiquadStages]);
+
 // Live tuning (levitated, KernelConfig::live_tuning): one write may move
 // each PID gain (kp, ki, kd) of an axis by at most this factor up or down,
 // keeping its sign; a zero gain stays zero until the stage rests. 2 = 6 dB,
