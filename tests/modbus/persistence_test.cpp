@@ -89,6 +89,17 @@ TEST(Persistence, CorruptNewestBankFallsBackToOtherAndFlags) {
   CHECK(r2.status.flags & modbus::kBankBCorrupt);
   // The next save still works, into a corrupt bank, and is loaded afterwards.
   CHECK(store.save(variant(4000.0f)));
+  // The bank it wrote and read back is flagged corrupt no longer; the other
+  // still is, and so is the reason.
+  const modbus::PersistStatus after = store.status();
+  CHECK((after.flags & modbus::kBankACorrupt) == 0);
+  CHECK(after.flags & modbus::kLoadedBankA);
+  CHECK(after.flags & modbus::kBankBCorrupt);
+  LONGS_EQUAL(static_cast<int>(persistence::Reason::kBankCorrupt), after.reason);
+  CHECK(store.save(variant(5000.0f)));  // into B: nothing corrupt is left
+  CHECK((store.status().flags & (modbus::kBankACorrupt | modbus::kBankBCorrupt)) == 0);
+  LONGS_EQUAL(static_cast<int>(persistence::Reason::kNone), store.status().reason);
+  CHECK(store.save(variant(4000.0f)));
   persistence::ConfigStore again(flash, 0, 1);
   DOUBLES_EQUAL(4000.0, again.load().config.get(RegId::gain_x_kp), 0.0);
 }

@@ -92,6 +92,19 @@ TEST(LabRegisters, DownloadOfAFinishedCaptureBy0x17) {
   // rec.data before a capture: 06.
   std::uint16_t words[kBlockWords];
   CHECK(b->server.read_registers(def(RegId::rec_data).address, kBlockWords, words) == ExceptionCode::kServerDeviceBusy);
+  // ... so a 0x17 that reads it is refused before its write: cmd.code = 1
+  // (home) is not executed (it used to be, and the reply said 06).
+  {
+    const std::uint16_t ra = def(RegId::rec_data).address, wa = def(RegId::cmd_code).address;
+    const std::uint8_t req[12] = {0x17, static_cast<std::uint8_t>(ra >> 8), static_cast<std::uint8_t>(ra & 0xFF), 0, 2,
+                                  static_cast<std::uint8_t>(wa >> 8), static_cast<std::uint8_t>(wa & 0xFF), 0, 1, 2, 0, 1};
+    std::uint8_t resp[kMaxPdu];
+    const std::size_t n = b->server.handle_pdu(req, sizeof req, resp, false);
+    CHECK_EQUAL(2u, n);
+    CHECK_EQUAL(0x97, resp[0]);
+    CHECK_EQUAL(static_cast<int>(ExceptionCode::kServerDeviceBusy), resp[1]);
+    CHECK(b->controller->status().state == kernel::SequencerState::kIdle);
+  }
   // 2 channels (x.pose, x.error), 100 samples, immediate, armed in the same request.
   std::uint16_t cfg15[16] = {};
   CHECK(b->server.read_registers(def(RegId::rec_control).address, 16, cfg15) == ExceptionCode::kNone);

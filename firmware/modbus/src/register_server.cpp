@@ -326,6 +326,12 @@ std::size_t RegisterServer::handle_pdu(const std::uint8_t* req, std::size_t len,
         }
       }
       if (e != ExceptionCode::kNone) break;
+      // And whether it can be read now (a lab block answers 06 while its
+      // capture runs): the write used to be applied and the reply then said
+      // 06, "busy, retry" -- a retried step stepped twice. Reads have no side
+      // effects; the real read follows the write, as the function defines.
+      e = read_registers(rstart, rcount, words);
+      if (e != ExceptionCode::kNone) break;
       std::uint16_t wvals[kMaxRwWriteCount];
       for (std::uint16_t i = 0; i < wcount; ++i) wvals[i] = get_u16(req + 10 + 2 * i);
       e = write_registers(wstart, wcount, wvals);

@@ -253,6 +253,13 @@ bool ConfigStore::save(const ConfigImage& config) {
   status_.flags = static_cast<std::uint16_t>(status_.flags & ~(modbus::kLoadedBankA | modbus::kLoadedBankB |
                                                                modbus::kLoadedDefaults | modbus::kSaveFailed));
   status_.flags |= target == 0 ? modbus::kLoadedBankA : modbus::kLoadedBankB;
+  // The bank just written and read back is no longer corrupt (the flags said
+  // "loaded bank B" and "bank B corrupt" together after such a save).
+  status_.flags &= static_cast<std::uint16_t>(~(target == 0 ? modbus::kBankACorrupt : modbus::kBankBCorrupt));
+  if (status_.reason == static_cast<std::uint16_t>(Reason::kBankCorrupt) &&
+      (status_.flags & (modbus::kBankACorrupt | modbus::kBankBCorrupt)) == 0) {
+    status_.reason = static_cast<std::uint16_t>(Reason::kNone);
+  }
   status_.sequence = sequence;
   return true;
 }

@@ -108,6 +108,13 @@ bool Controller<Scalar>::levitated_or_busy() const {
 
 template <typename Scalar>
 ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
+  const ConfigError e = prepare_config(c);
+  return e != ConfigError::kOk ? e : commit_config(c);
+}
+
+template <typename Scalar>
+ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
+  prepared_ = false;
   status_.config_axis = 0xFF;
   auto refuse = [this](ConfigError e) {
     status_.last_config_error = e;
@@ -119,8 +126,9 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
   // the bench's budgets are worked out for those alone.
   if (!stage::is_supported_servo_rate(rate)) return refuse(ConfigError::kBadServoRate);
   if (std::fabs(c.measurement.servo_rate_Hz - rate) > 1e-6 * rate) return refuse(ConfigError::kMeasurement);
-  SensorsToPoseState s2p_scratch = s2p_;
-  if (ApplySensorsToPoseConfig(c.measurement, &s2p_scratch) != SensorsToPoseError::kOk) {
+  // (ApplySensorsToPoseConfig builds the whole state from the config: no
+  // read of the live s2p_, which the tick writes.)
+  if (ApplySensorsToPoseConfig(c.measurement, &s2p_next_) != SensorsToPoseError::kOk) {
     return refuse(ConfigError::kMeasurement);
   }
   Applied& scratch = applied_[1 - active_];
@@ -192,6 +200,21 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
   if (validate(c.supervisor, c.servo_rate_Hz) != SupervisorConfigError::kOk) return refuse(ConfigError::kSupervisor);
   // The nominal height must sit inside the reference and supervisor z range.
   if (c.sequencer.nominal_height_m > sv.z_max_m) return refuse(ConfigError::kSequencer);
+  prepared_ = true;
+  return ConfigError::kOk;
+}
+
+template <typename Scalar>
+ConfigError Controller<Scalar>::commit_config(const KernelConfig& c) {
+  if (!prepared_) {
+    const ConfigError e = prepare_config(c);
+    if (e != ConfigError::kOk) return e;
+  }
+  prepared_ = false;
+  auto refuse = [this](ConfigError e) {
+    status_.last_config_error = e;
+    return e;
+  };
 
   // --- 2. while not on rest only gains may change, and only with live_tuning.
   if (levitated_or_busy()) {
@@ -228,10 +251,14 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
 
   // --- 3. swap. Measurement state is only replaced when its config changed
   // (re-seeding the counters would lose the interferometer zero).
-  if (!same_bytes(c.measurement, config_.measurement) || !s2p_.lsb_den) s2p_ = s2p_scratch;
+  if (!same_bytes(c.measurement, config_.measurement) || !s2p_.lsb_den) s2p_ = s2p_next_;
+  const bool at_rest = !levitated_or_busy();
   active_ = 1 - active_;
   config_ = c;
-  ramp_.left = 0;  // on rest (or unchanged): no ramp needed
+  // On rest a running coupling ramp ends (the correction cannot change while
+  // levitated, see above). A live gain write used to cut it too: the
+  // correction jumped to its target instead of blending over 0.5 s.
+  if (at_rest) ramp_.left = 0;
   // A live loop-type switch hands the effort over (approximately bumpless):
   // the new loop's integral state starts at the old loop's last output.
   for (int a = 0; a < kAxisCount; ++a) {

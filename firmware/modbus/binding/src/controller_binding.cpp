@@ -233,21 +233,35 @@ Device::ApplyResult ControllerDevice<Scalar>::apply_config(ConfigImage& config, 
     // may change until a valid stage is selected). The profile's whole
     // configuration replaces the old stage's: gains and limits tuned for
     // one stage mean nothing on another.
-    kernel::KernelConfig cfg{};
+    // (Static: a KernelConfig is large for the comms stack; this context is its only user.)
+    static kernel::KernelConfig cfg;
+    cfg = kernel::KernelConfig{};
     if (KernelConfigOfProfile(index, &cfg) != stage_profile::ProfileError::kOk) return ApplyResult::kRefused;
     cfg.live_tuning = live_tuning;
-    const ApplyResult r = to_apply_result(controller_.apply_config(cfg));
+    const ApplyResult r = apply_kernel_config(cfg);
     if (r != ApplyResult::kApplied) return r;
     active_profile_ = index;
+    if (critical_enter_ != nullptr) critical_enter_();
     controller_.set_stage_profile_error(0);
+    if (critical_exit_ != nullptr) critical_exit_();
     config = image_from_kernel(cfg);
     set_stage_profile(config, index);
     return ApplyResult::kApplied;
   }
-  kernel::KernelConfig cfg = controller_.config();
+  kernel::KernelConfig cfg = controller_.config();  // config_ changes only in this context's commits
   image_to_kernel(config, cfg);
   cfg.live_tuning = live_tuning;
-  return to_apply_result(controller_.apply_config(cfg));
+  return apply_kernel_config(cfg);
+}
+
+template <typename Scalar>
+Device::ApplyResult ControllerDevice<Scalar>::apply_kernel_config(const kernel::KernelConfig& cfg) {
+  const kernel::ConfigError prepared = controller_.prepare_config(cfg);
+  if (prepared != kernel::ConfigError::kOk) return to_apply_result(prepared);
+  if (critical_enter_ != nullptr) critical_enter_();
+  const kernel::ConfigError e = controller_.commit_config(cfg);
+  if (critical_exit_ != nullptr) critical_exit_();
+  return to_apply_result(e);
 }
 
 template <typename Scalar>

@@ -55,6 +55,12 @@ class Device {
   // the image as the device left it.
   enum class ApplyResult : std::uint8_t { kApplied, kRefused, kBusy };
   virtual ApplyResult apply_config(ConfigImage& config, bool live_tuning) = 0;
+  // The board's critical section (mask / unmask the servo tick). A device
+  // that takes it masks only the short commit of apply_config and returns
+  // true; the caller then must not mask the whole call (a configuration's
+  // validation and loop designs take ~9 ms on the M7: ~22 ticks at 2.5 kHz
+  // held at their last output). Default: false, the caller masks it all.
+  virtual bool set_critical_section(void (* /*enter*/)(), void (* /*exit*/)()) { return false; }
   // Run a motion command; returns 0 when accepted, else a kernel result code.
   // code: can::HostCommandCode value (cmd.code); 0 = none.
   virtual std::uint16_t command(std::uint16_t code, std::uint16_t axis, float value) = 0;

@@ -304,7 +304,17 @@ class Controller {
 
   MAGLEV_CONFIG_CODE Controller();  // applies default_kernel_config()
 
-  MAGLEV_CONFIG_CODE ConfigError apply_config(const KernelConfig& config);
+  MAGLEV_CONFIG_CODE ConfigError apply_config(const KernelConfig& config);  // prepare, then commit
+  // apply_config in two parts, for a board whose servo tick runs meanwhile:
+  // prepare_config validates and designs into the idle slot (4 M M7
+  // instructions with the six loop checks: ~9 ms at 480 MHz) and touches
+  // nothing the tick reads, so it may run with the tick enabled;
+  // commit_config makes the checks against the live state (levitated? gain
+  // steps) and swaps, a few thousand instructions with the tick masked. Call
+  // commit_config with the configuration just prepared; without a prepare
+  // (or after another) it prepares first.
+  MAGLEV_CONFIG_CODE ConfigError prepare_config(const KernelConfig& config);
+  MAGLEV_CONFIG_CODE ConfigError commit_config(const KernelConfig& config);
   MAGLEV_CONFIG_CODE CommandResult command(const MotionCommand& cmd);
   io::ActuatorCommand step(const io::SensorSample& sample, bool tick_overrun);
   // Work that need not run in the servo tick: homing's Hall solve (two
@@ -544,6 +554,10 @@ class Controller {
   CouplingIdentifier identifier_{};
   CouplingRamp ramp_{};
   float calib_effort_[kAxisCount] = {};  // this tick's U (float) for the DFT
+  // prepare_config's results for commit_config (the designs are in the idle
+  // slot of applied_).
+  SensorsToPoseState s2p_next_{};
+  bool prepared_ = false;
 };
 
 extern template class Controller<float>;

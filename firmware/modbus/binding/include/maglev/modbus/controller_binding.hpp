@@ -47,7 +47,14 @@ class ControllerDevice final : public Device {
 
   Activity activity() const override;
   double read_status(RegId id) const override;
+  // Validation, loop designs and a stage profile's load run outside the
+  // critical section; the kernel's commit inside it.
   ApplyResult apply_config(ConfigImage& config, bool live_tuning) override;
+  bool set_critical_section(void (*enter)(), void (*exit)()) override {
+    critical_enter_ = enter;
+    critical_exit_ = exit;
+    return true;
+  }
   std::uint16_t command(std::uint16_t code, std::uint16_t axis, float value) override;
   bool save_config(const ConfigImage& config) override;
   PersistStatus persist_status() const override;
@@ -58,6 +65,10 @@ class ControllerDevice final : public Device {
   persistence::ConfigStore* store_;
   PersistStatus boot_status_{};
   std::uint16_t active_profile_ = 0;  // stage.profile the kernel runs
+  void (*critical_enter_)() = nullptr;
+  void (*critical_exit_)() = nullptr;
+  // prepare_config unmasked, commit_config masked.
+  ApplyResult apply_kernel_config(const kernel::KernelConfig& cfg);
 };
 
 extern template class ControllerDevice<float>;
