@@ -239,6 +239,31 @@ TEST(Rejection, RepeatedOutOfOrderJumpAndLost) {
   LONGS_EQUAL(3, rx.stats().accepted);
 }
 
+// After an outage of 128-253 frames the counter reads as "older" (int8):
+// only a few frames late is out of order; anything further is a jump the
+// receiver resynchronises on (it refused up to 129 valid frames before).
+TEST(Rejection, AnOutageOfHalfTheCounterResynchronisesAtOnce) {
+  CanFrame f{};
+  for (int outage : {100, 127, 128, 150, 200, 251}) {
+    rx.reset();
+    encode_actuator(io::kSafeActuatorCommand, 0, f);
+    CHECK(RxStatus::kOk == rx.accept(f));
+    const auto first = static_cast<std::uint8_t>(outage + 1);  // frames 1..outage lost
+    encode_actuator(io::kSafeActuatorCommand, first, f);
+    CHECK(RxStatus::kSequenceJump == rx.accept(f));
+    encode_actuator(io::kSafeActuatorCommand, static_cast<std::uint8_t>(first + 1), f);
+    CHECK(RxStatus::kOk == rx.accept(f));
+  }
+  // A frame up to max_delta_counter (3) late is still out of order, state kept.
+  rx.reset();
+  encode_actuator(io::kSafeActuatorCommand, 50, f);
+  CHECK(RxStatus::kOk == rx.accept(f));
+  encode_actuator(io::kSafeActuatorCommand, 47, f);
+  CHECK(RxStatus::kOutOfOrder == rx.accept(f));
+  encode_actuator(io::kSafeActuatorCommand, 51, f);
+  CHECK(RxStatus::kOk == rx.accept(f));
+}
+
 TEST(Rejection, CounterWrapIsAccepted) {
   LinkReceiver r;
   CanFrame f{};

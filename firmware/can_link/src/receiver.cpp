@@ -16,9 +16,9 @@ RxStatus LinkReceiver::accept(const CanFrame& frame, const Message* expected) {
       const auto delta = static_cast<std::int8_t>(static_cast<std::uint8_t>(counter - st.last));
       if (delta == 0) {
         status = RxStatus::kRepeated;
-      } else if (delta < 0) {
+      } else if (delta < 0 && delta >= -static_cast<int>(m->max_delta_counter)) {
         status = RxStatus::kOutOfOrder;
-      } else if (delta > m->max_delta_counter) {
+      } else if (delta < 0 || delta > m->max_delta_counter) {
         status = RxStatus::kSequenceJump;
         st.last = counter;  // resync: the next consecutive frame is accepted
       } else {

@@ -28,10 +28,12 @@ class LinkReceiver {
   // Checks a frame (check_frame) and its counter against the last accepted one
   // of the same message:
   //   delta = (counter - last) mod 256, as int8:
-  //   0 -> kRepeated; < 0 -> kOutOfOrder (stale frame, state kept);
-  //   1..max_delta_counter -> kOk (delta-1 frames counted lost);
-  //   > max_delta_counter -> kSequenceJump (rejected, but the receiver
-  //   resynchronises on it so the next consecutive frame is accepted).
+  //   0 -> kRepeated; -max_delta_counter..-1 -> kOutOfOrder (a late
+  //   frame, state kept); 1..max_delta_counter -> kOk (delta-1 frames
+  //   counted lost); anything else -> kSequenceJump (rejected, but the
+  //   receiver resynchronises on it so the next consecutive frame is
+  //   accepted). Read as "older", an outage of 128-253 frames used to lock
+  //   the receiver out for up to 129 more valid frames (~52 ms at 2.5 kHz).
   // The first frame of a message after construction/reset is accepted.
   // `expected` (optional) restricts the frame to one message kind.
   RxStatus accept(const CanFrame& frame, const Message* expected = nullptr);
