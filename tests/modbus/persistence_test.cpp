@@ -163,6 +163,22 @@ TEST(Persistence, TypeChangeIsRefusedWithReason) {
   LONGS_EQUAL(static_cast<int>(persistence::Reason::kTypeChanged), r.status.reason);
 }
 
+// Whatever coupling correction the kernel accepts, the record holds: with a
+// payload a passed calibration left 12 in a +-10 register, the save reported
+// success and the next boot refused the record (the older bank loaded).
+TEST(Persistence, ACouplingCorrectionTheKernelAcceptsSavesAndLoads) {
+  persistence::RamFlash flash(storage, kSector, 2);
+  persistence::ConfigStore store(flash, 0, 1);
+  store.load();
+  ConfigImage c = variant(1234.0f);
+  c.set(RegId::coupling_x_theta_x, 34.0);  // the kernel's bound at 1.5 kg payload
+  CHECK(store.save(c));
+  persistence::ConfigStore again(flash, 0, 1);
+  const auto r = again.load();
+  CHECK((r.status.flags & modbus::kRefused) == 0);
+  DOUBLES_EQUAL(34.0, r.config.get(RegId::coupling_x_theta_x), 0.0);
+}
+
 TEST(Persistence, OutOfRangeStoredValueIsRefused) {
   persistence::RamFlash flash(storage, kSector, 2);
   persistence::ConfigStore store(flash, 0, 1);

@@ -474,8 +474,11 @@ void Controller<Scalar>::hold() {
   for (int a = 0; a < kAxisCount; ++a) {
     Profile& p = profile_[a];
     if (p.kind == ProfileKind::kNone) continue;
+    // From where the reference is about to be: a step given in the tick its
+    // profile was commanded is pending, and the profile (like the stop) holds it.
     StopReference stop;
-    if (stop.plan(status_.reference.pico[a], static_cast<double>(velocity[a]), fs, axis_limits(a)) == ReferenceError::kOk) {
+    if (stop.plan(status_.reference.pico[a] + pending_step_pm_[a], static_cast<double>(velocity[a]), fs,
+                  axis_limits(a)) == ReferenceError::kOk) {
       stop_[a] = stop;
       p = Profile{ProfileKind::kStop, 0};
     } else {
