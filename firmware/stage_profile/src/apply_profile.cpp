@@ -354,8 +354,7 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
     // rate, or an LDS target cell under twice the sensors' window, passed
     // this check and the kernel refused the profile.
     {
-      static kernel::SensorsToPoseState s2p;  // ~2 kB: static, as the profile record is
-      s2p = kernel::SensorsToPoseState{};
+      kernel::SensorsToPoseState s2p;
       if (kernel::ApplySensorsToPoseConfig(c.measurement, &s2p) != kernel::SensorsToPoseError::kOk) {
         return fail(ProfileError::kKernelRefused);
       }

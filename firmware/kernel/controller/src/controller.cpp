@@ -113,42 +113,44 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
 }
 
 template <typename Scalar>
+ConfigError Controller<Scalar>::refuse_config(ConfigError e) {
+  status_.last_config_error = e;
+  return e;
+}
+
+template <typename Scalar>
 ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
   prepared_ = false;
   status_.config_axis = 0xFF;
-  auto refuse = [this](ConfigError e) {
-    status_.last_config_error = e;
-    return e;
-  };
   // --- 1. validate the whole config into the scratch slot; nothing live changes.
   const double rate = static_cast<double>(c.servo_rate_Hz);
   // One of the offered rates (register servo.rate): the board's timers and
   // the bench's budgets are worked out for those alone.
-  if (!stage::is_supported_servo_rate(rate)) return refuse(ConfigError::kBadServoRate);
-  if (std::fabs(c.measurement.servo_rate_Hz - rate) > 1e-6 * rate) return refuse(ConfigError::kMeasurement);
+  if (!stage::is_supported_servo_rate(rate)) return refuse_config(ConfigError::kBadServoRate);
+  if (std::fabs(c.measurement.servo_rate_Hz - rate) > 1e-6 * rate) return refuse_config(ConfigError::kMeasurement);
   // (ApplySensorsToPoseConfig builds the whole state from the config: no
   // read of the live s2p_, which the tick writes.)
   if (ApplySensorsToPoseConfig(c.measurement, &s2p_next_) != SensorsToPoseError::kOk) {
-    return refuse(ConfigError::kMeasurement);
+    return refuse_config(ConfigError::kMeasurement);
   }
   Applied& scratch = applied_[1 - active_];
   for (int a = 0; a < kAxisCount; ++a) {
     const ConfigError de = DesignAxis<Scalar>(c, a, &scratch.pid[a], &scratch.imr[a], scratch.filter[a]);
     if (de != ConfigError::kOk) {
       status_.config_axis = static_cast<std::uint8_t>(a);
-      return refuse(de);
+      return refuse_config(de);
     }
     scratch.type[a] = c.axis[a].type;
     scratch.filtered[a] = biquad_chain_enabled(scratch.filter[a]);
   }
-  if (!(c.payload_mass_kg >= 0.0f && c.payload_mass_kg <= 1.5f)) return refuse(ConfigError::kPayload);
+  if (!(c.payload_mass_kg >= 0.0f && c.payload_mass_kg <= 1.5f)) return refuse_config(ConfigError::kPayload);
   ForceAllocationConfig alloc = c.allocation;
   alloc.payload_kg = static_cast<double>(c.payload_mass_kg);
   if (ApplyForceAllocationConfig<Scalar>(alloc, &scratch.allocation) != ForceAllocationError::kOk) {
-    return refuse(ConfigError::kAllocation);
+    return refuse_config(ConfigError::kAllocation);
   }
   for (float j : c.payload_inertia_kgm2) {
-    if (!(j >= 0.0f && j <= 0.01f)) return refuse(ConfigError::kPayload);
+    if (!(j >= 0.0f && j <= 0.01f)) return refuse_config(ConfigError::kPayload);
   }
   const double two_b_star = scratch.allocation.two_b_star_N_per_A;
   const double m_total = alloc.mass_kg + alloc.payload_kg;
@@ -168,7 +170,7 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
     for (int a = 0; a < kAxisCount; ++a) {
       radius[a] = static_cast<float>(std::sqrt(scratch.inertia_over_two_b_star[a] / scratch.inertia_over_two_b_star[0]));
     }
-    if (!correction_valid(c.coupling, radius)) return refuse(ConfigError::kCouplingCorrection);
+    if (!correction_valid(c.coupling, radius)) return refuse_config(ConfigError::kCouplingCorrection);
   }
   // Reference limits: inside the supervisor window, positive rates.
   const ReferenceLimits& r = c.references;
@@ -177,7 +179,7 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
     if (!(r.position_min[a] < r.position_max[a]) || !finite_positive(r.max_velocity[a]) ||
         !finite_positive(r.max_acceleration[a]) || !finite_positive(r.max_step[a]) || r.max_step[a] > 100e-6f ||
         !finite_positive(r.max_jerk[a])) {
-      return refuse(ConfigError::kReferenceLimits);
+      return refuse_config(ConfigError::kReferenceLimits);
     }
   }
   if (r.position_min[0] < sv.x_min_m || r.position_max[0] > sv.x_max_m || r.position_min[1] < sv.y_min_m ||
@@ -186,7 +188,7 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
       r.position_max[3] > sv.z_max_m || r.position_min[4] < -sv.tilt_limit_rad ||
       r.position_max[4] > sv.tilt_limit_rad || r.position_min[5] < -sv.tilt_limit_rad ||
       r.position_max[5] > sv.tilt_limit_rad) {
-    return refuse(ConfigError::kReferenceLimits);
+    return refuse_config(ConfigError::kReferenceLimits);
   }
   // Excitation: bounded amplitude (never more than the coil peak), lines below Nyquist.
   const ExcitationLimits& ex = c.excitation;
@@ -194,12 +196,12 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
       !finite_positive(ex.max_frequency_Hz) || ex.max_frequency_Hz >= 0.5f * c.servo_rate_Hz ||
       !finite_positive(ex.max_duration_s) ||
       static_cast<double>(ex.max_duration_s) * rate > 4.0e9) {
-    return refuse(ConfigError::kReferenceLimits);
+    return refuse_config(ConfigError::kReferenceLimits);
   }
-  if (validate(c.sequencer, c.servo_rate_Hz) != SequencerConfigError::kOk) return refuse(ConfigError::kSequencer);
-  if (validate(c.supervisor, c.servo_rate_Hz) != SupervisorConfigError::kOk) return refuse(ConfigError::kSupervisor);
+  if (validate(c.sequencer, c.servo_rate_Hz) != SequencerConfigError::kOk) return refuse_config(ConfigError::kSequencer);
+  if (validate(c.supervisor, c.servo_rate_Hz) != SupervisorConfigError::kOk) return refuse_config(ConfigError::kSupervisor);
   // The nominal height must sit inside the reference and supervisor z range.
-  if (c.sequencer.nominal_height_m > sv.z_max_m) return refuse(ConfigError::kSequencer);
+  if (c.sequencer.nominal_height_m > sv.z_max_m) return refuse_config(ConfigError::kSequencer);
   prepared_ = true;
   return ConfigError::kOk;
 }
@@ -211,13 +213,10 @@ ConfigError Controller<Scalar>::commit_config(const KernelConfig& c) {
     if (e != ConfigError::kOk) return e;
   }
   prepared_ = false;
-  auto refuse = [this](ConfigError e) {
-    status_.last_config_error = e;
-    return e;
-  };
 
   // --- 2. while not on rest only gains may change, and only with live_tuning.
-  if (levitated_or_busy()) {
+  const bool levitated = levitated_or_busy();
+  if (levitated) {
     const bool locked_same = c.servo_rate_Hz == config_.servo_rate_Hz &&
                              same_bytes(c.measurement, config_.measurement) &&
                              same_bytes(c.allocation, config_.allocation) &&
@@ -227,12 +226,12 @@ ConfigError Controller<Scalar>::commit_config(const KernelConfig& c) {
                              c.payload_mass_kg == config_.payload_mass_kg &&
                              same_bytes(c.payload_inertia_kgm2, config_.payload_inertia_kgm2) &&
                              same_bytes(c.coupling, config_.coupling);
-    if (!locked_same) return refuse(ConfigError::kLockedWhileLevitated);
+    if (!locked_same) return refuse_config(ConfigError::kLockedWhileLevitated);
     bool gains_same = true;
     for (int a = 0; a < kAxisCount; ++a) gains_same = gains_same && same_bytes(c.axis[a], config_.axis[a]);
     gains_same = gains_same && c.acceleration_feedforward == config_.acceleration_feedforward &&
                  c.antiwindup == config_.antiwindup;
-    if (!gains_same && !c.live_tuning) return refuse(ConfigError::kGainsLockedWhileLevitated);
+    if (!gains_same && !c.live_tuning) return refuse_config(ConfigError::kGainsLockedWhileLevitated);
     // Live tuning: a bounded step per write (kMaxLiveGainStep).
     auto step_ok = [](float now, float next) {
       if (now == 0.0f) return next == 0.0f;
@@ -244,7 +243,7 @@ ConfigError Controller<Scalar>::commit_config(const KernelConfig& c) {
       const Pid2DofConfig& next = c.axis[a].pid;
       if (!step_ok(now.kp, next.kp) || !step_ok(now.ki, next.ki) || !step_ok(now.kd, next.kd)) {
         status_.config_axis = static_cast<std::uint8_t>(a);
-        return refuse(ConfigError::kGainStepTooLarge);
+        return refuse_config(ConfigError::kGainStepTooLarge);
       }
     }
   }
@@ -252,13 +251,12 @@ ConfigError Controller<Scalar>::commit_config(const KernelConfig& c) {
   // --- 3. swap. Measurement state is only replaced when its config changed
   // (re-seeding the counters would lose the interferometer zero).
   if (!same_bytes(c.measurement, config_.measurement) || !s2p_.lsb_den) s2p_ = s2p_next_;
-  const bool at_rest = !levitated_or_busy();
   active_ = 1 - active_;
   config_ = c;
   // On rest a running coupling ramp ends (the correction cannot change while
   // levitated, see above). A live gain write used to cut it too: the
   // correction jumped to its target instead of blending over 0.5 s.
-  if (at_rest) ramp_.left = 0;
+  if (!levitated) ramp_.left = 0;
   // A live loop-type switch hands the effort over (approximately bumpless):
   // the new loop's integral state starts at the old loop's last output.
   for (int a = 0; a < kAxisCount; ++a) {

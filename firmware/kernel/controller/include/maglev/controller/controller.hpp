@@ -472,6 +472,7 @@ class Controller {
   bool levitated_or_busy() const;
   MAGLEV_CONFIG_CODE AxisReferenceLimits axis_limits(int a) const;
   void hold();
+  MAGLEV_CONFIG_CODE ConfigError refuse_config(ConfigError e);  // records it as the last config error
   MAGLEV_CONFIG_CODE CommandResult start_excitation(const MotionCommand& cmd);
   MAGLEV_CONFIG_CODE CommandResult start_calibration();
   void calibrate(Tick& t);            // before excite(): aborts, starts each experiment
