@@ -140,6 +140,7 @@ kernel::ForceAllocationConfig allocation_of(const StageProfile& p) {
   }
   c.peak_current_A = p.limits.peak_current_A;
   c.mass_kg = p.body.mass_kg;
+  for (int i = 0; i < 3; ++i) c.inertia_kgm2[i] = p.body.inertia_kgm2[i];
   c.gravity_m_per_s2 = p.body.gravity_m_per_s2;
   return c;
 }
@@ -264,6 +265,16 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
       return fail(ProfileError::kUnsupportedController, a);
     }
     if (p.axis[a].controller.schedule_points != 0 || p.axis[a].controller.feedback_linearization) {
+      return fail(ProfileError::kUnsupportedController, a);
+    }
+    // Paper 002's anti-windup gain E and LQR weights belong to its own
+    // kernel (pmlsm_stage). This one designs its internal-model regulator by
+    // pole placement on the profile's axis plant, with back-calculation
+    // anti-windup: a value set here would change nothing, so it is refused
+    // rather than ignored.
+    bool lqr_weights = false;
+    for (double w : p.axis[a].controller.lqr_weight_h) lqr_weights = lqr_weights || w != 0.0;
+    if (p.axis[a].controller.antiwindup_gain != 0.0 || lqr_weights) {
       return fail(ProfileError::kUnsupportedController, a);
     }
   }
@@ -398,6 +409,11 @@ kernel::KernelConfig config_of(const StageProfile& p) {
     l.pid.effort_limit_A = static_cast<float>(k.effort_limit_A);
     l.imr.effort_limit_A = l.pid.effort_limit_A;
     if (k.imr_omega0_rad_per_s > 0.0) l.imr.omega0_rad_s = static_cast<float>(k.imr_omega0_rad_per_s);
+    // The internal-model regulator is designed on this profile's axis plant
+    // (the one the checker judges the PID loops on), not the seed stage's.
+    l.imr.plant_gain = static_cast<float>(AxisPlantGain(p, a));
+    l.imr.plant_damping_per_s = static_cast<float>(ax.open_loop_damping_per_s);
+    l.imr.plant_stiffness_per_s2 = static_cast<float>(ax.open_loop_stiffness_per_s2);
     // Back-calculation time as the kernel's defaults derive it (sqrt(Ti Td), or Ti without D).
     if (l.pid.ki > 0.0f && l.pid.kp > 0.0f) {
       const double ti = static_cast<double>(l.pid.kp) / static_cast<double>(l.pid.ki);

@@ -371,7 +371,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     Axis p{};
     if (dot == std::string::npos || !parse_axis(k.substr(0, dot), &p)) {
       fail("[controller] unknown key '" + k +
-           "' (preset, payload_kg, servo_rate_Hz, lds_target_steps, lds_target_step_min, lds_target_window, AXIS.kp|ki|kd|b|derivative_filter_Hz, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
+           "' (preset, payload_kg, servo_rate_Hz, lds_target_steps, lds_target_step_min, lds_target_window, AXIS.kp|ki|kd|b|derivative_filter_Hz|loop, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
       continue;
     }
     const std::string field = k.substr(dot + 1);
@@ -422,6 +422,15 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       else f.pole_Hz = xf;
       continue;
     }
+    // AXIS.loop: the axis' regulator, the profile's `controller` key (paper
+    // 000's 2-DOF PID or paper 002's internal-model regulator, designed on
+    // the profile's axis plant).
+    if (field == "loop") {
+      if (v == "pid2dof") c.axis[index(p)].type = kernel::LoopType::kPid2Dof;
+      else if (v == "internal_model") c.axis[index(p)].type = kernel::LoopType::kInternalModel;
+      else fail("[controller] " + k + " = " + v + ": expected pid2dof or internal_model");
+      continue;
+    }
     double x = 0;
     if (!num("controller", k, v, Dim::kNumber, &x)) continue;
     // The same bounds as the register map (one source): a scenario may not
@@ -446,7 +455,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     else if (field == "b") pid.setpoint_weight_p = xf;
     else if (field == "derivative_filter_Hz") pid.derivative_filter_hz = xf;
     else fail("[controller] unknown field '" + field + "' in '" + k +
-              "' (kp, ki, kd, b, derivative_filter_Hz, filter1.*, filter2.*)");
+              "' (kp, ki, kd, b, derivative_filter_Hz, loop, filter1.*, filter2.*)");
   }
   return errs->size() == before;
 }

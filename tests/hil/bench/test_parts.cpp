@@ -207,6 +207,31 @@ TEST(Overrides, TheLdsTargetThresholdAndWindowAreLengthsBoundedByTheirRegisters)
   DOUBLES_EQUAL(1000.0, bad.controller.measurement.lds_target_window_um, 0.0);
 }
 
+// AXIS.loop picks an axis' regulator (sinusoid_imr runs paper 002's
+// internal-model regulator on x); any other value is refused by name.
+TEST(Overrides, AnAxisLoopIsChosenByName) {
+  auto parsed = scenario::parse_scenario(
+      "[scenario]\nname = l\nduration_s = 1\n[controller]\nx.loop = internal_model\ntheta_z.loop = pid2dof\n",
+      "l.scenario");
+  CHECK_TRUE(parsed.ok());
+  Overrides o;
+  std::vector<ScenarioError> errs;
+  CHECK_TRUE(apply_overrides(*parsed.scenario, &o, &errs));
+  for (int a = 0; a < kernel::kAxisCount; ++a) {
+    CHECK(o.controller.axis[a].type ==
+          (a == index(Axis::kX) ? kernel::LoopType::kInternalModel : kernel::LoopType::kPid2Dof));
+  }
+  static kernel::Controller<float> kernel_under_test;
+  CHECK(kernel_under_test.apply_config(o.controller) == kernel::ConfigError::kOk);
+  auto bad = scenario::parse_scenario("[scenario]\nname = m\nduration_s = 1\n[controller]\ny.loop = lqr\n", "m.scenario");
+  CHECK_TRUE(bad.ok());
+  Overrides ob;
+  std::vector<ScenarioError> bad_errs;
+  CHECK_FALSE(apply_overrides(*bad.scenario, &ob, &bad_errs));
+  CHECK_EQUAL(1u, bad_errs.size());
+  CHECK(bad_errs[0].message.find("y.loop = lqr: expected pid2dof or internal_model") != std::string::npos);
+}
+
 TEST(Overrides, ThePaperPresetIsThePublishedPidsWithoutOurShaping) {
   // Paper 000 (27), (28), (32), (33): the gains as printed, PID on the error
   // (b = c = 1), no acceleration feed-forward, no output filters; AXIS keys

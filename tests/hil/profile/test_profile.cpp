@@ -276,6 +276,49 @@ TEST(Profiles, TheCheckerAppliesTheAllocationAsTheKernelDoes) {
 // kernel takes; a stored record's counts cannot walk past the tables; the
 // parser reports a Halbach key left out and a section repeated under
 // another spelling; nothing may follow "ready" in the start-up.
+// The stage is data: the kernel's rotation feed-forward and its
+// internal-model regulators take the profile's body and axis plant (they
+// used to take the seed stage's constants whatever the profile said), and a
+// key this kernel has no use for is refused rather than ignored.
+TEST(Profiles, TheKernelTakesTheBodyAndTheRegulatorPlantFromTheProfile) {
+  const auto base = shipped("nk2017-cross").profile;
+  sp::StageProfile p = base;
+  p.body.inertia_kgm2[0] = 0.0031;
+  p.body.inertia_kgm2[1] = 0.0047;
+  p.body.inertia_kgm2[2] = 0.0072;
+  p.axis[3].open_loop_stiffness_per_s2 = 90000.0;
+  p.axis[3].open_loop_damping_per_s = 900.0;
+  for (int a = 0; a < 6; ++a) p.axis[a].controller.kind = sp::ControllerKind::kInternalModel;
+  kernel::KernelConfig kc{};
+  const sp::ProfileCheck check = sp::MakeKernelConfig(p, &kc);
+  CHECK_TRUE(check.error == sp::ProfileError::kOk);
+  for (int i = 0; i < 3; ++i) DOUBLES_EQUAL(p.body.inertia_kgm2[i], kc.allocation.inertia_kgm2[i], 0.0);
+  // x y theta_z z theta_x theta_y: 2 b* over m, Iz, m, Ix, Iy.
+  const double inertia[6] = {0.75, 0.75, 0.0072, 0.75, 0.0031, 0.0047};
+  for (int a = 0; a < 6; ++a) {
+    CHECK_TRUE(kc.axis[a].type == kernel::LoopType::kInternalModel);
+    CHECK_EQUAL(static_cast<float>(1.7037 / inertia[a]), kc.axis[a].imr.plant_gain);
+    CHECK_EQUAL(static_cast<float>(p.axis[a].open_loop_stiffness_per_s2), kc.axis[a].imr.plant_stiffness_per_s2);
+    CHECK_EQUAL(static_cast<float>(p.axis[a].open_loop_damping_per_s), kc.axis[a].imr.plant_damping_per_s);
+  }
+  static kernel::Controller<float> c;
+  CHECK_TRUE(c.apply_config(kc) == kernel::ConfigError::kOk);  // the kernel designs them
+
+  // Paper 002's anti-windup gain and LQR weights belong to its own kernel.
+  p = base;
+  p.axis[2].controller.kind = sp::ControllerKind::kInternalModel;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kOk);
+  p.axis[2].controller.antiwindup_gain = 7e-5;
+  sp::ProfileCheck r = sp::CheckStageProfile(p);
+  CHECK_TRUE(r.error == sp::ProfileError::kUnsupportedController);
+  LONGS_EQUAL(2, r.axis);
+  p.axis[2].controller.antiwindup_gain = 0.0;
+  p.axis[2].controller.lqr_weight_h[4] = 1.0;
+  r = sp::CheckStageProfile(p);
+  CHECK_TRUE(r.error == sp::ProfileError::kUnsupportedController);
+  LONGS_EQUAL(2, r.axis);
+}
+
 TEST(Profiles, TheCheckerRefusesWhatTheKernelWouldAndTheParserWhatIsMissing) {
   const auto base = shipped("nk2017-cross").profile;
   sp::StageProfile p = base;

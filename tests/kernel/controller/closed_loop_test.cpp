@@ -462,6 +462,65 @@ TEST(ClosedLoop, TrapezoidFromReferencesWithAccelerationFeedForward) {
   CHECK(with_ff < without / 5.0);
 }
 
+// The rotation axes' acceleration feed-forward I a / (2 b*) uses the
+// configured platen inertia (a profile's [body]); it used to be the seed
+// stage's constant whatever the configuration said. A shadow controller with
+// twice Iz sees the same samples as the one flying the stage: at rest the two
+// are identical, and on a theta_z move's first tick they differ by Iz a / (2 b*)
+// on theta_z alone.
+TEST(ClosedLoop, TheRotationFeedForwardUsesTheConfiguredInertia) {
+  static Controller<float> flying, shadow;
+  const KernelConfig kf = default_kernel_config();
+  KernelConfig ks = kf;
+  ks.allocation.inertia_kgm2[2] *= 2.0;
+  CHECK(flying.apply_config(kf) == ConfigError::kOk);
+  CHECK(shadow.apply_config(ks) == ConfigError::kOk);
+  AxisStage s(31);
+  CHECK(flying.command(MotionCommand{MotionType::kLevitate}) == CommandResult::kAccepted);
+  CHECK(shadow.command(MotionCommand{MotionType::kLevitate}) == CommandResult::kAccepted);
+  auto tick = [&]() {
+    const io::SensorSample sample = s.sample();
+    const io::ActuatorCommand cmd = flying.step(sample, false);
+    (void)shadow.step(sample, false);
+    s.advance(cmd, flying.status().pose[Axis::kX], flying.status().pose[Axis::kY]);
+  };
+  for (int n = 0; n < 40000 && flying.status().state != SequencerState::kReady; ++n) tick();
+  for (int n = 0; n < 500; ++n) tick();
+  CHECK(flying.status().state == SequencerState::kReady);
+  CHECK(shadow.status().state == SequencerState::kReady);
+  for (int a = 0; a < kAxisCount; ++a) CHECK_EQUAL(flying.status().effort_A[a], shadow.status().effort_A[a]);
+  const double tz0 = static_cast<double>(flying.status().reference[Axis::kThetaZ]) * 1e-12;
+  const MotionCommand move = move_cmd(MotionType::kMoveTo, Axis::kThetaZ, tz0 + 1e-3, 0.05, 0.5);
+  CHECK(flying.command(move) == CommandResult::kAccepted);
+  CHECK(shadow.command(move) == CommandResult::kAccepted);
+  tick();
+  const int tz = axis_index(Axis::kThetaZ);
+  const double acc = flying.status().reference_acceleration[tz];
+  DOUBLES_EQUAL(0.5, acc, 1e-9);
+  const double expected_A = io::stage::kIz_kgm2 * acc / io::stage::kTwoBStarIdentified_N_per_A;
+  const double got_A = static_cast<double>(shadow.status().effort_A[tz]) - static_cast<double>(flying.status().effort_A[tz]);
+  std::printf("\ntheta_z move, first tick: feed-forward difference %.6e A for +%.4f kg m^2 (expected %.6e A)\n", got_A,
+              io::stage::kIz_kgm2, expected_A);
+  DOUBLES_EQUAL(expected_A, got_A, 1e-6);
+  for (int a = 0; a < kAxisCount; ++a) {
+    if (a != tz) CHECK_EQUAL(flying.status().effort_A[a], shadow.status().effort_A[a]);
+  }
+}
+
+TEST(ClosedLoop, APlatenInertiaThatIsNotAPositiveNumberIsRefused) {
+  static Controller<float> c;
+  const KernelConfig good = default_kernel_config();
+  CHECK(c.apply_config(good) == ConfigError::kOk);
+  for (int i = 0; i < 3; ++i) {
+    for (double bad : {0.0, -0.0019, std::nan(""), 1e30}) {
+      KernelConfig kc = good;
+      kc.allocation.inertia_kgm2[i] = bad;
+      CHECK(c.apply_config(kc) == ConfigError::kAllocation);
+      CHECK(same_config(good, c.config()));  // the refused write changed nothing
+    }
+  }
+}
+
 TEST(ClosedLoop, EveryProfileValidatedAgainstTheLimits) {
   static Controller<float> c;
   AxisStage s(22);

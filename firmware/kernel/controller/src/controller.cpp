@@ -152,14 +152,18 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
   for (float j : c.payload_inertia_kgm2) {
     if (!(j >= 0.0f && j <= 0.01f)) return refuse_config(ConfigError::kPayload);
   }
+  // The platen's own inertias (a profile's [body]): positive and finite.
+  for (double j : alloc.inertia_kgm2) {
+    if (!(j > 0.0 && j < 1e3)) return refuse_config(ConfigError::kAllocation);
+  }
   const double two_b_star = scratch.allocation.two_b_star_N_per_A;
   const double m_total = alloc.mass_kg + alloc.payload_kg;
   const double inertia[kAxisCount] = {m_total,
                                       m_total,
-                                      stage::kIz_kgm2 + static_cast<double>(c.payload_inertia_kgm2[0]),
+                                      alloc.inertia_kgm2[2] + static_cast<double>(c.payload_inertia_kgm2[0]),
                                       m_total,
-                                      stage::kIx_kgm2 + static_cast<double>(c.payload_inertia_kgm2[1]),
-                                      stage::kIy_kgm2 + static_cast<double>(c.payload_inertia_kgm2[2])};
+                                      alloc.inertia_kgm2[0] + static_cast<double>(c.payload_inertia_kgm2[1]),
+                                      alloc.inertia_kgm2[1] + static_cast<double>(c.payload_inertia_kgm2[2])};
   for (int a = 0; a < kAxisCount; ++a) {
     // Acceleration feed-forward, eq (22) inverted: U = (m or I) a / (2 b*), A per SI acceleration.
     scratch.inertia_over_two_b_star[a] = inertia[a] / two_b_star;

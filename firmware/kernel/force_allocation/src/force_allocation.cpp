@@ -154,6 +154,9 @@ MAGLEV_CONFIG_CODE ForceAllocationConfig DefaultForceAllocationConfig() {
   c.mass_kg = stage::kMass_kg;
   c.payload_kg = 0.0;
   c.gravity_m_per_s2 = stage::kGravity_m_per_s2;
+  c.inertia_kgm2[0] = stage::kIx_kgm2;
+  c.inertia_kgm2[1] = stage::kIy_kgm2;
+  c.inertia_kgm2[2] = stage::kIz_kgm2;
   c.amplifier_gain_A_per_V = stage::kAmplifierGain_A_per_V;
   c.dac_full_scale_V = stage::kDacFullScale_V;
   c.current_monitor_gain_V_per_A = stage::kCurrentMonitorGain_V_per_A;

@@ -70,6 +70,11 @@ struct ForceAllocationConfig {
   double mass_kg;
   double payload_kg;
   double gravity_m_per_s2;
+  // The platen's moments of inertia about x, y and z (kg m^2): the rotation
+  // axes' acceleration feed-forward I a / (2 b*) and the radii of gyration
+  // of the coupling correction. A profile's [body] sets them (they used to
+  // be the seed stage's constants whatever the profile said).
+  double inertia_kgm2[3];
   // Electronics: DAC code = round(i / gain / FS * 32768); monitor A = code * FS / 32768 / gain.
   double amplifier_gain_A_per_V;
   double dac_full_scale_V;
