@@ -292,6 +292,18 @@ int run_controller_process(const ControllerProcessOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point first_tick{};
   const char* why = "signal";
+  // A row per tick, the ticks that stand in for lost sensor frames included
+  // (ControllerNode::run_once): the record stays on the plant's tick.
+  if (!o.out_dir.empty()) {
+    node.after_tick = [&]() {
+      const auto& st = node.status();
+      for (Axis a : kernel::kAllAxes) rows.push_back(pose_si(st.pose, a));
+      for (Axis a : kernel::kAllAxes) rows.push_back(pose_si(st.reference, a));
+      for (Axis a : kernel::kAllAxes) rows.push_back(static_cast<double>(st.effort_A[index(a)]));
+      for (int j = 0; j < 8; ++j) rows.push_back(static_cast<double>(st.coil_current_A[j]));
+      states.push_back(static_cast<std::int32_t>(st.state));
+    };
+  }
   for (;;) {
     if (g_stop_signal != 0) break;
     const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -299,7 +311,12 @@ int run_controller_process(const ControllerProcessOptions& o) {
       why = "duration";
       break;
     }
-    const bool ran = node.run_once(100000);
+    // Silence for kSilence_us once ticking: a stale tick (4 of them, ~2 s,
+    // and the frame watchdog lands the stage). Longer than the plant's
+    // lockstep wait for an actuator frame (200 ms), so that a lost frame is
+    // caught up by its successor's counter, never by this timeout.
+    constexpr std::uint32_t kSilence_us = 500000;
+    const bool ran = node.run_once(kSilence_us, node.ticks() > 0);
     if (cio.stop_requested()) {
       why = "shutdown command";
       break;
@@ -311,14 +328,6 @@ int run_controller_process(const ControllerProcessOptions& o) {
       c.type = kernel::MotionType::kLevitate;
       std::printf("controller: levitate -> %s\n", hil::to_string(node.command(c)));
       levitate_sent = true;
-    }
-    if (!o.out_dir.empty()) {
-      const auto& st = node.status();
-      for (Axis a : kernel::kAllAxes) rows.push_back(pose_si(st.pose, a));
-      for (Axis a : kernel::kAllAxes) rows.push_back(pose_si(st.reference, a));
-      for (Axis a : kernel::kAllAxes) rows.push_back(static_cast<double>(st.effort_A[index(a)]));
-      for (int j = 0; j < 8; ++j) rows.push_back(static_cast<double>(st.coil_current_A[j]));
-      states.push_back(static_cast<std::int32_t>(st.state));
     }
   }
   const double active_s =

@@ -56,6 +56,13 @@ bool NodePort::wait(std::uint32_t timeout_us) {
     const bool sensor = ok && rx_.last_message() == &can::message(can::MessageKind::kSensor);
     queue_.push_back(Queued{in, sensor});
     if (sensor) {
+      const std::uint8_t c = can::frame_counter(in);
+      if (!synced_) {
+        expected_ = c;
+        synced_ = true;
+      }
+      if (queued_sensor_frames_ == 0) first_ = c;
+      newest_ = c;
       ++queued_sensor_frames_;
       got = true;
     }
@@ -76,9 +83,20 @@ can::PortStatus NodePort::send(const can::CanFrame& f) {
   return s;
 }
 
+int NodePort::lost() const {
+  if (!synced_ || queued_sensor_frames_ == 0) return 0;
+  const int d = static_cast<std::int8_t>(static_cast<std::uint8_t>(first_ - expected_));
+  return d > 0 ? d : 0;
+}
+
+void NodePort::end_tick(bool fresh) {
+  if (!synced_) return;
+  expected_ = static_cast<std::uint8_t>((fresh ? newest_ : expected_) + 1u);
+}
+
 can::PortStatus NodePort::receive(can::CanFrame& f, std::uint32_t timeout_us) {
   (void)timeout_us;  // the app polls (0); nothing to wait for inside a tick
-  if (queue_.empty()) return can::PortStatus::kTimeout;
+  if (held_ || queue_.empty()) return can::PortStatus::kTimeout;
   f = queue_.front().frame;
   if (queue_.front().accepted_sensor) --queued_sensor_frames_;
   queue_.pop_front();
@@ -213,9 +231,27 @@ ControllerNode::ControllerNode(KernelKind kind, CanServoIo& io) : kind_(kind), i
 ControllerNode::~ControllerNode() = default;
 
 bool ControllerNode::run_once(std::uint32_t timeout_us, bool stale_if_missing) {
-  const bool fresh = io_.port().wait(timeout_us);
+  NodePort& port = io_.port();
+  const bool fresh = port.wait(timeout_us);
+  if (!fresh && (!stale_if_missing || ticks_ == 0 || io_.stop_requested())) {
+    execute_pending();
+    return false;
+  }
+  if (fresh && ticks_ > 0 && !io_.stop_requested()) {
+    // The periods whose frames never came: stale ticks, as a board's timer
+    // would have run them (the 3rd latches kStaleFrames, the 4th finds the
+    // frame watchdog expired).
+    port.hold(true);
+    for (int k = port.lost(); k > 0; --k) tick();
+    port.hold(false);
+  }
+  // Commands that came with (or before) this tick's frame apply at this tick.
   execute_pending();
-  if (!fresh && (!stale_if_missing || ticks_ == 0 || io_.stop_requested())) return false;
+  tick();
+  return true;
+}
+
+void ControllerNode::tick() {
   const app::CanSensorStats before = io_.sensors().stats();
   servo_->loop.on_tick();
   const app::CanSensorStats& after = io_.sensors().stats();
@@ -229,9 +265,10 @@ bool ControllerNode::run_once(std::uint32_t timeout_us, bool stale_if_missing) {
     if (link_.link_lost_ticks == 0) link_.first_link_lost_tick = tick;
     link_.link_lost_ticks += after.link_lost - before.link_lost;
   }
+  io_.port().end_tick(after.fresh != before.fresh);
   io_.publish_status(kernel_->status());
   ++ticks_;
-  return true;
+  if (after_tick) after_tick();
 }
 
 void ControllerNode::execute_pending() {

@@ -158,6 +158,64 @@ TEST(ControllerNode, MissingFramesRunTheAppsStaleAndLinkLostPath) {
   LONGS_EQUAL(1, b.drain().size());
 }
 
+// Two-process mode ticks on frames, not on a timer: a frame whose counter is
+// beyond the next tick's stands for the periods whose frames were lost, and
+// those run first as stale ticks (docs/CAN.md "Watchdogs"). It used to skip
+// them: the kernel fell a tick behind the plant per lost frame, never saw a
+// stale sample, and stayed Ready while the plant cut the amplifiers.
+TEST(ControllerNode, ALostSensorFrameIsAStaleTickWhenItsSuccessorArrives) {
+  Bench b;
+  b.send_sensor(0);
+  CHECK_TRUE(b.node.run_once(0));
+  b.drain();
+  b.send_sensor(2);  // frame 1 lost
+  CHECK_TRUE(b.node.run_once(0));
+  LONGS_EQUAL(3, b.node.ticks());
+  LONGS_EQUAL(1, b.node.link_stats().stale_ticks);
+  LONGS_EQUAL(1, b.node.link_stats().first_stale_tick);
+  LONGS_EQUAL(2, b.node.link_stats().fresh_ticks);
+  const auto frames = b.drain();
+  LONGS_EQUAL(1, frames.size());  // the stale tick answers nothing
+  CHECK_TRUE(is(frames[0], can::MessageKind::kActuator));
+  LONGS_EQUAL(2, can::frame_counter(frames[0]));
+  b.send_sensor(3);  // on time again: no catch-up
+  CHECK_TRUE(b.node.run_once(0));
+  LONGS_EQUAL(4, b.node.ticks());
+  LONGS_EQUAL(1, b.node.link_stats().stale_ticks);
+}
+
+TEST(ControllerNode, AnOutageSeenOnlyByItsEndStillTripsTheFrameWatchdog) {
+  Bench b;
+  std::vector<std::size_t> rows;
+  b.node.after_tick = [&]() { rows.push_back(b.node.ticks()); };
+  b.send_sensor(0);
+  CHECK_TRUE(b.node.run_once(0));
+  b.drain();
+  // Frames 1..5 lost; 6 jumps further than the receiver allows (rejected, it
+  // resynchronises on it); 7 is accepted: ticks 1..6 ran unseen.
+  b.send_sensor(6);
+  CHECK_FALSE(b.node.run_once(0));
+  b.send_sensor(7);
+  CHECK_TRUE(b.node.run_once(0));
+  LONGS_EQUAL(8, b.node.ticks());
+  LONGS_EQUAL(8, rows.size());  // after_tick: one row per tick, the stale ones included
+  const auto& ls = b.node.link_stats();
+  LONGS_EQUAL(6, ls.stale_ticks);
+  LONGS_EQUAL(1, ls.first_stale_tick);
+  CHECK_TRUE(ls.link_lost_ticks >= 1);
+  LONGS_EQUAL(4, ls.first_link_lost_tick);  // > 1.2 ms of silence, as on the board
+  CHECK_TRUE(b.node.status().first_fault.code == kernel::FaultCode::kStaleFrames);
+  // One actuator frame, answering 7 (the plant's receiver would call it a
+  // jump after 0: read raw here; the plant pairs frames by counter).
+  std::vector<can::CanFrame> frames;
+  for (can::CanFrame f{}; b.plant_port->pending() > 0 && b.plant_port->receive(f, 0) == can::PortStatus::kOk;) {
+    frames.push_back(f);
+  }
+  LONGS_EQUAL(1, frames.size());
+  CHECK_TRUE(is(frames[0], can::MessageKind::kActuator));
+  LONGS_EQUAL(7, can::frame_counter(frames[0]));
+}
+
 TEST(ControllerNode, NewestOfSeveralQueuedSensorFramesWinsAndTelemetryKeepsCatalogTicks) {
   Bench b;
   b.send_sensor(10);

@@ -25,6 +25,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -76,6 +77,17 @@ class NodePort final : public can::CanPort {
   const can::LinkReceiver& receiver() const { return rx_; }
   std::uint32_t tx_errors() const { return tx_errors_; }
 
+  // The node's tick clock on the E2E counter (the plant numbers its sensor
+  // frames tick mod 256). lost(): how many servo periods passed, unseen,
+  // between the last tick and the oldest accepted sensor frame wait() queued
+  // (0 before the first frame, or when the node is ahead). end_tick(): one
+  // tick ran; fresh = it took the queued sensor frames.
+  int lost() const;
+  void end_tick(bool fresh);
+  // While held, receive() serves nothing: the ticks that stand in for lost
+  // frames must not consume the frame that arrived after them.
+  void hold(bool held) { held_ = held; }
+
  private:
   struct Queued {
     can::CanFrame frame;
@@ -89,6 +101,11 @@ class NodePort final : public can::CanPort {
   std::deque<can::HostCommandFrame> commands_;
   bool stop_requested_ = false;
   std::uint32_t tx_errors_ = 0;
+  bool held_ = false;
+  bool synced_ = false;          // a sensor frame was accepted: expected_ is valid
+  std::uint8_t expected_ = 0;    // the counter the next tick's frame should carry
+  std::uint8_t first_ = 0;       // oldest accepted sensor frame queued since the last tick
+  std::uint8_t newest_ = 0;      // newest accepted sensor frame queued
 };
 
 // The node's CAN I/O: NodePort + the app's CanSensorSource/CanActuatorSink +
@@ -173,8 +190,15 @@ class ControllerNode {
   // SensorFrameWatchdog (1.2 ms = 3 periods) expired read() fails, so
   // ServoLoop adds io::kAdcFault and writes io::kSafeActuatorCommand.
   // No tick before the first sensor frame, none after a shutdown command.
-  // Returns true if a tick ran.
+  // A board ticks on its own timer, so a lost sensor frame is a stale tick
+  // there. The node ticks on frames, so it counts what it did not see: when
+  // a frame arrives whose counter is k beyond the next tick's, k stale ticks
+  // (the app's stale and link-lost path, docs/CAN.md "Watchdogs") run first,
+  // then the fresh one; the node stays on the plant's tick whatever was lost
+  // (two-process mode, where nothing else tells it a period passed).
+  // Returns true if a tick ran; after_tick (if set) runs after every tick.
   bool run_once(std::uint32_t timeout_us, bool stale_if_missing = false);
+  std::function<void()> after_tick;
 
   // Executes one host command (as received over CAN) on the kernel; the
   // result is a kernel::CommandResult value or can::kHostResultNotExecuted.
@@ -199,6 +223,7 @@ class ControllerNode {
 
  private:
   void execute_pending();
+  void tick();
   KernelKind kind_;
   CanServoIo& io_;
   std::unique_ptr<Kernel> kernel_;
