@@ -159,7 +159,13 @@ DrawnErrors DrawAsBuilt(const ErrorSet& set, PlantConfig* c) {
   ab.y_mirror_roll_rad = draw("mirror_tilt_rad", "y_mirror_roll_rad");
   ab.mirror_bow_m = draw("mirror_flatness_m", "mirror_bow_m");
   c->interferometer.beam_height_m += draw("abbe_offset_m", "beam_height_m");
-  c->interferometer.y_beam_separation_m += draw("y_beam_separation_m", "y_beam_separation_error_m");
+  {
+    // The separation error moves y1 and y2 apart by half each (halving is
+    // exact: the same bits as -/+ (separation + error) / 2).
+    const double e = draw("y_beam_separation_m", "y_beam_separation_error_m");
+    c->interferometer.y_beam_x_m[0] -= 0.5 * e;
+    c->interferometer.y_beam_x_m[1] += 0.5 * e;
+  }
   for (int i = 0; i < io::kDisplacementSensors; ++i) {
     const std::string n = std::to_string(i + 1);
     c->displacement.sensor_x_m[i] += draw("lds_position_m", "lds" + n + "_dx_m");

@@ -1287,14 +1287,15 @@ double Plant::AsBuiltInterferometer(int axis) const {
   const Eigen::Vector3d& p = body_.position_m;
   if (axis == 0) {
     const Eigen::Vector3d nb = Eigen::Vector3d(1.0, ab.x_mirror_yaw_rad, ab.x_mirror_pitch_rad).normalized();
+    const double yb = ic.x_beam_y_m;
     const Eigen::Vector3d m0(d - cx, -cy, 0.0);  // a point of the mirror face, CoM frame
     const Eigen::Vector3d n = r * nb;
-    const double t = (n.dot(p) + nb.dot(m0) - n.z() * zb) / n.x();
-    const Eigen::Vector3d hit = r.transpose() * (Eigen::Vector3d(t, 0.0, zb) - p);
+    const double t = (n.dot(p) + nb.dot(m0) - n.y() * yb - n.z() * zb) / n.x();
+    const Eigen::Vector3d hit = r.transpose() * (Eigen::Vector3d(t, yb, zb) - p);
     const double s = (hit.y() + cy) / ab.mirror_half_length_m;
     return t + ab.mirror_bow_m * s * s;
   }
-  const double xb = (axis == 1 ? -0.5 : 0.5) * ic.y_beam_separation_m;
+  const double xb = ic.y_beam_x_m[axis - 1];
   const Eigen::Vector3d nb = Eigen::Vector3d(0.0, 1.0, ab.y_mirror_roll_rad).normalized();
   const Eigen::Vector3d m0(-cx, d - cy, 0.0);
   const Eigen::Vector3d n = r * nb;
@@ -1333,11 +1334,11 @@ double Plant::InterferometerDisplacement(int axis) const {
   const double zb = ic.beam_height_m;
   const Eigen::Vector3d& p = body_.position_m;
   if (axis == 0) {
-    const Eigen::Vector3d n = r.col(0);  // x beam along X at world y = 0
-    const double t = (n.dot(p) + d - n.z() * zb) / n.x();
+    const Eigen::Vector3d n = r.col(0);  // x beam along X at world y = x_beam_y_m
+    const double t = (n.dot(p) + d - n.y() * ic.x_beam_y_m - n.z() * zb) / n.x();
     return t - d;
   }
-  const double xb = (axis == 1 ? -0.5 : 0.5) * ic.y_beam_separation_m;
+  const double xb = ic.y_beam_x_m[axis - 1];
   const Eigen::Vector3d n = r.col(1);
   const double t = (n.dot(p) + d - n.x() * xb - n.z() * zb) / n.y();
   return t - d;
@@ -1358,7 +1359,11 @@ io::SensorSample Plant::sample() {
       lost = lost || (e.axis == a && t >= e.start_s && t < e.end_s);
     }
     const std::int64_t fresh = static_cast<std::int64_t>(config_.interferometer.start_count[a]) +
-                               static_cast<std::int64_t>(std::floor((InterferometerDisplacement(a) + noise) / lsb_m_));
+                               static_cast<std::int64_t>(std::floor(
+                                   ((config_.interferometer.sign[a] < 0 ? -InterferometerDisplacement(a)
+                                                                        : InterferometerDisplacement(a)) +
+                                    noise) /
+                                   lsb_m_));
     if (lost) {
       status = static_cast<std::uint16_t>(status | (io::kBeamLoss0 << a));
     } else {

@@ -49,6 +49,41 @@ bool PlantConfigForProfile(const stage_profile::StageProfile& p, const PlantConf
   c.field.coil_turns = p.halbach.coil_turns;
   c.field.rest_gap_m = p.halbach.rest_gap_m;
   c.amplifier.current_limit_A = p.limits.hardware_current_A;
+  // The sensors where the profile puts them: the kernel's pose solver reads
+  // them from the profile (MakeKernelConfig), so the plant must measure
+  // there too (it used to keep the seed stage's places whatever the profile
+  // said). Same order and mapping as the kernel: interferometers -> beams,
+  // laser displacement sensors -> heights, the first Hall sensor -> Hall A
+  // (B a quarter pitch further in x and y).
+  int beams = 0, heights = 0, halls = 0;
+  for (int s = 0; s < p.sensor_count && s < sp::kMaxSensors; ++s) {
+    const sp::Sensor& sensor = p.sensors[s];
+    if (sensor.kind == sp::SensorKind::kInterferometer && beams < io::kInterferometerAxes) {
+      const double cx = std::cos(sensor.direction_rad), sy = std::sin(sensor.direction_rad);
+      const bool along_x = std::fabs(cx) > 0.5;
+      if (along_x != (beams == 0)) {
+        *why = "the bench plant models interferometer 1 along X and 2 and 3 along Y (sensor " +
+               std::to_string(s + 1) + " is along " + (along_x ? "X" : "Y") + ")";
+        return false;
+      }
+      if (along_x) {
+        c.interferometer.x_beam_y_m = sensor.y_m;
+      } else {
+        c.interferometer.y_beam_x_m[beams - 1] = sensor.x_m;
+      }
+      c.interferometer.sign[beams] = (along_x ? cx : sy) < 0.0 ? -1 : 1;
+      ++beams;
+    } else if (sensor.kind == sp::SensorKind::kLaserDisplacement && heights < io::kDisplacementSensors) {
+      c.displacement.sensor_x_m[heights] = sensor.x_m;
+      c.displacement.sensor_y_m[heights] = sensor.y_m;
+      ++heights;
+    } else if (sensor.kind == sp::SensorKind::kHall && halls++ == 0) {
+      c.hall.a_x_m = sensor.x_m;
+      c.hall.a_y_m = sensor.y_m;
+      c.hall.b_x_m = sensor.x_m + p.halbach.pitch_m / 4;
+      c.hall.b_y_m = sensor.y_m + p.halbach.pitch_m / 4;
+    }
+  }
   ApplyServoRate(p.servo_rate_Hz, &c);
   *out = c;
   return true;

@@ -7,7 +7,9 @@
 #include <vector>
 
 #include "maglev/controller/controller.hpp"
+#include "maglev/plant/plant.hpp"
 #include "maglev/plant/plant_profile.hpp"
+#include "maglev/sensors_to_pose/sensors_to_pose.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 
@@ -67,6 +69,70 @@ TEST(Profiles, TheBenchBuildsEveryShippedProfilesPlant) {
   CHECK_TRUE(hil::PlantConfigForProfile(tri.profile, hil::PlantConfig::Default(), &plant, &why));
   DOUBLES_EQUAL(tri.profile.halbach.triangle_alpha_rad, plant.body.triangle_alpha_rad, 0.0);
   DOUBLES_EQUAL(0.5235987755982988, plant.body.triangle_alpha_rad, 1e-16);
+}
+
+// The bench measures where the profile puts the sensors, as the kernel's
+// pose solver assumes: moved beams and height sensors, one counting down.
+// The plant kept the seed's places whatever the profile said, so the
+// kernel's pose of a turned and tilted platen was off (theta_z by the ratio
+// of the beam separations, the tilts by the sensors' offsets).
+TEST(Profiles, TheBenchMeasuresWhereTheProfilePutsTheSensors) {
+  sp::StageProfile p = shipped("nk2017-cross").profile;
+  int beams = 0, heights = 0;
+  const double y_beam_x[2] = {-0.04, 0.045};
+  for (int s = 0; s < p.sensor_count; ++s) {
+    sp::Sensor& sensor = p.sensors[s];
+    if (sensor.kind == sp::SensorKind::kInterferometer) {
+      if (beams == 0) {
+        sensor.y_m = 0.01;
+        sensor.direction_rad = 3.141592653589793;  // along -X: counts down as x grows
+      } else {
+        sensor.x_m = y_beam_x[beams - 1];
+      }
+      ++beams;
+    } else if (sensor.kind == sp::SensorKind::kLaserDisplacement) {
+      sensor.x_m += heights == 0 ? 0.006 : -0.004;
+      sensor.y_m += heights == 2 ? 0.005 : -0.003;
+      ++heights;
+    }
+  }
+  kernel::KernelConfig kc{};
+  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == sp::ProfileError::kOk);
+  hil::PlantConfig pc{};
+  std::string why;
+  CHECK_TEXT(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &pc, &why), why.c_str());
+  pc.sensor_noise_enabled = false;
+  DOUBLES_EQUAL(0.01, pc.interferometer.x_beam_y_m, 0.0);
+  LONGS_EQUAL(-1, pc.interferometer.sign[0]);
+  DOUBLES_EQUAL(0.045, pc.interferometer.y_beam_x_m[1], 0.0);
+  static hil::Plant plant(pc, 1);
+  static kernel::SensorsToPoseState s2p;
+  CHECK_TRUE(kernel::ApplySensorsToPoseConfig(kc.measurement, &s2p) == kernel::SensorsToPoseError::kOk);
+  // Home, then the platen moved in small steps (inside the glitch check's
+  // acceleration bound) to x 2 um, y -1.5 um, z 25 um, theta_z 20 urad,
+  // theta_x 60 urad, theta_y -40 urad.
+  const double target[6] = {2e-6, -1.5e-6, 20e-6, 25e-6, 60e-6, -40e-6};  // x y theta_z z theta_x theta_y
+  kernel::PoseMeasurement m{};
+  const int steps = 400;
+  for (int k = 0; k <= steps; ++k) {
+    const double f = static_cast<double>(k) / steps;
+    hil::BodyState b = plant.body_state();
+    b.position_m = Eigen::Vector3d(f * target[0], f * target[1], f * target[3]);
+    b.attitude = Eigen::AngleAxisd(f * target[2], Eigen::Vector3d::UnitZ()) *
+                 Eigen::AngleAxisd(f * target[5], Eigen::Vector3d::UnitY()) *
+                 Eigen::AngleAxisd(f * target[4], Eigen::Vector3d::UnitX());
+    plant.set_body_state(b);
+    m = kernel::SensorsToPoseStep(plant.sample(), &s2p);
+  }
+  const double tol[6] = {2e-9, 2e-9, 0.05e-6, 30e-9, 0.5e-6, 0.5e-6};
+  const char* names[6] = {"x", "y", "theta_z", "z", "theta_x", "theta_y"};
+  const double z_home = 0.0;
+  for (int a = 0; a < 6; ++a) {
+    double got = static_cast<double>(m.pose.pico[a]) * 1e-12;
+    if (a == 3) got -= z_home;
+    std::printf("\n%s: kernel %.4g, plant %.4g", names[a], got, target[a]);
+    if (a != 3) DOUBLES_EQUAL(target[a], got, tol[a]);  // z is measured from the rest gap, not from home
+  }
 }
 
 TEST(Profiles, TheDefaultProfileIsTheKernelDefaultBitForBit) {

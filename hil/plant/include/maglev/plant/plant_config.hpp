@@ -151,7 +151,14 @@ struct InterferometerConfig {
   double wavelength_m = io::stage::kWavelength_m;
   int fold = io::stage::kInterferometerFold;
   int interpolation = io::stage::kInterferometerInterpolation;
-  double y_beam_separation_m = io::stage::kYBeamSeparation_m;
+  // Where the beams run (world frame): the x beam along X at y = x_beam_y_m,
+  // the y1 and y2 beams along Y at x = y_beam_x_m[0], [1] (a profile's
+  // interferometers, as the kernel's pose solver reads them), and the sign
+  // each counts with (-1: a beam looking along -X or -Y counts down as the
+  // stage moves +).
+  double x_beam_y_m = 0.0;
+  double y_beam_x_m[2] = {-io::stage::kYBeamSeparation_m / 2, +io::stage::kYBeamSeparation_m / 2};
+  int sign[io::kInterferometerAxes] = {1, 1, 1};
   double mirror_distance_m = 0.0715;  // (ours) mirror faces at the frame edge
   // (ours) beam height above the platen CoM (Abbe arm for tilts).
   double beam_height_m = 0.0;
