@@ -355,6 +355,16 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
       if (e == kernel::ForceAllocationError::kScalarRange) return fail(ProfileError::kAllocationCondition);
       if (e != kernel::ForceAllocationError::kOk) return fail(ProfileError::kAllocationRank);
     }
+    // The supervisor lands the stage when a beam's count rate implies more
+    // than max_interferometer_speed_m_per_s (a lost fringe burst): an x or y
+    // velocity limit above it passed here, and the first fast move faulted
+    // (kCounterJump at 0.3 m/s with max_velocity = 0.5). 10 % is left for
+    // the loop's overshoot and what a turning platen adds at a beam.
+    for (int a = 0; a < 2; ++a) {
+      if (!(c.references.max_velocity[a] <= 0.9f * sv.max_interferometer_speed_m_per_s)) {
+        return fail(ProfileError::kLimitsOutsideHardware, a);
+      }
+    }
     const kernel::ExcitationLimits& ex = c.excitation;
     if (!(ex.max_amplitude_A <= sv.peak_current_A) || !(ex.max_frequency_Hz < 0.5f * c.servo_rate_Hz)) {
       return fail(ProfileError::kLimitsOutsideHardware);

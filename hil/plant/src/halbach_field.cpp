@@ -40,7 +40,7 @@ HalbachField::HalbachField(const FieldConfig& config)
     : config_(config),
       m0_(config.peak_magnetization_A_per_m > 0.0
               ? config.peak_magnetization_A_per_m
-              : CalibrateM0(config, io::stage::kTwoBStarIdentified_N_per_A)),
+              : CalibrateM0(config, config.two_b_star_N_per_A)),
       gamma1_(2.0 * kPi / config.pitch_m),
       harmonics_(config.harmonics < 1 ? 1 : (config.harmonics > kMaxHarmonics ? kMaxHarmonics : config.harmonics)) {
   for (int h = 0; h < kMaxHarmonics; ++h) {

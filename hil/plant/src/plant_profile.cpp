@@ -48,6 +48,7 @@ bool PlantConfigForProfile(const stage_profile::StageProfile& p, const PlantConf
   c.field.coil_thickness_m = p.halbach.coil_thickness_m;
   c.field.coil_turns = p.halbach.coil_turns;
   c.field.rest_gap_m = p.halbach.rest_gap_m;
+  c.field.two_b_star_N_per_A = p.halbach.two_b_star_N_per_A;
   c.amplifier.current_limit_A = p.limits.hardware_current_A;
   // The sensors where the profile puts them: the kernel's pose solver reads
   // them from the profile (MakeKernelConfig), so the plant must measure

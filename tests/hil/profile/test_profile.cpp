@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "maglev/controller/controller.hpp"
+#include "maglev/plant/halbach_field.hpp"
 #include "maglev/plant/plant.hpp"
 #include "maglev/plant/plant_profile.hpp"
 #include "maglev/sensors_to_pose/sensors_to_pose.hpp"
@@ -133,6 +134,33 @@ TEST(Profiles, TheBenchMeasuresWhereTheProfilePutsTheSensors) {
     std::printf("\n%s: kernel %.4g, plant %.4g", names[a], got, target[a]);
     if (a != 3) DOUBLES_EQUAL(target[a], got, tol[a]);  // z is measured from the rest gap, not from home
   }
+}
+
+// The rest of what the helper's review found the Halbach path leaving at
+// the seed's values: the plant's force constant follows the profile's
+// identified 2 b* (it met the seed's 1.7037 N/A whatever the profile said,
+// and the kernel allocated with the profile's), and an x / y velocity limit
+// the supervisor's beam-speed check would land is refused at the check.
+TEST(Profiles, ThePlantsForceConstantAndTheVelocityLimitFollowTheProfile) {
+  const auto base = shipped("nk2017-cross").profile;
+  sp::StageProfile p = base;
+  p.halbach.two_b_star_N_per_A = 2.2;
+  hil::PlantConfig seed{}, lab{};
+  std::string why;
+  CHECK_TRUE(hil::PlantConfigForProfile(base, hil::PlantConfig::Default(), &seed, &why));
+  CHECK_TRUE(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &lab, &why));
+  DOUBLES_EQUAL(2.2, lab.field.two_b_star_N_per_A, 0.0);
+  const double m0_seed = hil::HalbachField(seed.field).peak_magnetization_A_per_m();
+  const double m0_lab = hil::HalbachField(lab.field).peak_magnetization_A_per_m();
+  DOUBLES_EQUAL(2.2 / 1.7037, m0_lab / m0_seed, 1e-12);  // b* is linear in M0 (eq 20)
+
+  p = base;
+  p.axis[0].max_velocity = 0.5;
+  sp::ProfileCheck r = sp::CheckStageProfile(p);
+  CHECK_TRUE(r.error == sp::ProfileError::kLimitsOutsideHardware);
+  LONGS_EQUAL(0, r.axis);
+  p.axis[0].max_velocity = 0.25;  // 0.9 x the 0.3 m/s beam-speed bound is 0.27
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kOk);
 }
 
 TEST(Profiles, TheDefaultProfileIsTheKernelDefaultBitForBit) {

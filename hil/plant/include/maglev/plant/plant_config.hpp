@@ -26,8 +26,12 @@ struct FieldConfig {
   double pitch_m = io::stage::kPitch_m;
   double magnet_thickness_m = io::stage::kMagnetThickness_m;
   // Peak magnetization M0 [A/m]. <= 0 means "calibrate": choose M0 so that the
-  // model's 2 b*(z0) at the rest gap equals kTwoBStarIdentified_N_per_A (eq 29).
+  // model's 2 b*(z0) at the rest gap equals two_b_star_N_per_A (eq 29).
   double peak_magnetization_A_per_m = 0.0;
+  // The identified 2 b*(z0) the calibration meets: the seed's, or a profile's
+  // `two_b_star_N_per_A` (the plant used the seed's whatever the profile said,
+  // while the kernel allocated with the profile's).
+  double two_b_star_N_per_A = io::stage::kTwoBStarIdentified_N_per_A;
   // Harmonics n = 4k+1 used in (1)-(2): 1 -> n=1 only; 4 -> n = 1,5,9,13.
   int harmonics = 4;
   double coil_effective_length_m = io::stage::kCoilEffectiveLength_m;  // p
