@@ -447,11 +447,17 @@ kernel::KernelConfig config_of(const StageProfile& p) {
   c.supervisor.peak_current_A = static_cast<float>(p.limits.peak_current_A);
   c.supervisor.rms_current_A = static_cast<float>(p.limits.rms_current_A);
   c.sequencer.nominal_height_m = static_cast<float>(p.limits.nominal_height_m);
+  SetSensorGeometry(p, &c.measurement);
+  return c;
+}
+}  // namespace
+
+void SetSensorGeometry(const StageProfile& p, kernel::SensorsToPoseConfig* m) {
   // The sensor geometry sensors_to_pose solves with: the profile's sensors, in
   // order of kind (interferometers -> the three beams, laser displacement
   // sensors -> the three heights, the first Hall sensor -> Hall A; B sits a
   // quarter pitch further). What the profile does not describe (wavelength,
-  // fold, mirror distance, counting sign, ADC scale) stays the family's.
+  // fold, mirror distance, ADC scale) stays the family's.
   int beams = 0, heights = 0, halls = 0;
   for (int s = 0; s < p.sensor_count && s < kMaxSensors; ++s) {
     const Sensor& sensor = p.sensors[s];
@@ -460,7 +466,7 @@ kernel::KernelConfig config_of(const StageProfile& p) {
         if (beams < io::kInterferometerAxes) {
           // Along X (direction 0 or pi) or along Y (+-pi/2): the check admits no other.
           const bool along_x = std::fabs(numeric::dcos(sensor.direction_rad)) > 0.5;
-          kernel::BeamConfig& b = c.measurement.beam[beams++];
+          kernel::BeamConfig& b = m->beam[beams++];
           b.axis = along_x ? kernel::BeamAxis::kX : kernel::BeamAxis::kY;
           b.perpendicular_m = along_x ? sensor.y_m : sensor.x_m;
           // A beam that looks along -X or -Y counts down as the stage moves +.
@@ -469,26 +475,24 @@ kernel::KernelConfig config_of(const StageProfile& p) {
         break;
       case SensorKind::kLaserDisplacement:
         if (heights < io::kDisplacementSensors) {
-          c.measurement.displacement_sensor_x_m[heights] = sensor.x_m;
-          c.measurement.displacement_sensor_y_m[heights] = sensor.y_m;
+          m->displacement_sensor_x_m[heights] = sensor.x_m;
+          m->displacement_sensor_y_m[heights] = sensor.y_m;
           ++heights;
         }
         break;
       case SensorKind::kHall:
         if (halls++ == 0) {
-          c.measurement.hall_a_x_m = sensor.x_m;
-          c.measurement.hall_a_y_m = sensor.y_m;
+          m->hall_a_x_m = sensor.x_m;
+          m->hall_a_y_m = sensor.y_m;
         }
         break;
       default:
         break;
     }
   }
-  c.measurement.pitch_m = p.halbach.pitch_m;
-  c.measurement.lds_target_cell_m = kernel::MagnetBlockWidth_m(p.halbach.pitch_m);
-  return c;
+  m->pitch_m = p.halbach.pitch_m;
+  m->lds_target_cell_m = kernel::MagnetBlockWidth_m(p.halbach.pitch_m);
 }
-}  // namespace
 
 ProfileCheck MakeKernelConfig(const StageProfile& p, kernel::KernelConfig* out) {
   const ProfileCheck check = CheckStageProfile(p);

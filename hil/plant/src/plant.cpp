@@ -1358,12 +1358,10 @@ io::SensorSample Plant::sample() {
     for (const BeamLossEvent& e : config_.interferometer.beam_loss_events) {
       lost = lost || (e.axis == a && t >= e.start_s && t < e.end_s);
     }
+    const double displacement = InterferometerDisplacement(a);
+    const double counted = config_.interferometer.sign[a] < 0 ? -displacement : displacement;
     const std::int64_t fresh = static_cast<std::int64_t>(config_.interferometer.start_count[a]) +
-                               static_cast<std::int64_t>(std::floor(
-                                   ((config_.interferometer.sign[a] < 0 ? -InterferometerDisplacement(a)
-                                                                        : InterferometerDisplacement(a)) +
-                                    noise) /
-                                   lsb_m_));
+                               static_cast<std::int64_t>(std::floor((counted + noise) / lsb_m_));
     if (lost) {
       status = static_cast<std::uint16_t>(status | (io::kBeamLoss0 << a));
     } else {

@@ -1,5 +1,7 @@
 #include "maglev/plant/plant_profile.hpp"
 
+#include "maglev/stage_profile/apply_profile.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -50,41 +52,32 @@ bool PlantConfigForProfile(const stage_profile::StageProfile& p, const PlantConf
   c.field.rest_gap_m = p.halbach.rest_gap_m;
   c.field.two_b_star_N_per_A = p.halbach.two_b_star_N_per_A;
   c.amplifier.current_limit_A = p.limits.hardware_current_A;
-  // The sensors where the profile puts them: the kernel's pose solver reads
-  // them from the profile (MakeKernelConfig), so the plant must measure
-  // there too (it used to keep the seed stage's places whatever the profile
-  // said). Same order and mapping as the kernel: interferometers -> beams,
-  // laser displacement sensors -> heights, the first Hall sensor -> Hall A
-  // (B a quarter pitch further in x and y).
-  int beams = 0, heights = 0, halls = 0;
-  for (int s = 0; s < p.sensor_count && s < sp::kMaxSensors; ++s) {
-    const sp::Sensor& sensor = p.sensors[s];
-    if (sensor.kind == sp::SensorKind::kInterferometer && beams < io::kInterferometerAxes) {
-      const double cx = std::cos(sensor.direction_rad), sy = std::sin(sensor.direction_rad);
-      const bool along_x = std::fabs(cx) > 0.5;
-      if (along_x != (beams == 0)) {
-        *why = "the bench plant models interferometer 1 along X and 2 and 3 along Y (sensor " +
-               std::to_string(s + 1) + " is along " + (along_x ? "X" : "Y") + ")";
-        return false;
-      }
-      if (along_x) {
-        c.interferometer.x_beam_y_m = sensor.y_m;
-      } else {
-        c.interferometer.y_beam_x_m[beams - 1] = sensor.x_m;
-      }
-      c.interferometer.sign[beams] = (along_x ? cx : sy) < 0.0 ? -1 : 1;
-      ++beams;
-    } else if (sensor.kind == sp::SensorKind::kLaserDisplacement && heights < io::kDisplacementSensors) {
-      c.displacement.sensor_x_m[heights] = sensor.x_m;
-      c.displacement.sensor_y_m[heights] = sensor.y_m;
-      ++heights;
-    } else if (sensor.kind == sp::SensorKind::kHall && halls++ == 0) {
-      c.hall.a_x_m = sensor.x_m;
-      c.hall.a_y_m = sensor.y_m;
-      c.hall.b_x_m = sensor.x_m + p.halbach.pitch_m / 4;
-      c.hall.b_y_m = sensor.y_m + p.halbach.pitch_m / 4;
+  // The sensors where the profile puts them, from the same mapping the
+  // kernel's pose solver gets (stage_profile::SetSensorGeometry): the plant
+  // used to keep the seed stage's places whatever the profile said. Hall B
+  // sits a quarter pitch from A in x and y, as the kernel assumes.
+  kernel::SensorsToPoseConfig m = kernel::DefaultSensorsToPoseConfig();
+  sp::SetSensorGeometry(p, &m);
+  for (int b = 0; b < io::kInterferometerAxes; ++b) {
+    const kernel::BeamAxis want = b == 0 ? kernel::BeamAxis::kX : kernel::BeamAxis::kY;
+    if (m.beam[b].axis != want) {
+      *why = "the bench plant models interferometer 1 along X and 2 and 3 along Y (interferometer " +
+             std::to_string(b + 1) + " is along " + (want == kernel::BeamAxis::kX ? "Y" : "X") + ")";
+      return false;
     }
+    c.interferometer.sign[b] = m.beam[b].sign;
   }
+  c.interferometer.x_beam_y_m = m.beam[0].perpendicular_m;
+  c.interferometer.y_beam_x_m[0] = m.beam[1].perpendicular_m;
+  c.interferometer.y_beam_x_m[1] = m.beam[2].perpendicular_m;
+  for (int i = 0; i < io::kDisplacementSensors; ++i) {
+    c.displacement.sensor_x_m[i] = m.displacement_sensor_x_m[i];
+    c.displacement.sensor_y_m[i] = m.displacement_sensor_y_m[i];
+  }
+  c.hall.a_x_m = m.hall_a_x_m;
+  c.hall.a_y_m = m.hall_a_y_m;
+  c.hall.b_x_m = m.hall_a_x_m + p.halbach.pitch_m / 4;
+  c.hall.b_y_m = m.hall_a_y_m + p.halbach.pitch_m / 4;
   ApplyServoRate(p.servo_rate_Hz, &c);
   *out = c;
   return true;

@@ -36,4 +36,12 @@ ProfileCheck CheckStageProfile(const StageProfile& p);
 // an error *out is untouched.
 ProfileCheck MakeKernelConfig(const StageProfile& p, kernel::KernelConfig* out);
 
+// The sensor geometry of the profile into a pose solver configuration (the
+// part of MakeKernelConfig that places the sensors, unchecked): its sensors
+// in order of kind -- interferometers -> the three beams (axis, perpendicular
+// offset, counting sign), laser displacement sensors -> the three heights,
+// the first Hall sensor -> Hall A -- and the pitch. The bench's plant places
+// its sensors from the same call, so the two cannot disagree.
+void SetSensorGeometry(const StageProfile& p, kernel::SensorsToPoseConfig* m);
+
 }  // namespace maglev::stage_profile
