@@ -195,7 +195,32 @@ LoopMargins AxisLoopMargins(const StageProfile& p, int a) {
 
 namespace {
 kernel::KernelConfig config_of(const StageProfile& p);
+
+double hall_height_m(const Sensor& s) { return s.height_m > 0.0 ? s.height_m : io::stage::kHallHeightAboveMagnets_m; }
+double hall_sensitivity_V_per_T(const Sensor& s) {
+  return s.sensitivity_V_per_T > 0.0 ? s.sensitivity_V_per_T : io::stage::kHallSensitivity_V_per_T;
+}
 }  // namespace
+
+HallSwing HallSignalSwing(const StageProfile& p, const Sensor& hall) {
+  const HalbachParameters& h = p.halbach;
+  HallSwing w{};
+  w.height_m = hall_height_m(hall);
+  w.sensitivity_V_per_T = hall_sensitivity_V_per_T(hall);
+  const double gamma1 = 2.0 * io::stage::kPi / h.pitch_m;
+  const double half_width = gamma1 * h.coil_side_width_m / 2.0;
+  const double g_thick = gamma1 * h.coil_thickness_m;
+  const double side = (numeric::dsin(half_width) / half_width) * ((1.0 - numeric::dexp(-g_thick)) / g_thick);
+  // |B_1|: a coil side wider than half a pitch turns S_1 negative.
+  w.fundamental_T = std::fabs(h.two_b_star_N_per_A) * numeric::dexp(-gamma1 * (w.height_m - h.rest_gap_m)) /
+                    std::fabs(4.0 * h.coil_turns * h.coil_effective_length_m * side);
+  const double harmonics = 1.0 + kernel::HalbachHarmonicRatio(5, w.height_m, h.magnet_thickness_m, h.pitch_m) +
+                           kernel::HalbachHarmonicRatio(9, w.height_m, h.magnet_thickness_m, h.pitch_m);
+  w.peak_V = w.sensitivity_V_per_T * w.fundamental_T * harmonics;
+  w.amplitude_fraction = w.sensitivity_V_per_T * w.fundamental_T / io::stage::kAdcFullScale_V;
+  w.peak_fraction = w.peak_V / io::stage::kAdcFullScale_V;
+  return w;
+}
 
 ProfileCheck CheckStageProfile(const StageProfile& p) {
   ProfileCheck r;
@@ -389,6 +414,42 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
       }
     }
   }
+  // Homing's Hall sensors (after what the kernel itself refuses): exactly two, B a quarter pitch beyond A in x and y
+  // (the Hall solve reads them as a quadrature pair: a profile without them
+  // homed on the seed stage's Hall places), each with a swing the ADC can
+  // read. A stronger array than the seed's (2 b* 2.2 N/A) on the seed's
+  // 20 V/T railed the ADC at rest and homing failed without a reason.
+  {
+    const Sensor* hall[2] = {nullptr, nullptr};
+    int halls = 0;
+    for (int s = 0; s < p.sensor_count && s < kMaxSensors; ++s) {
+      if (p.sensors[s].kind != SensorKind::kHall) continue;
+      if (halls < 2) hall[halls] = &p.sensors[s];
+      ++halls;
+    }
+    if (halls != 2) return fail(ProfileError::kUnsupportedSensors);
+    const double quarter = p.halbach.pitch_m / 4.0;
+    if (!(std::fabs(hall[1]->x_m - hall[0]->x_m - quarter) <= kHallQuadratureTolerance_m) ||
+        !(std::fabs(hall[1]->y_m - hall[0]->y_m - quarter) <= kHallQuadratureTolerance_m)) {
+      return fail(ProfileError::kUnsupportedSensors);
+    }
+    // One height and one sensitivity: the solve takes A and B's channels as
+    // the sine and cosine of one amplitude.
+    if (hall_height_m(*hall[0]) != hall_height_m(*hall[1]) ||
+        hall_sensitivity_V_per_T(*hall[0]) != hall_sensitivity_V_per_T(*hall[1])) {
+      return fail(ProfileError::kUnsupportedSensors);
+    }
+    for (const Sensor* s : hall) {
+      if (!(s->height_m >= 0.0 && s->height_m < 0.1) ||
+          !(s->sensitivity_V_per_T >= 0.0 && s->sensitivity_V_per_T < 1e4)) {
+        return fail(ProfileError::kHallSignalRange);
+      }
+      const HallSwing w = HallSignalSwing(p, *s);
+      if (!(w.peak_fraction <= kHallMaxPeakFraction) || !(w.amplitude_fraction >= kHallMinAmplitudeFraction)) {
+        return fail(ProfileError::kHallSignalRange);
+      }
+    }
+  }
   // Every PID loop must cross over once with a positive phase margin.
   for (int a = 0; a < kA; ++a) {
     if (p.axis[a].controller.kind != ControllerKind::kPid2Dof) continue;
@@ -484,6 +545,10 @@ void SetSensorGeometry(const StageProfile& p, kernel::SensorsToPoseConfig* m) {
         if (halls++ == 0) {
           m->hall_a_x_m = sensor.x_m;
           m->hall_a_y_m = sensor.y_m;
+          // The 5th harmonic's share at Hall A's height over this array (it
+          // was the seed stage's whatever the profile said).
+          m->hall_fifth_harmonic_ratio = kernel::HalbachHarmonicRatio(5, hall_height_m(sensor),
+                                                                      p.halbach.magnet_thickness_m, p.halbach.pitch_m);
         }
         break;
       default:

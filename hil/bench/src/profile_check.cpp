@@ -148,7 +148,22 @@ int check_profile_main(const std::string& name_or_path) {
                   p.limits.peak_current_A - need, need > p.limits.peak_current_A ? "  BEYOND THE LIMIT" : "");
     }
   }
-  // 5. Verdict, and whether the bench can build its plant.
+  // 5. The Hall sensors' swing at rest (homing), as the check judges it.
+  if (p.family == sp::ActuatorFamily::kHalbachLorentz) {
+    for (int i = 0; i < p.sensor_count && i < sp::kMaxSensors; ++i) {
+      if (p.sensors[i].kind != sp::SensorKind::kHall) continue;
+      const sp::HallSwing w = sp::HallSignalSwing(p, p.sensors[i]);
+      const bool ok = w.peak_fraction <= sp::kHallMaxPeakFraction && w.amplitude_fraction >= sp::kHallMinAmplitudeFraction;
+      std::printf("  hall sensor %d: B_1 %.4f T at %.4g mm x %.4g V/T: peak %.3f V = %.1f %% of full scale "
+                  "(admitted <= %.0f %%), amplitude %.1f %% (admitted >= %.0f %%)%s\n",
+                  i + 1, w.fundamental_T, w.height_m * 1e3, w.sensitivity_V_per_T, w.peak_V, 100.0 * w.peak_fraction,
+                  100.0 * sp::kHallMaxPeakFraction, 100.0 * w.amplitude_fraction, 100.0 * sp::kHallMinAmplitudeFraction,
+                  ok ? "" : w.peak_fraction > sp::kHallMaxPeakFraction
+                                ? "  RAILS THE ADC: lower sensitivity_V_per_T or raise height_m"
+                                : "  TOO WEAK: raise sensitivity_V_per_T or lower height_m");
+    }
+  }
+  // 6. Verdict, and whether the bench can build its plant.
   if (p.family == sp::ActuatorFamily::kSolenoidMagnet) return selfstab_check_profile(p);
   if (check.error != sp::ProfileError::kOk) {
     std::printf("  controller: REFUSES this profile: %s%s%s\n", sp::to_string(check.error),

@@ -78,6 +78,15 @@ bool PlantConfigForProfile(const stage_profile::StageProfile& p, const PlantConf
   c.hall.a_y_m = m.hall_a_y_m;
   c.hall.b_x_m = m.hall_a_x_m + p.halbach.pitch_m / 4;
   c.hall.b_y_m = m.hall_a_y_m + p.halbach.pitch_m / 4;
+  // Hall A's height and sensitivity as the check judged them
+  // (HallSignalSwing: the profile's, or the family's when not given).
+  for (int s = 0; s < p.sensor_count && s < sp::kMaxSensors; ++s) {
+    if (p.sensors[s].kind != sp::SensorKind::kHall) continue;
+    const sp::HallSwing w = sp::HallSignalSwing(p, p.sensors[s]);
+    c.hall.height_above_magnets_m = w.height_m;
+    c.hall.sensitivity_V_per_T = w.sensitivity_V_per_T;
+    break;
+  }
   ApplyServoRate(p.servo_rate_Hz, &c);
   *out = c;
   return true;

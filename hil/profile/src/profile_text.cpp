@@ -369,6 +369,9 @@ Keys sensor_keys(sp::Sensor* s) {
           {"direction_rad", real(&s->direction_rad, -2 * kPi, 2 * kPi)},
           {"resolution", real(&s->resolution, 0.0, 1e3)},
           {"noise", real(&s->noise, 0.0, 1.0)},
+          // Hall sensors only (checked at the end, when the kind is known).
+          {"sensitivity_V_per_T", real(&s->sensitivity_V_per_T, 0.01, 1e4)},
+          {"height_m", real(&s->height_m, 1e-5, 0.1)},
           {"axis", [=](const std::string& v) -> std::string {
              for (int a = 0; a < sp::kAxes; ++a) {
                if (v == kAxisNames[a]) {
@@ -414,6 +417,11 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
   std::map<std::string, int> seen_sections;
   std::map<std::string, int> seen_keys;
   std::set<std::string> halbach_set;  // keys given in [halbach]
+  struct HallKey {
+    int sensor, line;
+    std::string key;
+  };
+  std::vector<HallKey> hall_keys;  // Hall-only keys, checked once each sensor's kind is known
   std::istringstream in(text);
   std::string raw;
   int line = 0;
@@ -497,6 +505,9 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
     }
     seen_keys[k] = line;
     if (section == "halbach") halbach_set.insert(k);
+    if (section.rfind("sensor ", 0) == 0 && (k == "sensitivity_V_per_T" || k == "height_m")) {
+      hall_keys.push_back({sensors_seen - 1, line, k});
+    }
     const std::string why = it->second(v);
     if (!why.empty()) err(line, k, why);
   }
@@ -535,6 +546,11 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
     const int at = seen_sections.count("halbach") ? seen_sections["halbach"] : end;
     for (const char* k : required) {
       if (halbach_set.count(k) == 0) err(at, k, "missing in [halbach]");
+    }
+  }
+  for (const HallKey& h : hall_keys) {
+    if (p.sensors[h.sensor].kind != sp::SensorKind::kHall) {
+      err(h.line, h.key, "only a hall sensor has this key (sensor " + std::to_string(h.sensor + 1) + " is not one)");
     }
   }
   if (p.limits.peak_current_A > p.limits.hardware_current_A) {

@@ -797,6 +797,7 @@ PROFILE_ERRORS = (
     (15, "kUnsupportedSensors", "sensor set not supported by this firmware's pose solver"),
     (16, "kBadActuatorParameters", "actuator parameters missing or not positive"),
     (17, "kKernelRefused", "the kernel refuses the configuration it yields"),
-    (18, "kCount", "?"),
+    (18, "kHallSignalRange", "a Hall sensor's signal would rail the ADC or is too weak"),
+    (19, "kCount", "?"),
 )
 # END GENERATED FIRMWARE TABLES

@@ -1,6 +1,7 @@
 // Stage profiles: the shipped profiles parse; the default profile IS the
 // kernel's default configuration; malformed text gets file:line: field:
 // reason for every bad field; the firmware's check refuses what cannot run.
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -22,6 +23,15 @@ namespace sp = maglev::stage_profile;
 
 namespace {
 profile::ProfileParse shipped(const char* name) { return profile::find_profile(name, MAGLEV_PROFILE_DIR); }
+
+// The kernel's configuration and the bench plant's (sensor noise off) for a
+// profile the checker accepts.
+void noiseless_configs(const sp::StageProfile& p, kernel::KernelConfig* kc, hil::PlantConfig* pc) {
+  CHECK_TRUE(sp::MakeKernelConfig(p, kc).error == sp::ProfileError::kOk);
+  std::string why;
+  CHECK_TEXT(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), pc, &why), why.c_str());
+  pc->sensor_noise_enabled = false;
+}
 }  // namespace
 
 TEST_GROUP(Profiles){};
@@ -98,11 +108,8 @@ TEST(Profiles, TheBenchMeasuresWhereTheProfilePutsTheSensors) {
     }
   }
   kernel::KernelConfig kc{};
-  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == sp::ProfileError::kOk);
   hil::PlantConfig pc{};
-  std::string why;
-  CHECK_TEXT(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &pc, &why), why.c_str());
-  pc.sensor_noise_enabled = false;
+  noiseless_configs(p, &kc, &pc);
   DOUBLES_EQUAL(0.01, pc.interferometer.x_beam_y_m, 0.0);
   LONGS_EQUAL(-1, pc.interferometer.sign[0]);
   DOUBLES_EQUAL(0.045, pc.interferometer.y_beam_x_m[1], 0.0);
@@ -159,6 +166,141 @@ TEST(Profiles, ThePlantsForceConstantAndTheVelocityLimitFollowTheProfile) {
   LONGS_EQUAL(0, r.axis);
   p.axis[0].max_velocity = 0.25;  // 0.9 x the 0.3 m/s beam-speed bound is 0.27
   CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kOk);
+}
+
+namespace {
+// The Hall sensors of a profile read by the bench's plant at rest, solved as
+// homing solves them: the amplitude (codes) and the phase's position error
+// in x (m).
+struct HallRead {
+  kernel::HallPhase phase;
+  double x_error_m;
+};
+HallRead read_halls_at_rest(const sp::StageProfile& p, double x_m) {
+  kernel::KernelConfig kc{};
+  hil::PlantConfig pc{};
+  noiseless_configs(p, &kc, &pc);
+  static kernel::SensorsToPoseState s2p;
+  CHECK_TRUE(kernel::ApplySensorsToPoseConfig(kc.measurement, &s2p) == kernel::SensorsToPoseError::kOk);
+  hil::Plant plant(pc, 1);
+  hil::BodyState b = plant.body_state();
+  b.position_m.x() = x_m;
+  plant.set_body_state(b);
+  HallRead r{};
+  r.phase = kernel::HallToPhase(plant.sample(), s2p);
+  // Sensor A's place along the array from its phase, against where it is.
+  const double pitch = p.halbach.pitch_m;
+  const double along = r.phase.phase_x_turn / 4294967296.0 * pitch;
+  double e = std::fmod(along - (x_m + kc.measurement.hall_a_x_m), pitch);
+  if (e > pitch / 2) e -= pitch;
+  if (e < -pitch / 2) e += pitch;
+  r.x_error_m = e;
+  return r;
+}
+}  // namespace
+
+// A stronger array than the seed's (2 b* 2.2 N/A against 1.7037) on the
+// seed's 20 V/T Hall sensors rails their ADC at rest: the profile passed the
+// check, and homing failed on the bench (Homing -> Idle, HomingFailed) with
+// no reason given. The check now predicts each Hall sensor's swing from the
+// array's 2 b* and refuses a profile whose sensors would rail (or be too weak
+// to read), and the profile can say which sensor the lab fitted.
+TEST(Profiles, AHallSensorThatWouldRailTheAdcIsRefusedAndALessSensitiveOneHomes) {
+  const auto base = shipped("nk2017-cross").profile;
+  // The seed: the swing the check predicts is what the plant's sensors read
+  // (the plant calibrates its magnets to 2 b* on its own; 5th harmonic and
+  // coil-side averaging included). Homing places sensor A to within 0.3 mm:
+  // the solve models the 5th harmonic, not the 9th (2.9 % of the
+  // fundamental at 1.6 mm, up to 0.029 rad = 0.23 mm of phase; measured
+  // -0.28 .. +0.20 mm over these places, 0.05 mm at 3 mm height).
+  const sp::HallSwing seed = sp::HallSignalSwing(base, base.sensors[6]);
+  DOUBLES_EQUAL(0.4154, seed.fundamental_T, 1e-4);
+  DOUBLES_EQUAL(0.950, seed.peak_fraction, 1e-3);
+  const double places[4] = {0.0, 0.0031, 0.0127, 0.021};
+  double seed_error[4];
+  for (int i = 0; i < 4; ++i) {
+    const double x = places[i];
+    const HallRead r = read_halls_at_rest(base, x);
+    seed_error[i] = r.x_error_m;
+    CHECK_TRUE(r.phase.plausible);
+    // |B| of the pair swings between (1 - eps) and (1 + eps) of B_1.
+    const double b1_codes = seed.amplitude_fraction * 32768.0;
+    const double eps = kernel::HalbachHarmonicRatio(5, seed.height_m, base.halbach.magnet_thickness_m, base.halbach.pitch_m);
+    CHECK_TRUE(r.phase.amplitude_x_codes > b1_codes * (1.0 - eps) * 0.99);
+    CHECK_TRUE(r.phase.amplitude_x_codes < b1_codes * (1.0 + eps) * 1.01);
+    CHECK_TRUE(std::fabs(r.x_error_m) < 0.3e-3);
+  }
+
+  // The 2.2 N/A array on the seed's sensors: the check refuses it, because
+  // the plant's reading would rail and homing would fail.
+  sp::StageProfile p = base;
+  p.halbach.two_b_star_N_per_A = 2.2;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kHallSignalRange);
+  const sp::HallSwing strong = sp::HallSignalSwing(p, p.sensors[6]);
+  CHECK_TRUE(strong.peak_fraction > 1.0);
+  {
+    hil::PlantConfig pc{};
+    std::string why;
+    CHECK_TRUE(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &pc, &why));
+    pc.sensor_noise_enabled = false;
+    hil::Plant plant(pc, 1);
+    kernel::SensorsToPoseState s2p;
+    CHECK_TRUE(kernel::ApplySensorsToPoseConfig(kernel::DefaultSensorsToPoseConfig(), &s2p) ==
+               kernel::SensorsToPoseError::kOk);
+    bool any_railed_position = false;
+    for (double x : {0.0, 0.0031, 0.0127, 0.021}) {
+      hil::BodyState b = plant.body_state();
+      b.position_m.x() = x;
+      plant.set_body_state(b);
+      any_railed_position = any_railed_position || !kernel::HallToPhase(plant.sample(), s2p).plausible;
+    }
+    CHECK_TRUE(any_railed_position);  // what the kernel's homing met
+  }
+
+  // The same array with 15 V/T sensors: accepted, the plant reads at 15 V/T,
+  // and homing places sensor A as on the seed (the field's shape is the
+  // seed's, scaled: the same place to the ADC's quantization).
+  p.sensors[6].sensitivity_V_per_T = 15.0;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kUnsupportedSensors);  // A and B must agree
+  p.sensors[7].sensitivity_V_per_T = 15.0;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kOk);
+  for (int i = 0; i < 4; ++i) {
+    const HallRead r = read_halls_at_rest(p, places[i]);
+    CHECK_TRUE(r.phase.plausible);
+    DOUBLES_EQUAL(seed_error[i], r.x_error_m, 1e-6);
+  }
+
+  // Too weak to read: 2 V/T (8 % of full scale).
+  p = base;
+  p.sensors[6].sensitivity_V_per_T = p.sensors[7].sensitivity_V_per_T = 2.0;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kHallSignalRange);
+  // A higher sensor sees an array whose 5th harmonic has decayed further:
+  // the pose solver's harmonic ratio follows the profile's height.
+  p = base;
+  p.sensors[6].height_m = p.sensors[7].height_m = 3e-3;
+  kernel::KernelConfig kc{};
+  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == sp::ProfileError::kOk);
+  DOUBLES_EQUAL(kernel::HalbachHarmonicRatio(5, 3e-3, 0.0127, 0.0508), kc.measurement.hall_fifth_harmonic_ratio, 0.0);
+  CHECK_TRUE(kc.measurement.hall_fifth_harmonic_ratio < kernel::DefaultSensorsToPoseConfig().hall_fifth_harmonic_ratio);
+  for (double x : {0.0, 0.0127}) CHECK_TRUE(std::fabs(read_halls_at_rest(p, x).x_error_m) < 0.1e-3);
+
+  // Homing needs the pair: one Hall sensor, or B off its quarter pitch, is refused.
+  p = base;
+  p.sensors[7].kind = sp::SensorKind::kLaserDisplacement;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kUnsupportedSensors);
+  p = base;
+  p.sensors[7].x_m += 0.001;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kUnsupportedSensors);
+
+  // The keys belong to Hall sensors only.
+  const std::string text = R"([sensor 1]
+kind = interferometer
+sensitivity_V_per_T = 15
+)";
+  const profile::ProfileParse bad = profile::parse_profile(text, "lab.profile");
+  bool said = false;
+  for (const auto& e : bad.errors) said = said || e.find("lab.profile:3: sensitivity_V_per_T: only a hall sensor") == 0;
+  CHECK_TRUE(said);
 }
 
 TEST(Profiles, TheDefaultProfileIsTheKernelDefaultBitForBit) {

@@ -24,6 +24,32 @@ LoopMargins AxisLoopMargins(const StageProfile& p, int axis);
 // y'' + c y' + k y: plant gain per A of effort (m/s^2 or rad/s^2 per A).
 double AxisPlantGain(const StageProfile& p, int axis);
 
+// A Hall sensor's swing on its ADC channel, with the platen at rest (where
+// the field is strongest). The array's fundamental at the sensor's height
+// follows from the profile's 2 b* and coil geometry (paper 000 eqs (3), (19):
+// 2 b*(gap) = 4 N L S_1 c_1 M_0 e^{-gamma_1 gap}, S_1 the coil side's
+// averaging factor, so B_1(h) = 2 b* e^{-gamma_1 (h - gap)} / (4 N L S_1));
+// the 5th and 9th harmonics add (1/n)(1 - e^{-n gamma_1 t})/(1 -
+// e^{-gamma_1 t}) e^{-(n-1) gamma_1 h} of it each (HalbachHarmonicRatio).
+struct HallSwing {
+  double height_m;             // above the magnets, at rest (the profile's, or the family's)
+  double sensitivity_V_per_T;  // the profile's, or the family's
+  double fundamental_T;        // B_1 at that height
+  double peak_V;               // sensitivity x (B_1 + B_5 + B_9): harmonics in phase, the worst case
+  double amplitude_fraction;   // sensitivity x B_1 / full scale: the Hall solve's amplitude
+  double peak_fraction;        // peak_V / full scale
+};
+HallSwing HallSignalSwing(const StageProfile& p, const Sensor& hall);
+// What CheckStageProfile admits (kHallSignalRange): the peak at most 97 % of
+// full scale -- 3 % left before the ADC rails for 3 sigma of the magnets' 1 %
+// remanence spread -- and the amplitude at least 20 %, twice the pose
+// solver's 10 % floor below which it takes a sensor for detached.
+inline constexpr double kHallMaxPeakFraction = 0.97;
+inline constexpr double kHallMinAmplitudeFraction = 0.20;
+// How far Hall B may sit from a quarter pitch beyond Hall A (x and y): the
+// Hall solve takes the two as a quadrature pair; 10 um is 0.07 deg of phase.
+inline constexpr double kHallQuadratureTolerance_m = 10e-6;
+
 // Validates the profile against this firmware (family, controllers, sensors
 // per active axis, allocation rank and condition, limits inside the
 // hardware, start-up sequence). Nothing is applied.

@@ -138,6 +138,13 @@ struct Sensor {
   // A sensor that reads one axis directly (an encoder on a guide, paper
   // 002): that axis' index; kGeometricSensor = placed by its geometry.
   std::uint8_t measured_axis;
+  // Hall sensors only (0 = the family's: the seed stage's 20 V/T at 1.6 mm).
+  // ADC volts per tesla of each field component, and the sensor's height
+  // above the magnets' surface with the platen at rest. With the array's
+  // strength (two_b_star_N_per_A) they set the Hall ADC's swing, which
+  // CheckStageProfile keeps off the rails (kHallSignalRange).
+  double sensitivity_V_per_T;
+  double height_m;
 };
 inline constexpr std::uint8_t kGeometricSensor = 255;
 
@@ -243,7 +250,8 @@ struct StageProfile {
   X(kUnsupportedSensors, 15, "sensor set not supported by this firmware's pose solver") \
   X(kBadActuatorParameters, 16, "actuator parameters missing or not positive") \
   X(kKernelRefused, 17, "the kernel refuses the configuration it yields") /* measurement or loop design */ \
-  X(kCount, 18, "?")
+  X(kHallSignalRange, 18, "a Hall sensor's signal would rail the ADC or is too weak") /* homing */ \
+  X(kCount, 19, "?")
 
 enum class ProfileError : std::uint8_t {
   MAGLEV_PROFILE_ERRORS(MAGLEV_ENUMERATOR)
