@@ -251,9 +251,19 @@ class Client {
         die(kAccess, std::string("cannot ") + what + " " + where + ": engineer access required (pass --engineer)");
       case 2:
         die(kRefused, std::string("cannot ") + what + " " + where + ": illegal data address (read-only or not in the map)");
-      case 3:
+      case 3: {
+        // The value was in the register's range: the kernel refused the
+        // configuration it made (status.config_error says why, e.g. a
+        // current limit beyond the selected stage's own).
+        std::uint16_t why = 0;
+        std::string reason = "see status.config_error";
+        if (modbus_read_registers(ctx_, def(RegId::status_config_error).address, 1, &why) == 1 && why != 0) {
+          reason = std::string("status.config_error ") + std::to_string(why) + " " +
+                   maglev::kernel::to_string(static_cast<maglev::kernel::ConfigError>(why));
+        }
         die(kRefused, std::string("cannot ") + what + " " + where + val + ": illegal data value (allowed " +
-                          range_text(d) + ", or the controller refused the resulting configuration; see status.config_error)");
+                          range_text(d) + ", or the controller refused the resulting configuration: " + reason + ")");
+      }
       case 4:
         die(kRefused, std::string("cannot ") + what + " " + where + ": server device failure");
       case 6:

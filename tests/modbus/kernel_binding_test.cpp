@@ -14,6 +14,7 @@
 #include "maglev/can_link/host_commands.hpp"
 #include "maglev/modbus/controller_binding.hpp"
 #include "maglev/modbus_tcp/tcp_server.hpp"
+#include "maglev/stage_profile/apply_profile.hpp"
 #include "maglev/stage_profile/stage_database.hpp"
 #include "maglev_test/resting_sample.hpp"
 
@@ -299,6 +300,76 @@ TEST(KernelBinding, SelectingAStageProfileLoadsItsWholeConfigurationAndPersists)
   running.live_tuning = square.live_tuning;
   CHECK(same_config(square, running));
   LONGS_EQUAL(1, read_u16(rebooted.ctx, RegId::stage_profile));
+}
+
+// The register map's current and travel ranges were the seed stage's (4 A,
+// 3 A, +-30 / +-19.5 mm). A stage whose profile allows more (here 4.5 A
+// peak, 3.5 A rms, +-40 mm of x travel: inside the board's 5 A) loaded, but
+// its registers could not be written back with their own values, and a
+// saved record was refused at the next boot (kValueOutOfRange): the stage
+// fell back to the default one. The ranges are now the board's envelope and
+// each stage's own limits bound the supervisor in the kernel
+// (KernelConfig::stage, ConfigError kBeyondStageLimits).
+TEST(KernelBinding, AStagesOwnLimitsBoundTheWritesAndItsValuesSaveAndRestore) {
+  // 1. The seed stage: its own 4 A / +-28 mm still bound what a host writes.
+  {
+    Stage st(flash);
+    LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+    const kernel::KernelConfig before = st.config();
+    std::uint16_t w[2];
+    set_f32(4.5f, w);  // inside the register's 5 A, beyond the seed's coils
+    EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::limit_peak_current), 2, w), 3);
+    LONGS_EQUAL(static_cast<int>(kernel::ConfigError::kBeyondStageLimits), read_u16(st.ctx, RegId::status_config_error));
+    set_f32(0.0305f, w);  // the window more than 2 mm beyond the 28 mm travel
+    EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::limit_x_max), 2, w), 3);
+    set_f32(3.5f, w);
+    EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::limit_rms_current), 2, w), 3);
+    CHECK(same_config(before, st.config()));
+    set_f32(0.030f, w);  // 2 mm beyond: admitted
+    LONGS_EQUAL(2, modbus_write_registers(st.ctx, addr(RegId::limit_x_max), 2, w));
+    set_f32(3.5f, w);  // a lower peak current: admitted
+    LONGS_EQUAL(2, modbus_write_registers(st.ctx, addr(RegId::limit_peak_current), 2, w));
+    DOUBLES_EQUAL(3.5, static_cast<double>(st.config().supervisor.peak_current_A), 0.0);
+  }
+  // 2. A lab's stage with wider limits: every value fits the map, the kernel
+  // takes its own values back through the map, and a saved record loads.
+  stage_profile::StageProfile lab{};
+  CHECK(stage_profile::LoadStageProfile(0, &lab) == stage_profile::ProfileError::kOk);
+  lab.limits.peak_current_A = 4.5;
+  lab.limits.rms_current_A = 3.5;
+  lab.axis[0].travel_min = -0.040;
+  lab.axis[0].travel_max = 0.040;
+  kernel::KernelConfig cfg{};
+  CHECK(stage_profile::MakeKernelConfig(lab, &cfg).error == stage_profile::ProfileError::kOk);
+  CHECK(FirstRegisterOutOfRange(cfg) == nullptr);
+  const ConfigImage image = image_from_kernel(cfg);
+  kernel::KernelConfig back = cfg;
+  image_to_kernel(image, back);
+  CHECK(same_config(cfg, back));
+  static kernel::Controller<float> controller;
+  LONGS_EQUAL(static_cast<int>(kernel::ConfigError::kOk), static_cast<int>(controller.apply_config(back)));
+  {
+    persistence::RamFlash f(flash, kSector, 2);
+    persistence::ConfigStore store(f, 0, 1);
+    store.load();
+    CHECK(store.save(image));
+    const persistence::LoadResult loaded = persistence::ConfigStore(f, 0, 1).load();
+    CHECK_FALSE(loaded.status.flags & kLoadedDefaults);
+    CHECK_FALSE(loaded.status.flags & kRefused);
+    DOUBLES_EQUAL(4.5, loaded.config.get(RegId::limit_peak_current), 0.0);
+    DOUBLES_EQUAL(0.041, loaded.config.get(RegId::limit_x_max), 1e-8);
+  }
+  // On that stage the seed's 4 A is no ceiling, its own 4.5 A is.
+  kernel::KernelConfig over = cfg;
+  over.supervisor.peak_current_A = 4.6f;
+  LONGS_EQUAL(static_cast<int>(kernel::ConfigError::kBeyondStageLimits), static_cast<int>(controller.apply_config(over)));
+  // 3. A profile value the map cannot hold at all is refused when the stage
+  // is selected (kRegisterRange), never loaded and lost at the next boot.
+  lab.axis[0].max_acceleration = 3.0;  // max_acceleration.x holds up to 2 m/s^2
+  CHECK(stage_profile::MakeKernelConfig(lab, &cfg).error == stage_profile::ProfileError::kOk);
+  const RegisterDef* d = FirstRegisterOutOfRange(cfg);
+  CHECK(d != nullptr);
+  STRCMP_EQUAL("max_acceleration.x", d->name);
 }
 
 TEST(KernelBinding, SwitchingTheStageWhileOffRestIsRefusedAndChangesNothing) {

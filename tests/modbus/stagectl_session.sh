@@ -52,8 +52,11 @@ contains "$WORK/out" "gain.theta_y.effort_limit = 4  # A" "dump has the last axi
 # --- errors: each names the register, the value and the range ---------------
 expect 3 "unknown register" -- get gain.w.kp
 contains "$WORK/err" "unknown register 'gain.w.kp'" "unknown name"
-expect 3 "out of range (local check)" -- --engineer set limit.peak_current 5A
-contains "$WORK/err" "limit.peak_current: value 5A is out of range [0, 4] A" "range message"
+expect 3 "out of range (local check)" -- --engineer set limit.peak_current 6A
+contains "$WORK/err" "limit.peak_current: value 6A is out of range [0, 5] A" "range message"
+# Inside the board's 5 A, beyond the seed stage's own 4 A: the kernel refuses it, and says why.
+expect 4 "beyond the stage's own limit" -- --engineer set limit.peak_current 4.5A
+contains "$WORK/err" "status.config_error 15 BeyondStageLimits" "stage limit message"
 expect 3 "wrong unit" -- --engineer set limit.peak_current 2mm
 contains "$WORK/err" "unit 'mm' does not fit 'A'" "unit message"
 expect 6 "engineer register without --engineer" -- set gain.x.kd 50
@@ -80,7 +83,7 @@ expect 0 "save" -- --engineer save
 contains "$WORK/out" "saved (sequence 1)" "save sequence"
 printf 'gain.z.kp = 41000\nlimit.rms_current = 9  # A\nnot.a.register = 1\n' >"$WORK/bad.txt"
 expect 9 "import with errors writes nothing" -- --engineer config import "$WORK/bad.txt"
-contains "$WORK/err" "bad.txt:2: limit.rms_current: value 9 is out of range [0, 3] A" "import range error"
+contains "$WORK/err" "bad.txt:2: limit.rms_current: value 9 is out of range [0, 5] A" "import range error"
 contains "$WORK/err" "bad.txt:3: 'not.a.register' is not a configuration register" "import name error"
 stop_server
 start_server

@@ -507,6 +507,14 @@ kernel::KernelConfig config_of(const StageProfile& p) {
   c.supervisor.y_max_m = static_cast<float>(p.axis[1].travel_max + 1e-3);
   c.supervisor.peak_current_A = static_cast<float>(p.limits.peak_current_A);
   c.supervisor.rms_current_A = static_cast<float>(p.limits.rms_current_A);
+  // The stage's own limits, which no register write may exceed (kernel
+  // StageEnvelope): the profile's currents, its travel + 2 mm.
+  c.stage.peak_current_A = c.supervisor.peak_current_A;
+  c.stage.rms_current_A = c.supervisor.rms_current_A;
+  c.stage.x_min_m = -static_cast<float>(-p.axis[0].travel_min + kernel::kStageWindowBeyondTravel_m);
+  c.stage.x_max_m = static_cast<float>(p.axis[0].travel_max + kernel::kStageWindowBeyondTravel_m);
+  c.stage.y_min_m = -static_cast<float>(-p.axis[1].travel_min + kernel::kStageWindowBeyondTravel_m);
+  c.stage.y_max_m = static_cast<float>(p.axis[1].travel_max + kernel::kStageWindowBeyondTravel_m);
   c.sequencer.nominal_height_m = static_cast<float>(p.limits.nominal_height_m);
   SetSensorGeometry(p, &c.measurement);
   return c;

@@ -11,6 +11,7 @@
 #include "maglev/bench/timeline.hpp"
 #include "maglev/bench/units.hpp"
 #include "maglev/io/stage_parameters.hpp"
+#include "maglev/modbus/controller_binding.hpp"
 #include "maglev/plant/plant_profile.hpp"
 #include "maglev/profile/profile_text.hpp"
 #include "maglev/register_schema/register_map.hpp"
@@ -496,6 +497,17 @@ bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<Sc
   if (check.error != stage_profile::ProfileError::kOk) {
     errs->push_back({name_or_path + ": the controller refuses this profile: " + stage_profile::to_string(check.error) +
                      (check.axis >= 0 ? std::string(" (axis ") + axis_name(static_cast<Axis>(check.axis)) + ")" : "")});
+    return false;
+  }
+  // As the firmware's stage selection (KernelConfigOfProfile): a value the
+  // register map cannot hold could not be saved on the board.
+  if (const modbus::RegisterDef* d = modbus::FirstRegisterOutOfRange(kc)) {
+    double v = 0.0;
+    (void)modbus::get_config_field(kc, d->id, &v);
+    char text[160];
+    std::snprintf(text, sizeof text, "%s is %g, outside the register's range %g..%g", d->name, v, d->min, d->max);
+    errs->push_back({name_or_path + ": the controller refuses this profile: " +
+                     stage_profile::to_string(stage_profile::ProfileError::kRegisterRange) + " (" + text + ")"});
     return false;
   }
   std::string why;

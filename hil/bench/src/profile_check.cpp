@@ -12,6 +12,7 @@
 #include "maglev/force_allocation/force_allocation.hpp"
 #include "maglev/plant/plant_profile.hpp"
 #include "maglev/profile/profile_text.hpp"
+#include "maglev/modbus/controller_binding.hpp"
 #include "maglev/stage_profile/apply_profile.hpp"
 
 namespace maglev::bench {
@@ -168,6 +169,13 @@ int check_profile_main(const std::string& name_or_path) {
   if (check.error != sp::ProfileError::kOk) {
     std::printf("  controller: REFUSES this profile: %s%s%s\n", sp::to_string(check.error),
                 check.axis >= 0 ? " on axis " : "", check.axis >= 0 ? axis_name(static_cast<Axis>(check.axis)) : "");
+    return 1;
+  }
+  if (const modbus::RegisterDef* d = made.error == sp::ProfileError::kOk ? modbus::FirstRegisterOutOfRange(kc) : nullptr) {
+    double v = 0.0;
+    (void)modbus::get_config_field(kc, d->id, &v);
+    std::printf("  controller: REFUSES this profile: %s: %s is %g, outside %g..%g\n",
+                sp::to_string(sp::ProfileError::kRegisterRange), d->name, v, d->min, d->max);
     return 1;
   }
   hil::PlantConfig plant{};

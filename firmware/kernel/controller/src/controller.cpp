@@ -54,6 +54,12 @@ MAGLEV_CONFIG_CODE KernelConfig default_kernel_config() {
   for (float& j : c.payload_inertia_kgm2) j = 0.0f;
   c.excitation = ExcitationLimits{};
   c.coupling = CouplingCorrection{};  // off: the allocation as designed
+  c.stage.peak_current_A = c.supervisor.peak_current_A;
+  c.stage.rms_current_A = c.supervisor.rms_current_A;
+  c.stage.x_min_m = -static_cast<float>(stage::kTravelX_m / 2 + kStageWindowBeyondTravel_m);
+  c.stage.x_max_m = static_cast<float>(stage::kTravelX_m / 2 + kStageWindowBeyondTravel_m);
+  c.stage.y_min_m = -static_cast<float>(stage::kTravelY_m / 2 + kStageWindowBeyondTravel_m);
+  c.stage.y_max_m = static_cast<float>(stage::kTravelY_m / 2 + kStageWindowBeyondTravel_m);
   return c;
 }
 
@@ -204,6 +210,20 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
   }
   if (validate(c.sequencer, c.servo_rate_Hz) != SequencerConfigError::kOk) return refuse_config(ConfigError::kSequencer);
   if (validate(c.supervisor, c.servo_rate_Hz) != SupervisorConfigError::kOk) return refuse_config(ConfigError::kSupervisor);
+  // The stage's own limits (StageEnvelope): the register ranges are the
+  // board's envelope, these are the selected stage's coils and travel.
+  {
+    const StageEnvelope& st = c.stage;
+    const bool envelope_ok = finite_positive(st.peak_current_A) && finite_positive(st.rms_current_A) &&
+                             st.x_min_m < 0.0f && st.x_max_m > 0.0f && st.y_min_m < 0.0f && st.y_max_m > 0.0f &&
+                             std::isfinite(st.x_min_m) && std::isfinite(st.x_max_m) && std::isfinite(st.y_min_m) &&
+                             std::isfinite(st.y_max_m);
+    if (!envelope_ok || !(sv.peak_current_A <= st.peak_current_A) || !(sv.rms_current_A <= st.rms_current_A) ||
+        !(sv.x_min_m >= st.x_min_m) || !(sv.x_max_m <= st.x_max_m) || !(sv.y_min_m >= st.y_min_m) ||
+        !(sv.y_max_m <= st.y_max_m)) {
+      return refuse_config(ConfigError::kBeyondStageLimits);
+    }
+  }
   // The nominal height must sit inside the reference and supervisor z range.
   if (c.sequencer.nominal_height_m > sv.z_max_m) return refuse_config(ConfigError::kSequencer);
   prepared_ = true;
@@ -229,7 +249,7 @@ ConfigError Controller<Scalar>::commit_config(const KernelConfig& c) {
                              same_bytes(c.supervisor, config_.supervisor) &&
                              c.payload_mass_kg == config_.payload_mass_kg &&
                              same_bytes(c.payload_inertia_kgm2, config_.payload_inertia_kgm2) &&
-                             same_bytes(c.coupling, config_.coupling);
+                             same_bytes(c.coupling, config_.coupling) && same_bytes(c.stage, config_.stage);
     if (!locked_same) return refuse_config(ConfigError::kLockedWhileLevitated);
     bool gains_same = true;
     for (int a = 0; a < kAxisCount; ++a) gains_same = gains_same && same_bytes(c.axis[a], config_.axis[a]);

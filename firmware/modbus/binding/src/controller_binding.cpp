@@ -122,13 +122,26 @@ void set_stage_profile(ConfigImage& image, std::uint16_t index) {
   image.raw[static_cast<std::size_t>(persisted_slot(RegId::stage_profile))] = index;
 }
 
+const RegisterDef* FirstRegisterOutOfRange(const kernel::KernelConfig& config) {
+  for (std::size_t s = 0; s < kPersistedCount; ++s) {
+    const RegisterDef& d = persisted_def(s);
+    double v = 0.0;
+    if (get_config_field(config, d.id, &v) && !value_in_range(d, v)) return &d;
+  }
+  return nullptr;
+}
+
 stage_profile::ProfileError KernelConfigOfProfile(std::uint16_t index, kernel::KernelConfig* out) {
   // Static: a StageProfile is ~4 kB, too large for the comms stack; the
   // comms loop is the only caller (boot, then Modbus writes).
   static stage_profile::StageProfile profile;
   const stage_profile::ProfileError loaded = stage_profile::LoadStageProfile(index, &profile);
   if (loaded != stage_profile::ProfileError::kOk) return loaded;
-  return stage_profile::MakeKernelConfig(profile, out).error;
+  const stage_profile::ProfileError checked = stage_profile::MakeKernelConfig(profile, out).error;
+  if (checked != stage_profile::ProfileError::kOk) return checked;
+  // (*out holds the refused configuration then: both callers drop it.)
+  if (FirstRegisterOutOfRange(*out) != nullptr) return stage_profile::ProfileError::kRegisterRange;
+  return stage_profile::ProfileError::kOk;
 }
 
 template <typename Scalar>

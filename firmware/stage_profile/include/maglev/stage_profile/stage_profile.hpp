@@ -251,7 +251,8 @@ struct StageProfile {
   X(kBadActuatorParameters, 16, "actuator parameters missing or not positive") \
   X(kKernelRefused, 17, "the kernel refuses the configuration it yields") /* measurement or loop design */ \
   X(kHallSignalRange, 18, "a Hall sensor's signal would rail the ADC or is too weak") /* homing */ \
-  X(kCount, 19, "?")
+  X(kRegisterRange, 19, "a value outside the register map's range") /* the board's envelope: it could not be saved */ \
+  X(kCount, 20, "?")
 
 enum class ProfileError : std::uint8_t {
   MAGLEV_PROFILE_ERRORS(MAGLEV_ENUMERATOR)

@@ -78,6 +78,24 @@ struct Injection {
   float value = 0.0f;         // A (effort) or m / rad (reference)
 };
 
+// The selected stage's own limits, which no register write may exceed. Set
+// from the stage profile (stage_profile::MakeKernelConfig), never by a
+// register: the register map's ranges are the board's envelope, wide enough
+// for every stage this firmware runs, so that a stage whose limits differ
+// from the seed's can save and restore its configuration. prepare_config
+// refuses a supervisor limit beyond these (kBeyondStageLimits): whatever a
+// host writes, the coils get no more current than the stage's coils take,
+// and the travel window opens no further than the stage's travel.
+struct StageEnvelope {
+  float peak_current_A;  // the profile's peak_current_A (the seed: 4 A)
+  float rms_current_A;   // the profile's rms_current_A (the seed: 3 A)
+  // The supervisor's x / y travel window at most 2 mm beyond the profile's
+  // travel: its 1 mm default and 1 mm to tune (the seed: +-30, +-19.5 mm).
+  float x_min_m, x_max_m, y_min_m, y_max_m;
+};
+// The window's reach beyond a stage's travel (StageEnvelope).
+inline constexpr double kStageWindowBeyondTravel_m = 2e-3;
+
 struct KernelConfig {
   float servo_rate_Hz;
   SensorsToPoseConfig measurement;
@@ -103,6 +121,8 @@ struct KernelConfig {
   // written by the kernel's own calibration (kCalibrateCoupling) or loaded
   // from the persisted configuration; locked while levitated.
   CouplingCorrection coupling;
+  // --- the stage's limits (StageEnvelope), from its profile; no register.
+  StageEnvelope stage;
 };
 
 KernelConfig default_kernel_config();
@@ -156,7 +176,8 @@ inline bool same_config(const KernelConfig& a, const KernelConfig& b) { return s
   X(kGainsLockedWhileLevitated, 11, "GainsLockedWhileLevitated")  /* gains differ while levitated and live_tuning is off */ \
   X(kUnstableLoop, 12, "UnstableLoop")  /* the loop check finds a PID loop without crossover, phase margin or delay margin (config_axis) */ \
   X(kGainStepTooLarge, 13, "GainStepTooLarge")  /* live tuning: a PID gain (kp, ki, kd) moved by more than kMaxLiveGainStep in one write (config_axis) */ \
-  X(kCouplingCorrection, 14, "CouplingCorrection")  /* coupling correction not finite, reserved bytes set or beyond kMaxCorrectionMagnitude */
+  X(kCouplingCorrection, 14, "CouplingCorrection")  /* coupling correction not finite, reserved bytes set or beyond kMaxCorrectionMagnitude */ \
+  X(kBeyondStageLimits, 15, "BeyondStageLimits")  /* a current limit or travel window beyond the selected stage's (StageEnvelope) */
 
 enum class ConfigError : std::uint8_t {
   MAGLEV_CONFIG_ERRORS(MAGLEV_ENUMERATOR)

@@ -24,8 +24,16 @@ ConfigImage image_from_kernel(const kernel::KernelConfig& config);
 // The stage.profile entry of an image.
 std::uint16_t stage_profile_of(const ConfigImage& image);
 void set_stage_profile(ConfigImage& image, std::uint16_t index);
+// The first persisted register whose value in `config` its range does not
+// admit, or nullptr. A profile's configuration must fit the register map
+// whole: a value outside it was loaded, then could not be written back, and
+// the saved record was refused at the next boot (the stage fell back to the
+// default one).
+const RegisterDef* FirstRegisterOutOfRange(const kernel::KernelConfig& config);
 // The kernel configuration of database profile `index` (LoadStageProfile,
-// then MakeKernelConfig): kOk, or why it is refused (*out untouched).
+// then MakeKernelConfig, then FirstRegisterOutOfRange: kRegisterRange): kOk,
+// or why it is refused (*out untouched, but for kRegisterRange: then it holds
+// the configuration the map could not).
 stage_profile::ProfileError KernelConfigOfProfile(std::uint16_t index, kernel::KernelConfig* out);
 
 template <typename Scalar>
