@@ -350,10 +350,36 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
   {
     const kernel::KernelConfig c = config_of(p);
     const kernel::SupervisorConfig& sv = c.supervisor;
-    if (kernel::validate(sv, c.servo_rate_Hz) != kernel::SupervisorConfigError::kOk ||
-        kernel::validate(c.sequencer, c.servo_rate_Hz) != kernel::SequencerConfigError::kOk ||
+    if (kernel::validate(sv, c.servo_rate_Hz) != kernel::SupervisorConfigError::kOk) {
+      // The theta_z, z and tilt windows follow the profile's travel: name the
+      // axis whose window the supervisor refuses (the family's window in its
+      // place passes), the larger tilt for the shared tilt window.
+      const kernel::SupervisorConfig family{};
+      for (int a = 2; a < kA; ++a) {
+        kernel::SupervisorConfig trial = sv;
+        if (a == 2) trial.theta_z_limit_rad = family.theta_z_limit_rad;
+        if (a == 3) trial.z_max_m = family.z_max_m;
+        if (a >= 4) trial.tilt_limit_rad = family.tilt_limit_rad;
+        if (kernel::validate(trial, c.servo_rate_Hz) == kernel::SupervisorConfigError::kOk) {
+          const bool tilt_y = a >= 4 && std::fabs(p.axis[5].travel_max - p.axis[5].travel_min) >
+                                            std::fabs(p.axis[4].travel_max - p.axis[4].travel_min);
+          return fail(ProfileError::kLimitsOutsideHardware, tilt_y ? 5 : a);
+        }
+      }
+      return fail(ProfileError::kLimitsOutsideHardware);
+    }
+    if (kernel::validate(c.sequencer, c.servo_rate_Hz) != kernel::SequencerConfigError::kOk ||
         c.sequencer.nominal_height_m > sv.z_max_m) {
       return fail(ProfileError::kLimitsOutsideHardware);
+    }
+    // The z window inside what the laser displacement sensors measure (the
+    // kernel's prepare_config rule).
+    {
+      const kernel::SensorsToPoseConfig& m = c.measurement;
+      if (!(static_cast<double>(sv.z_max_m) <
+            m.displacement_zero_height_m + m.adc_full_scale_V * m.displacement_scale_m_per_V)) {
+        return fail(ProfileError::kLimitsOutsideHardware, 3);
+      }
     }
     constexpr float kOpen = std::numeric_limits<float>::infinity();
     const float window_min[kA] = {sv.x_min_m, sv.y_min_m, -sv.theta_z_limit_rad, sv.z_min_m, -sv.tilt_limit_rad,
@@ -505,6 +531,17 @@ kernel::KernelConfig config_of(const StageProfile& p) {
   c.supervisor.x_max_m = static_cast<float>(p.axis[0].travel_max + 1e-3);
   c.supervisor.y_min_m = -static_cast<float>(-p.axis[1].travel_min + 1e-3);
   c.supervisor.y_max_m = static_cast<float>(p.axis[1].travel_max + 1e-3);
+  // The theta_z, z and tilt windows from the profile's travel, with the
+  // seed's margins (1 mrad, 2 um, 100 urad: its 5 mrad, 40 um and 300 urad);
+  // they were the seed's whatever the profile said, which refused a stage
+  // that levitates higher or tilts further. z_min (5 um below rest: the
+  // landing's contact) stays the family's.
+  const auto reach = [&p](int a) { return std::fmax(std::fabs(p.axis[a].travel_min), std::fabs(p.axis[a].travel_max)); };
+  if (active(p, 2)) c.supervisor.theta_z_limit_rad = static_cast<float>(reach(2) + 1e-3);
+  if (active(p, 3)) c.supervisor.z_max_m = static_cast<float>(p.axis[3].travel_max + 2e-6);
+  if (active(p, 4) || active(p, 5)) {
+    c.supervisor.tilt_limit_rad = static_cast<float>(std::fmax(active(p, 4) ? reach(4) : 0.0, active(p, 5) ? reach(5) : 0.0) + 100e-6);
+  }
   c.supervisor.peak_current_A = static_cast<float>(p.limits.peak_current_A);
   c.supervisor.rms_current_A = static_cast<float>(p.limits.rms_current_A);
   // The stage's own limits, which no register write may exceed (kernel

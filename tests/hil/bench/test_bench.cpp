@@ -1,8 +1,14 @@
 // HIL bench runner: lockstep determinism, both kernels levitate through the
 // CAN link, the 8 um step meets the paper's figure, scenario errors carry lines.
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
+#include <unistd.h>
 
+#include "maglev/bench/axes.hpp"
+#include "maglev/bench/overrides.hpp"
 #include "maglev/bench/runner.hpp"
 #include "maglev/bench/units.hpp"
 #include "maglev/scenario/scenario.hpp"
@@ -210,4 +216,57 @@ TEST(Bench, TheTwoProcessLinkRefusesRatesAboveItsBusBudget) {
   CHECK_EQUAL(1u, errs.size());
   CHECK_TRUE(errs[0].message.find("servo rate 10000 Hz") != std::string::npos);
   CHECK_TRUE(errs[0].message.find("at most 3578 Hz") != std::string::npos);
+}
+
+// A lab's stage that levitates higher and tilts and turns further than the
+// seed: the supervisor's theta_z, z and tilt windows (and the nominal
+// height's cap) were the seed's (5 mrad, 40 um, 300 urad; 40 um), so its
+// profile was refused ("limits outside the hardware"). They now follow the
+// profile's travel with the seed's margins; the stage levitates at its own
+// 50 um and moves beyond the seed's windows, to Ready.
+TEST(Bench, AStageThatLevitatesHigherAndTiltsFurtherRunsInsideItsOwnWindows) {
+  std::ifstream in(maglev::bench::profile_dir() + "/nk2017-cross.profile");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string t = text.str();
+  const auto swap = [&t](const std::string& from, const std::string& to) {
+    const auto at = t.find(from);
+    CHECK_TRUE(at != std::string::npos);
+    t.replace(at, from.size(), to);
+  };
+  swap("name = nk2017-cross", "name = lab-tall");
+  swap("nominal_height_m = 30e-6", "nominal_height_m = 50e-6");
+  swap("travel = 10e-6 38e-6", "travel = 10e-6 58e-6");
+  swap("travel = -4e-3 4e-3", "travel = -8e-3 8e-3");
+  swap("travel = -200e-6 200e-6", "travel = -400e-6 400e-6");  // theta_x
+  swap("travel = -200e-6 200e-6", "travel = -400e-6 400e-6");  // theta_y
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("maglev-lab-tall-" + std::to_string(getpid()) + ".profile")).string();
+  {
+    std::ofstream out(path);
+    out << t;
+  }
+  const auto sc = parse(R"(
+[scenario]
+name = tall
+duration_s = 7
+profile = )" + path + R"(
+[timeline]
+0.0 levitate
+3.0 move theta_x 350urad 1mrad/s 0.05rad/s^2
+4.5 move theta_z 6mrad 0.05rad/s 0.5rad/s^2
+[metrics]
+levitation
+)");
+  const auto r = run_sc(sc, maglev::hil::KernelKind::kFloat32);
+  std::filesystem::remove(path);
+  STRCMP_EQUAL("Ready", r.final_state.c_str());
+  DOUBLES_EQUAL(50e-6, r.metrics.at("z_final_height_m"), 0.5e-6);
+  using maglev::bench::Axis;
+  using maglev::bench::index;
+  const std::size_t last = r.trace.size() - 1;
+  // Both moves beyond the seed's windows, measured there.
+  const double theta_x = r.trace.pose[index(Axis::kThetaX)][last] - r.trace.pose[index(Axis::kThetaX)][0];
+  CHECK_TRUE(theta_x > 340e-6);
+  DOUBLES_EQUAL(6e-3, r.trace.pose[index(Axis::kThetaZ)][last], 2e-6);
 }

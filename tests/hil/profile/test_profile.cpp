@@ -303,6 +303,34 @@ sensitivity_V_per_T = 15
   CHECK_TRUE(said);
 }
 
+// The supervisor's theta_z, z and tilt windows follow the profile's travel
+// with the seed's margins (1 mrad, 2 um, 100 urad), as x and y already did
+// (1 mm): the default profile gives the seed's 5 mrad, 40 um and 300 urad
+// (TheDefaultProfileIsTheKernelDefaultBitForBit), a taller stage its own.
+TEST(Profiles, TheSupervisorsWindowsFollowTheProfilesTravel) {
+  sp::StageProfile p = shipped("nk2017-cross").profile;
+  p.limits.nominal_height_m = 50e-6;
+  p.axis[3].travel_max = 58e-6;
+  p.axis[2].travel_min = -8e-3;
+  p.axis[2].travel_max = 7e-3;
+  p.axis[4].travel_max = 400e-6;
+  kernel::KernelConfig kc{};
+  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == sp::ProfileError::kOk);
+  DOUBLES_EQUAL(60e-6, kc.supervisor.z_max_m, 1e-11);  // float
+  DOUBLES_EQUAL(9e-3, kc.supervisor.theta_z_limit_rad, 1e-9);   // the larger side
+  DOUBLES_EQUAL(500e-6, kc.supervisor.tilt_limit_rad, 1e-10);   // the larger tilt axis
+  DOUBLES_EQUAL(50e-6, kc.sequencer.nominal_height_m, 1e-11);
+  static kernel::Controller<float> c;
+  CHECK_TRUE(c.apply_config(kc) == kernel::ConfigError::kOk);
+  kernel::KernelConfig high = kc;
+  high.supervisor.z_max_m = 310e-6f;  // above the height sensors' 300 um
+  CHECK_TRUE(c.apply_config(high) == kernel::ConfigError::kSupervisor);
+  // The z window stays inside what the height sensors measure (300 um above
+  // rest on this board): a profile beyond it is refused.
+  p.axis[3].travel_max = 310e-6;
+  CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kLimitsOutsideHardware);
+}
+
 TEST(Profiles, TheDefaultProfileIsTheKernelDefaultBitForBit) {
   const auto p = shipped("nk2017-cross");
   CHECK_TRUE(p.ok());

@@ -346,7 +346,7 @@ TEST(Sequencer, ConfigValidation) {
   bad.lift_ramp_rate_per_s = -1.0f;
   CHECK(validate(bad, kRate) == SequencerConfigError::kBadRampRate);
   bad = c;
-  bad.nominal_height_m = 50e-6f;  // beyond the 40 um envelope
+  bad.nominal_height_m = 1.5e-3f;  // beyond the 1 mm sanity bound (a stage's own comes from its profile)
   CHECK(validate(bad, kRate) == SequencerConfigError::kBadHeight);
   bad = c;
   bad.tilt_settle_error_rad = 0.0f / 0.0f;

@@ -295,7 +295,7 @@ TEST(Supervisor, ConfigValidation) {
   b.x_min_m = 0.03f;
   CHECK(validate(b, kRate) == SupervisorConfigError::kBadTravel);
   b = c;
-  b.z_max_m = 1e-3f;
+  b.z_max_m = 1.5e-3f;  // beyond the 1 mm sanity bound (a stage's own comes from its profile)
   CHECK(validate(b, kRate) == SupervisorConfigError::kBadEnvelope);
   b = c;
   b.following_error_limit[4] = -1.0f;

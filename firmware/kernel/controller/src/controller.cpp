@@ -226,6 +226,13 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
   }
   // The nominal height must sit inside the reference and supervisor z range.
   if (c.sequencer.nominal_height_m > sv.z_max_m) return refuse_config(ConfigError::kSequencer);
+  // The z window's top inside what the laser displacement sensors measure
+  // (their zero height + full scale: 300 um above rest on the seed board).
+  {
+    const SensorsToPoseConfig& m = c.measurement;
+    const double lds_top_m = m.displacement_zero_height_m + m.adc_full_scale_V * m.displacement_scale_m_per_V;
+    if (!(static_cast<double>(sv.z_max_m) < lds_top_m)) return refuse_config(ConfigError::kSupervisor);
+  }
   prepared_ = true;
   return ConfigError::kOk;
 }

@@ -42,9 +42,12 @@ MAGLEV_CONFIG_CODE SupervisorConfigError validate(const SupervisorConfig& c, flo
       !positive(c.theta_z_limit_rad) || c.theta_z_limit_rad > 0.1f) {
     return SupervisorConfigError::kBadTravel;
   }
-  // The z envelope must contain the rest position and stay inside the 40 um
-  // levitation range (paper 000 Sec. V) -- anything larger risks the coils.
-  if (!(c.z_min_m < 0.0f) || !(c.z_max_m > 0.0f) || c.z_max_m > 100e-6f || c.z_min_m < -100e-6f ||
+  // The z envelope must contain the rest position. Its top is a stage's
+  // (a profile's z travel + 2 um: the seed's 40 um, paper 000 Sec. V);
+  // prepare_config bounds it by the laser displacement sensors' range, this
+  // only by 1 mm (the seed's 100 um cap here refused a lab stage that
+  // levitates higher).
+  if (!(c.z_min_m < 0.0f) || !(c.z_max_m > 0.0f) || c.z_max_m > 1e-3f || c.z_min_m < -100e-6f ||
       !positive(c.tilt_limit_rad) || c.tilt_limit_rad > 2e-3f) {
     return SupervisorConfigError::kBadEnvelope;
   }
