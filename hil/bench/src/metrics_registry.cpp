@@ -42,11 +42,15 @@ void noise(const MetricSpec& s, const metrics::Window& w, Context& c) {
 }
 
 // The step (or move) is the first point-to-point command on this axis inside the window.
-double command_time(const MetricSpec& s, const Context& c) {
+const TimelineAction* command_of(const MetricSpec& s, const Context& c) {
   for (const auto& a : c.in.actions) {
-    if (a.axis == s.axis && a.t_s >= s.t0 && a.t_s < s.t1 && a.is_point_to_point()) return a.t_s;
+    if (a.axis == s.axis && a.t_s >= s.t0 && a.t_s < s.t1 && a.is_point_to_point()) return &a;
   }
-  return s.t0;
+  return nullptr;
+}
+double command_time(const MetricSpec& s, const Context& c) {
+  const TimelineAction* a = command_of(s, c);
+  return a != nullptr ? a->t_s : s.t0;
 }
 
 const char* ccq_suffix(const std::string& unit) {
@@ -59,6 +63,13 @@ const char* ccq_suffix(const std::string& unit) {
 void step_or_ccq(const MetricSpec& s, const metrics::Window&, Context& c) {
   const double fs = c.in.servo_rate_Hz;
   const std::string u = si_unit(s.axis);
+  // A refused command moved nothing: whatever the window holds is noise (or
+  // a stage that never lifted), not this metric.
+  if (const TimelineAction* a = command_of(s, c); a != nullptr && a->refused) {
+    c.warnings.push_back("metric " + s.name + ": not measured, its command at t = " + std::to_string(a->t_s) +
+                         " s ('" + a->text + "') was refused");
+    return;
+  }
   const double t_cmd = command_time(s, c);
   const metrics::Window wend = metrics::window(c.t, s.t1 - 1.0 / fs, s.t1 + 1.0 / fs);
   const metrics::Window wpre = metrics::window(c.t, t_cmd - 2.0 / fs, t_cmd);

@@ -120,6 +120,10 @@ double set_run_timing(RunResult* R, double wall_s, const can::BusLoadMeter& mete
   return sim_s;
 }
 
+void mark_refused_actions(const std::vector<CommandLog>& commands, std::vector<TimelineAction>* actions) {
+  for (std::size_t i = 0; i < commands.size() && i < actions->size(); ++i) (*actions)[i].refused = !commands[i].accepted;
+}
+
 void add_run_metrics(RunResult* R, const can::BusLoadMeter& meter, double sim_s, const LinkTotals& l) {
   auto& M = R->metrics;
   M["real_time_factor"] = R->real_time_factor;

@@ -258,6 +258,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
           static_cast<double>(R.coupling.matrix[i]);
     }
   }
+  internal::mark_refused_actions(R.commands, &actions);
   compute_metrics(sc, MetricInputs{actions, tr, excitations, levitate_t, ready_t, sc.duration_s(), rate_Hz},
                   &R.metrics, &R.warnings);
   return R;

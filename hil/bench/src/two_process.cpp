@@ -246,6 +246,7 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
                                                  static_cast<double>(rh.final_state), static_cast<double>(rh.fault)});
   M["host_commands_acked"] = static_cast<double>(R.commands.size() - pending.size());
   if (paced) internal::add_realtime_metrics(timer, &M);
+  internal::mark_refused_actions(R.commands, &actions);
   compute_metrics(sc, MetricInputs{actions, tr, {}, levitate_t, ready_t, sc.duration_s(), rate_Hz},
                   &M, &R.warnings);
   if (!pending.empty()) R.warnings.push_back(std::to_string(pending.size()) + " host command(s) never acknowledged");

@@ -270,3 +270,27 @@ levitation
   CHECK_TRUE(theta_x > 340e-6);
   DOUBLES_EQUAL(6e-3, r.trace.pose[index(Axis::kThetaZ)][last], 2e-6);
 }
+
+// A step the controller refuses moves nothing: its step metrics are not
+// measured (a warning says why), rather than an "overshoot" of the noise
+// judged against the paper. (A stage that never levitated once printed
+// x_step_8um_overshoot_percent 154 % "OUTSIDE 0.5-2x".)
+TEST(Bench, ARefusedStepIsNotMeasured) {
+  const auto sc = parse(R"(
+[scenario]
+name = nolev
+duration_s = 2
+[timeline]
+1.0 step x 8um
+[metrics]
+step x 1.0 2.0 x_step_8um
+)");
+  const auto r = run_sc(sc, maglev::hil::KernelKind::kFloat32);
+  CHECK_FALSE(r.commands.empty());
+  CHECK_FALSE(r.commands[0].accepted);
+  CHECK_TRUE(r.metrics.find("x_step_8um_overshoot_percent") == r.metrics.end());
+  CHECK_TRUE(r.metrics.find("x_step_8um_measured_m") == r.metrics.end());
+  bool said = false;
+  for (const auto& w : r.warnings) said = said || w.find("x_step_8um: not measured") != std::string::npos;
+  CHECK_TRUE(said);
+}

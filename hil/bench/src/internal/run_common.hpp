@@ -10,6 +10,7 @@
 #include "maglev/bench/candump_log.hpp"
 #include "maglev/bench/overrides.hpp"
 #include "maglev/bench/runner.hpp"
+#include "maglev/bench/timeline.hpp"
 #include "maglev/can_link/bus_load.hpp"
 #include "maglev/can_port/periodic_timer.hpp"
 #include "maglev/virtual_can/virtual_can.hpp"
@@ -63,6 +64,9 @@ struct LinkTotals {
 };
 // The run metrics both modes report (R's timing and completed already set).
 void add_run_metrics(RunResult* R, const can::BusLoadMeter& meter, double sim_s, const LinkTotals& l);
+// Marks the actions the controller refused (commands[i] is actions[i]'s
+// log: both executors log every action they run, in order).
+void mark_refused_actions(const std::vector<CommandLog>& commands, std::vector<TimelineAction>* actions);
 // Real-time mode: deadline misses and the wake-up lateness histogram.
 void add_realtime_metrics(const can::PeriodicTimer& timer, std::map<std::string, double>* M);
 

@@ -37,6 +37,11 @@ struct TimelineAction {
   Axis axis = Axis::kX;  // the command's axis (x for commands without one)
   can::HostCommandFrame command{};  // kHostCommand: seq 0; the executor numbers it
   BenchExcite excite{};             // kBenchExcite
+  // Set after the run (internal::mark_refused_actions): the controller
+  // refused it. The step and ccq metrics then measure nothing for it: a
+  // step refused as "not ready" once reported a 154 % "overshoot" of noise
+  // and a verdict against the paper on a stage that never levitated.
+  bool refused = false;
 
   bool is(can::HostCommandCode c) const { return kind == Kind::kHostCommand && command.code == c; }
   // A point-to-point motion (step, move, move_to, move_jerk, move_jerk_to):
