@@ -129,6 +129,49 @@ TEST(Controller, InvalidConfigRefusedWholeRunningOneUnchanged) {
   CHECK(c.apply_config(imr) == ConfigError::kOk);
 }
 
+// A payload is admitted while the stage hovers platen and payload on at most
+// 95 % of its peak coil current (kMaxHoverFraction). The fixed 1.5 kg cap it
+// replaces (the register's 1.0 kg) let through payloads the seed stage
+// cannot lift; a stronger stage carries more.
+TEST(Controller, APayloadIsAdmittedWhileTheStageCanHoverIt) {
+  static Controller<float> c;
+  static Controller<numeric::Q7_24> q;
+  KernelConfig k = default_kernel_config();
+  CHECK(c.apply_config(k) == ConfigError::kOk);
+  // Empty: 2.16 A per coil of 4 A; the current grows with the mass carried.
+  ForceAllocationState<float> st{};
+  CHECK(ApplyForceAllocationConfig<float>(k.allocation, &st) == ForceAllocationError::kOk);
+  const double empty_A = HoverPeakCurrent_A(st, k.allocation.pitch_m);
+  DOUBLES_EQUAL(2.159, empty_A, 2e-3);
+  // Paper 000's 539.6 g hovers on 3.71 A (93 %): admitted, both kernels.
+  k.payload_mass_kg = 0.5396f;
+  CHECK(c.apply_config(k) == ConfigError::kOk);
+  CHECK(q.apply_config(k) == ConfigError::kOk);
+  // 1.0 kg would need 5.0 A: refused, and nothing changes.
+  const KernelConfig before = c.config();
+  k.payload_mass_kg = 1.0f;
+  CHECK(c.apply_config(k) == ConfigError::kPayload);
+  CHECK(q.apply_config(k) == ConfigError::kPayload);
+  CHECK(same_config(before, c.config()));
+  // The limit is where the hover current reaches 95 % of the 4 A peak:
+  // (m + p) / m = 3.8 / 2.159 on the 0.75 kg platen, p = 0.570 kg.
+  const double p_max = 0.75 * (0.95 * 4.0 / empty_A) - 0.75;
+  k.payload_mass_kg = static_cast<float>(p_max - 0.005);
+  CHECK(c.apply_config(k) == ConfigError::kOk);
+  k.payload_mass_kg = static_cast<float>(p_max + 0.005);
+  CHECK(c.apply_config(k) == ConfigError::kPayload);
+  // A stage with twice the force constant carries the 1.0 kg.
+  k = default_kernel_config();
+  k.allocation.two_b_star_identified_N_per_A *= 2.0;
+  k.payload_mass_kg = 1.0f;
+  CHECK(c.apply_config(k) == ConfigError::kOk);
+  // Not a number, or beyond the sanity bound: refused.
+  k.payload_mass_kg = 0.0f / 0.0f;
+  CHECK(c.apply_config(k) == ConfigError::kPayload);
+  k.payload_mass_kg = 1000.0f;
+  CHECK(c.apply_config(k) == ConfigError::kPayload);
+}
+
 TEST(Controller, LockedFieldsWhileLevitated) {
   static Rig<float> r;
   CHECK(r.c.command(MotionCommand{MotionType::kLevitate}) == CommandResult::kAccepted);

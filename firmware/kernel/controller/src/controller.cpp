@@ -119,6 +119,31 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
 }
 
 template <typename Scalar>
+MAGLEV_CONFIG_CODE double HoverPeakCurrent_A(const ForceAllocationState<Scalar>& state, double pitch_m) {
+  using Traits = numeric::ScalarTraits<Scalar>;
+  Scalar effort[kAxisCount];
+  for (Scalar& e : effort) e = Traits::zero();
+  effort[axis_index(Axis::kZ)] = GravityFeedForward_A(Traits::one(), state);
+  double peak = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      AllocationOutput<Scalar> out;
+      AllocateCurrents<Scalar>(effort, numeric::si_to_pico(pitch_m * i / 4.0), numeric::si_to_pico(pitch_m * j / 4.0),
+                               state, &out);
+      // The demand itself, before the current limit's common scale k.
+      const double k = Traits::to_double(out.scale_k);
+      for (const Scalar& cur : out.current_A) {
+        const double a = std::fabs(Traits::to_double(cur)) / (k > 0.0 ? k : 1.0);
+        peak = a > peak ? a : peak;
+      }
+    }
+  }
+  return peak;
+}
+template double HoverPeakCurrent_A<float>(const ForceAllocationState<float>&, double);
+template double HoverPeakCurrent_A<numeric::Q7_24>(const ForceAllocationState<numeric::Q7_24>&, double);
+
+template <typename Scalar>
 ConfigError Controller<Scalar>::refuse_config(ConfigError e) {
   status_.last_config_error = e;
   return e;
@@ -149,11 +174,23 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
     scratch.type[a] = c.axis[a].type;
     scratch.filtered[a] = biquad_chain_enabled(scratch.filter[a]);
   }
-  if (!(c.payload_mass_kg >= 0.0f && c.payload_mass_kg <= 1.5f)) return refuse_config(ConfigError::kPayload);
+  if (!(c.payload_mass_kg >= 0.0f && c.payload_mass_kg <= kMaxPayloadSanity_kg)) return refuse_config(ConfigError::kPayload);
   ForceAllocationConfig alloc = c.allocation;
   alloc.payload_kg = static_cast<double>(c.payload_mass_kg);
   if (ApplyForceAllocationConfig<Scalar>(alloc, &scratch.allocation) != ForceAllocationError::kOk) {
-    return refuse_config(ConfigError::kAllocation);
+    // A payload the fixed-point tables cannot hold is a payload error.
+    return refuse_config(c.payload_mass_kg > 0.0f ? ConfigError::kPayload : ConfigError::kAllocation);
+  }
+  // The stage must hover its platen and payload with room to control: the
+  // gravity feed-forward through the allocation, at the largest coil over 4 x
+  // 4 places per pitch, at most kMaxHoverFraction of the peak current. The
+  // fixed cap it replaces (1.5 kg; the register's 1.0 kg) let through
+  // payloads the seed stage cannot lift (1.0 kg: 5.0 A per coil of its 4 A),
+  // and would refuse a heavier stage's real capacity.
+  if (c.payload_mass_kg > 0.0f &&
+      HoverPeakCurrent_A(scratch.allocation, c.allocation.pitch_m) >
+          kMaxHoverFraction * static_cast<double>(c.supervisor.peak_current_A)) {
+    return refuse_config(ConfigError::kPayload);
   }
   for (float j : c.payload_inertia_kgm2) {
     if (!(j >= 0.0f && j <= 0.01f)) return refuse_config(ConfigError::kPayload);

@@ -96,6 +96,14 @@ struct StageEnvelope {
 // The window's reach beyond a stage's travel (StageEnvelope).
 inline constexpr double kStageWindowBeyondTravel_m = 2e-3;
 
+// Payload (KernelConfig::payload_mass_kg): admitted while the stage hovers
+// platen and payload on at most this fraction of its peak coil current
+// (HoverPeakCurrent_A), the rest left to the loops. Paper 000's 539.6 g on
+// the seed stage hovers on 3.71 A of 4 A (0.93); 1.0 kg would need 5.0 A.
+inline constexpr double kMaxHoverFraction = 0.95;
+// A sanity bound only; the hover rule is the stage's.
+inline constexpr float kMaxPayloadSanity_kg = 100.0f;
+
 struct KernelConfig {
   float servo_rate_Hz;
   SensorsToPoseConfig measurement;
@@ -126,6 +134,12 @@ struct KernelConfig {
 };
 
 KernelConfig default_kernel_config();
+
+// The largest coil current that hovers the platen and its payload (the
+// allocation's gravity feed-forward, current limit undone), over 4 x 4
+// places per pitch. The payload check's measure.
+template <typename Scalar>
+double HoverPeakCurrent_A(const ForceAllocationState<Scalar>& state, double pitch_m);
 
 // Equality of the VALUES of two configuration (sub)structs, byte for byte
 // with padding excluded. Padding bytes are unspecified: a brace-initialized
