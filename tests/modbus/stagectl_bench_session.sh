@@ -5,7 +5,8 @@
 # (wait for Ready), move x to current + 1 mm, try `save` DURING the move (the
 # "not moving" rule: exception 06 -> stagectl exit 5), wait for the move to
 # end, check x moved 1 mm (+-1 um) and status says ready, `save` again (now
-# allowed: 0), land (wait for Idle), stop the server (SIGTERM, exit 0).
+# allowed: 0), land (wait for Idle), select the square stage and levitate it
+# (the bench rebuilds its plant), land, stop the server (SIGTERM, exit 0).
 # Any deviation fails the test and prints the server's log.
 # usage: stagectl_bench_session.sh STAGECTL MAGLEV_HIL WORKDIR
 set -u
@@ -76,6 +77,17 @@ expect 0 "save after the move" --engineer save
 expect 0 "land, wait for idle" --wait 20 land
 [ "$(val status.state)" = 0 ] && pass "state idle" || fail "state $(val status.state), expected 0"
 within "$(val status.z)" 0 5e-6 && pass "z back at rest" || fail "z = $(val status.z) after landing"
+
+# Another stage selected over Modbus (landed): the bench's plant is rebuilt
+# from its profile, so that stage levitates (it faulted on the boot stage's
+# plant: FollowingError 0.17 s into the square stage's levitation).
+expect 0 "select the square stage (stage.profile 1)" --engineer set stage.profile 1
+expect 0 "the square stage levitates, wait for ready" --wait 20 levitate
+[ "$(val status.state)" = 6 ] && pass "square stage ready" || fail "square stage state $(val status.state), fault $(val status.fault)"
+grep -q "stage.profile 1 (nk2020-square) selected: the bench's plant rebuilt" "$WORK/hil.log" &&
+  pass "the bench says it rebuilt the plant" || fail "no plant rebuild line"
+expect 5 "switching the stage while levitated is busy (06)" --engineer set stage.profile 0
+expect 0 "land the square stage" --wait 20 land
 
 kill -TERM "$HIL_PID"; wait "$HIL_PID"; rc=$?; trap - EXIT
 [ "$rc" = 0 ] && pass "server stops on SIGTERM (exit 0)" || fail "server exit $rc on SIGTERM"

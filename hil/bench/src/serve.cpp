@@ -270,27 +270,51 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
   // board's stage is the one wired to it. A selection the firmware refused
   // (status.profile_error) leaves the default stage's plant: the kernel
   // holds it landed with fault 18 anyway.
-  hil::PlantConfig stage_plant = plant_config;
-  const auto profile_index = static_cast<std::uint16_t>(modbus->registers().config().get(modbus::RegId::stage_profile));
-  if (profile_index != 0 && controller->stage_profile_error() == 0) {
+  // The plant of database stage `index` (index 0: the base plant, the
+  // default stage's), at the servo rate; false: *why says why.
+  const auto plant_of = [&plant_config](std::uint16_t index, double rate, hil::PlantConfig* out, std::string* why,
+                                        const char** name) {
     static stage_profile::StageProfile profile;  // ~4 kB
-    std::string why;
-    if (stage_profile::LoadStageProfile(profile_index, &profile) != stage_profile::ProfileError::kOk ||
-        !hil::PlantConfigForProfile(profile, plant_config, &stage_plant, &why)) {
-      std::fprintf(stderr, "maglev-hil serve: the bench cannot build the plant of stage.profile %u: %s\n",
-                   static_cast<unsigned>(profile_index), why.c_str());
-      return 1;
+    *out = plant_config;
+    *name = "the default stage";
+    if (index != 0) {
+      if (stage_profile::LoadStageProfile(index, &profile) != stage_profile::ProfileError::kOk) {
+        *why = "not in the profile database";
+        return false;
+      }
+      if (!hil::PlantConfigForProfile(profile, plant_config, out, why)) return false;
+      *name = profile.name;
     }
-    std::printf("maglev-hil serve: stage.profile %u (%s) from the flash: plant and kernel built from it\n",
-                static_cast<unsigned>(profile_index), profile.name);
-  }
+    hil::ApplyServoRate(rate, out);
+    return true;
+  };
+  const auto selected_stage = [&modbus, &controller]() -> int {
+    // The stage the kernel runs: the register's value once the binding took
+    // it; a refused selection (status.profile_error) runs no stage at all.
+    if (controller->stage_profile_error() != 0) return 0;
+    return static_cast<int>(modbus->registers().config().get(modbus::RegId::stage_profile));
+  };
   // The servo rate the flash's configuration selects (servo.rate): the
   // plant steps at it and the loop is paced at it. A later servo.rate write
   // (landed) re-designs the kernel; the bench then stops and asks for a
   // restart, because its plant and pacing were built for the boot rate.
   const double rate_Hz = static_cast<double>(controller->config().servo_rate_Hz);
-  hil::ApplyServoRate(rate_Hz, &stage_plant);
-  hil::Plant plant(stage_plant, seed);
+  int plant_stage = selected_stage();
+  hil::PlantConfig stage_plant{};
+  {
+    std::string why;
+    const char* name = "";
+    if (!plant_of(static_cast<std::uint16_t>(plant_stage), rate_Hz, &stage_plant, &why, &name)) {
+      std::fprintf(stderr, "maglev-hil serve: the bench cannot build the plant of stage.profile %d: %s\n", plant_stage,
+                   why.c_str());
+      return 1;
+    }
+    if (plant_stage != 0) {
+      std::printf("maglev-hil serve: stage.profile %d (%s) from the flash: plant and kernel built from it\n",
+                  plant_stage, name);
+    }
+  }
+  auto plant = std::make_unique<hil::Plant>(stage_plant, seed);
   app::CanSensorConfig sensor_config{};
   sensor_config.period_us = static_cast<std::uint32_t>(std::lround(1e6 / rate_Hz));
   app::CanSensorSource sensors(*ctrl_port, sensor_config);
@@ -329,7 +353,7 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
     const std::int64_t start = now_ns();
     const double t = static_cast<double>(n) * dt;
     // --- plant endpoint: sensors -> CAN.
-    const io::SensorSample s = plant.sample();
+    const io::SensorSample s = plant->sample();
     can::CanFrame f{};
     if (n % can::kCurrentMonitorPeriodTicks == 0) {
       can::CurrentMonitorFrame cm{};
@@ -360,8 +384,8 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
       }
     }
     if (!got) ++c.missed_actuator;
-    plant.apply(watchdog.update(got, received));  // the amplifiers' watchdog: hold <= 10 ms, then off
-    plant.advance_tick();
+    plant->apply(watchdog.update(got, received));  // the amplifiers' watchdog: hold <= 10 ms, then off
+    plant->advance_tick();
     ++c.ticks;
     // --- Modbus, between ticks: only requests already waiting.
     const std::int64_t poll_cpu0 = thread_cpu_ns();
@@ -384,6 +408,41 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
     }
     deadline += period_ns;
 
+    // A stage selected over Modbus (stage.profile, landed only: the binding
+    // refuses it otherwise) is the stage wired to the board from now on: the
+    // bench rebuilds its plant from that profile, at rest, as a lab swaps the
+    // stage on the bench. The plant stayed the boot stage's before, and the
+    // square stage's kernel then faulted on the cross plant (FollowingError,
+    // 0.17 s into its levitation).
+    if (const int now_stage = selected_stage(); now_stage != plant_stage) {
+      std::string why;
+      const char* name = "";
+      hil::PlantConfig next{};
+      if (!plant_of(static_cast<std::uint16_t>(now_stage), rate_Hz, &next, &why, &name)) {
+        std::fprintf(stderr, "maglev-hil serve: stage.profile is now %d, whose plant the bench cannot build (%s): stopping\n",
+                     now_stage, why.c_str());
+        break;
+      }
+      // Where the landed platen lies stays where it lies: x, y and theta_z
+      // carry over (the interferometers read on; the counters jumped by the
+      // 1 mm a session had moved, and the supervisor latched CounterJump);
+      // height and tilt are the new stage's rest.
+      const hil::BodyState was = plant->body_state();
+      plant = std::make_unique<hil::Plant>(next, seed);
+      hil::BodyState rest = plant->body_state();
+      const Eigen::Quaterniond& q = was.attitude;
+      const double yaw = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+      rest.position_m.x() = was.position_m.x();
+      rest.position_m.y() = was.position_m.y();
+      rest.attitude = Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())) * rest.attitude;
+      plant->set_body_state(rest);
+      watchdog = lockstep::ActuatorWatchdog{};
+      plant_stage = now_stage;
+      std::printf("maglev-hil serve: stage.profile %d (%s) selected: the bench's plant rebuilt from it, at rest\n",
+                  now_stage, name);
+      std::fflush(stdout);
+      deadline = now_ns() + period_ns;  // the rebuild is not a missed tick
+    }
     if (static_cast<double>(controller->config().servo_rate_Hz) != rate_Hz) {
       std::fprintf(stderr,
                    "maglev-hil serve: servo.rate is now %.0f Hz (the bench runs its plant at the boot rate %.0f Hz): "
