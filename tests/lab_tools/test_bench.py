@@ -190,9 +190,13 @@ class Test2Levitated(unittest.TestCase):
         # The open loop of x from the wave generator + recorder: crossover and phase
         # margin as `stagectl frf x` measures them on the same bench (PERFORMANCE.md:
         # 50.47 Hz, 28.2 deg over three runs).
-        r = self.stage.frf_onboard("x")
+        # 0.2 A, not the default 0.1 A: at 5 Hz the loop gain is large, e = u + d is
+        # small and the line's coherence sat at 0.91 (idle machine) to 0.79 (both cores
+        # busy: CI's parallel tests), against the 0.9 gate; at 0.2 A it is 0.98 / 0.96.
+        r = self.stage.frf_onboard("x", amplitude_A=0.2)
         self.assertGreater(len(r.f_Hz), 20)
-        self.assertTrue(np.all(r.coherence > 0.9))
+        self.assertTrue(np.all(r.coherence > 0.9),
+                        f"coherence {np.round(r.coherence, 3).tolist()} at {np.round(r.f_Hz, 1).tolist()} Hz")
         mag = r.magnitude_dB
         k = int(np.nonzero((mag[:-1] > 0) & (mag[1:] <= 0))[0][0])
         a = mag[k] / (mag[k] - mag[k + 1])  # linear in dB over log f

@@ -506,6 +506,13 @@ kernel::KernelConfig config_of(const StageProfile& p) {
     l.pid.effort_limit_A = static_cast<float>(k.effort_limit_A);
     l.imr.effort_limit_A = l.pid.effort_limit_A;
     if (k.imr_omega0_rad_per_s > 0.0) l.imr.omega0_rad_s = static_cast<float>(k.imr_omega0_rad_per_s);
+    if (k.kind == ControllerKind::kInternalModel) {
+      // The regulator's own 2-DOF weight and derivative filter (they reached
+      // only the unused PID before: an internal-model axis ran b = 1 and the
+      // family's 1 kHz filter whatever the profile said).
+      l.imr.setpoint_weight_p = static_cast<float>(k.setpoint_weight_p);
+      l.imr.derivative_filter_hz = static_cast<float>(k.derivative_filter_Hz);
+    }
     // The internal-model regulator is designed on this profile's axis plant
     // (the one the checker judges the PID loops on), not the seed stage's.
     l.imr.plant_gain = static_cast<float>(AxisPlantGain(p, a));

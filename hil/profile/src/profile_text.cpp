@@ -422,6 +422,11 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
     std::string key;
   };
   std::vector<HallKey> hall_keys;  // Hall-only keys, checked once each sensor's kind is known
+  struct LoopKey {
+    int axis, line;
+    std::string key;
+  };
+  std::vector<LoopKey> loop_keys;  // one regulator's keys, checked once the axis' controller is known
   std::istringstream in(text);
   std::string raw;
   int line = 0;
@@ -508,6 +513,12 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
     if (section.rfind("sensor ", 0) == 0 && (k == "sensitivity_V_per_T" || k == "height_m")) {
       hall_keys.push_back({sensors_seen - 1, line, k});
     }
+    if (section.rfind("axis ", 0) == 0 && (k == "kp" || k == "ki" || k == "kd" || k == "imr_omega0_rad_per_s" ||
+                                           k == "antiwindup_gain" || k == "lqr_weight_h")) {
+      for (int a = 0; a < sp::kAxes; ++a) {
+        if (section == std::string("axis ") + kAxisNames[a]) loop_keys.push_back({a, line, k});
+      }
+    }
     const std::string why = it->second(v);
     if (!why.empty()) err(line, k, why);
   }
@@ -546,6 +557,18 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
     const int at = seen_sections.count("halbach") ? seen_sections["halbach"] : end;
     for (const char* k : required) {
       if (halbach_set.count(k) == 0) err(at, k, "missing in [halbach]");
+    }
+  }
+  // A regulator's key on an axis run by the other regulator was taken and
+  // never used (a kp on an internal-model axis): said, not ignored.
+  for (const LoopKey& l : loop_keys) {
+    const sp::ControllerKind kind = p.axis[l.axis].controller.kind;
+    const bool pid_key = l.key == "kp" || l.key == "ki" || l.key == "kd";
+    if (pid_key && kind == sp::ControllerKind::kInternalModel) {
+      err(l.line, l.key, "belongs to controller = pid2dof; this axis' internal-model regulator is designed by pole "
+                         "placement on its plant (docs/STAGES.md)");
+    } else if (!pid_key && kind == sp::ControllerKind::kPid2Dof) {
+      err(l.line, l.key, "belongs to controller = internal_model; this axis runs pid2dof");
     }
   }
   for (const HallKey& h : hall_keys) {

@@ -331,6 +331,45 @@ TEST(Profiles, TheSupervisorsWindowsFollowTheProfilesTravel) {
   CHECK_TRUE(sp::CheckStageProfile(p).error == sp::ProfileError::kLimitsOutsideHardware);
 }
 
+// A regulator's key on an axis the other regulator runs was parsed and never
+// used: kp on an internal-model axis, antiwindup_gain on a PID axis. Said
+// now, at its line. And an internal-model axis takes its own setpoint weight
+// and derivative filter (they reached only the unused PID before).
+TEST(Profiles, ARegulatorsKeysOnTheOtherRegulatorsAxisAreRefusedAtTheirLine) {
+  std::string text = R"([axis x]
+mode = active
+controller = internal_model
+kp = 36000
+setpoint_weight_p = 0.4
+derivative_filter_Hz = 800
+[axis y]
+mode = active
+controller = pid2dof
+antiwindup_gain = 7e-5
+)";
+  const profile::ProfileParse bad = profile::parse_profile(text, "lab.profile");
+  bool kp_said = false, e_said = false;
+  for (const auto& e : bad.errors) {
+    kp_said = kp_said || e.find("lab.profile:4: kp: belongs to controller = pid2dof") == 0;
+    e_said = e_said || e.find("lab.profile:10: antiwindup_gain: belongs to controller = internal_model") == 0;
+  }
+  CHECK_TRUE(kp_said);
+  CHECK_TRUE(e_said);
+
+  sp::StageProfile p = shipped("nk2017-cross").profile;
+  p.axis[0].controller.kind = sp::ControllerKind::kInternalModel;
+  p.axis[0].controller.kp = p.axis[0].controller.ki = p.axis[0].controller.kd = 0.0;
+  p.axis[0].controller.setpoint_weight_p = 0.4;
+  p.axis[0].controller.derivative_filter_Hz = 800.0;
+  kernel::KernelConfig kc{};
+  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == sp::ProfileError::kOk);
+  DOUBLES_EQUAL(0.4, kc.axis[0].imr.setpoint_weight_p, 1e-7);
+  DOUBLES_EQUAL(800.0, kc.axis[0].imr.derivative_filter_hz, 0.0);
+  // A PID axis' internal-model settings stay the family's (the bench's
+  // [controller] x.loop = internal_model switch relies on them).
+  DOUBLES_EQUAL(1.0, kc.axis[1].imr.setpoint_weight_p, 0.0);
+}
+
 TEST(Profiles, TheDefaultProfileIsTheKernelDefaultBitForBit) {
   const auto p = shipped("nk2017-cross");
   CHECK_TRUE(p.ok());
