@@ -196,6 +196,11 @@ LoopMargins AxisLoopMargins(const StageProfile& p, int a) {
 namespace {
 kernel::KernelConfig config_of(const StageProfile& p);
 
+// The larger |end| of an axis' travel: what a symmetric window must hold.
+double travel_reach(const StageProfile& p, int a) {
+  return std::fmax(std::fabs(p.axis[a].travel_min), std::fabs(p.axis[a].travel_max));
+}
+
 double hall_height_m(const Sensor& s) { return s.height_m > 0.0 ? s.height_m : io::stage::kHallHeightAboveMagnets_m; }
 double hall_sensitivity_V_per_T(const Sensor& s) {
   return s.sensitivity_V_per_T > 0.0 ? s.sensitivity_V_per_T : io::stage::kHallSensitivity_V_per_T;
@@ -361,8 +366,7 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
         if (a == 3) trial.z_max_m = family.z_max_m;
         if (a >= 4) trial.tilt_limit_rad = family.tilt_limit_rad;
         if (kernel::validate(trial, c.servo_rate_Hz) == kernel::SupervisorConfigError::kOk) {
-          const bool tilt_y = a >= 4 && std::fabs(p.axis[5].travel_max - p.axis[5].travel_min) >
-                                            std::fabs(p.axis[4].travel_max - p.axis[4].travel_min);
+          const bool tilt_y = a >= 4 && travel_reach(p, 5) > travel_reach(p, 4);
           return fail(ProfileError::kLimitsOutsideHardware, tilt_y ? 5 : a);
         }
       }
@@ -374,12 +378,8 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
     }
     // The z window inside what the laser displacement sensors measure (the
     // kernel's prepare_config rule).
-    {
-      const kernel::SensorsToPoseConfig& m = c.measurement;
-      if (!(static_cast<double>(sv.z_max_m) <
-            m.displacement_zero_height_m + m.adc_full_scale_V * m.displacement_scale_m_per_V)) {
-        return fail(ProfileError::kLimitsOutsideHardware, 3);
-      }
+    if (!(static_cast<double>(sv.z_max_m) < kernel::HeightSensorsTop_m(c.measurement))) {
+      return fail(ProfileError::kLimitsOutsideHardware, 3);
     }
     constexpr float kOpen = std::numeric_limits<float>::infinity();
     const float window_min[kA] = {sv.x_min_m, sv.y_min_m, -sv.theta_z_limit_rad, sv.z_min_m, -sv.tilt_limit_rad,
@@ -543,11 +543,11 @@ kernel::KernelConfig config_of(const StageProfile& p) {
   // they were the seed's whatever the profile said, which refused a stage
   // that levitates higher or tilts further. z_min (5 um below rest: the
   // landing's contact) stays the family's.
-  const auto reach = [&p](int a) { return std::fmax(std::fabs(p.axis[a].travel_min), std::fabs(p.axis[a].travel_max)); };
-  if (active(p, 2)) c.supervisor.theta_z_limit_rad = static_cast<float>(reach(2) + 1e-3);
+  if (active(p, 2)) c.supervisor.theta_z_limit_rad = static_cast<float>(travel_reach(p, 2) + 1e-3);
   if (active(p, 3)) c.supervisor.z_max_m = static_cast<float>(p.axis[3].travel_max + 2e-6);
   if (active(p, 4) || active(p, 5)) {
-    c.supervisor.tilt_limit_rad = static_cast<float>(std::fmax(active(p, 4) ? reach(4) : 0.0, active(p, 5) ? reach(5) : 0.0) + 100e-6);
+    const double tilt = std::fmax(active(p, 4) ? travel_reach(p, 4) : 0.0, active(p, 5) ? travel_reach(p, 5) : 0.0);
+    c.supervisor.tilt_limit_rad = static_cast<float>(tilt + 100e-6);
   }
   c.supervisor.peak_current_A = static_cast<float>(p.limits.peak_current_A);
   c.supervisor.rms_current_A = static_cast<float>(p.limits.rms_current_A);

@@ -35,20 +35,7 @@ const char* mode_name(sp::AxisMode m) {
 double peak_coil_current(const kernel::KernelConfig& kc, const float effort[kAxes]) {
   kernel::ForceAllocationState<float> st{};
   if (kernel::ApplyForceAllocationConfig<float>(kc.allocation, &st) != kernel::ForceAllocationError::kOk) return -1.0;
-  double peak = 0.0;
-  const double pitch = kc.allocation.pitch_m;
-  for (int i = 0; i < 16; ++i) {
-    for (int j = 0; j < 16; ++j) {
-      const auto x = static_cast<std::int64_t>(std::llround(pitch * i / 16.0 * 1e12));
-      const auto y = static_cast<std::int64_t>(std::llround(pitch * j / 16.0 * 1e12));
-      kernel::AllocationOutput<float> out{};
-      kernel::AllocateCurrents<float>(effort, x, y, st, &out);
-      // Unlimited demand: undo the common scale factor k of the current limit.
-      const double k = static_cast<double>(out.scale_k) > 0.0 ? static_cast<double>(out.scale_k) : 1.0;
-      for (float c : out.current_A) peak = std::max(peak, std::fabs(static_cast<double>(c)) / k);
-    }
-  }
-  return peak;
+  return kernel::PeakCoilCurrent_A(effort, st, kc.allocation.pitch_m, 16);
 }
 
 }  // namespace

@@ -389,7 +389,8 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
     ++c.ticks;
     // --- Modbus, between ticks: only requests already waiting.
     const std::int64_t poll_cpu0 = thread_cpu_ns();
-    c.modbus_requests += static_cast<std::uint64_t>(std::max(0, modbus->poll(0)));
+    const int requests = std::max(0, modbus->poll(0));
+    c.modbus_requests += static_cast<std::uint64_t>(requests);
     c.max_modbus_cpu_ns = std::max(c.max_modbus_cpu_ns, thread_cpu_ns() - poll_cpu0);
     modbus->registers().advance_time_us(static_cast<std::uint32_t>(period_ns / 1000));  // engineer relock clock
 
@@ -413,8 +414,9 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
     // bench rebuilds its plant from that profile, at rest, as a lab swaps the
     // stage on the bench. The plant stayed the boot stage's before, and the
     // square stage's kernel then faulted on the cross plant (FollowingError,
-    // 0.17 s into its levitation).
-    if (const int now_stage = selected_stage(); now_stage != plant_stage) {
+    // 0.17 s into its levitation). Only a request can change it: looked up
+    // after a poll that answered one, not every tick.
+    if (const int now_stage = requests > 0 ? selected_stage() : plant_stage; now_stage != plant_stage) {
       std::string why;
       const char* name = "";
       hil::PlantConfig next{};

@@ -417,16 +417,15 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
   std::map<std::string, int> seen_sections;
   std::map<std::string, int> seen_keys;
   std::set<std::string> halbach_set;  // keys given in [halbach]
-  struct HallKey {
-    int sensor, line;
+  // Keys that belong to one kind of sensor or one regulator, checked at the
+  // end, once the section's kind / controller is known (index: the
+  // section's sensor or axis).
+  struct KindKey {
+    int index, line;
     std::string key;
   };
-  std::vector<HallKey> hall_keys;  // Hall-only keys, checked once each sensor's kind is known
-  struct LoopKey {
-    int axis, line;
-    std::string key;
-  };
-  std::vector<LoopKey> loop_keys;  // one regulator's keys, checked once the axis' controller is known
+  std::vector<KindKey> hall_keys, loop_keys;
+  int section_index = -1;  // the axis or sensor the current section describes
   std::istringstream in(text);
   std::string raw;
   int line = 0;
@@ -452,6 +451,7 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
       seen_sections[section] = line;
       const auto w = words(section);
       keys.clear();
+      section_index = -1;
       if (w.size() == 1 && w[0] == "stage") keys = stage_keys(&p, &family_set);
       else if (w.size() == 1 && w[0] == "body") keys = body_keys(&p.body);
       else if (w.size() == 1 && w[0] == "halbach") keys = halbach_keys(&p.halbach);
@@ -467,6 +467,7 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
         else {
           p.axis[a].mode = sp::AxisMode::kActive;  // a listed axis is a degree of freedom
           keys = axis_keys(&p.axis[a]);
+          section_index = a;
         }
       } else if (w.size() == 2 && (w[0] == "actuator" || w[0] == "sensor")) {
         double n = 0;
@@ -480,6 +481,7 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
           seen = static_cast<int>(n);
           if (w[0] == "actuator") keys = actuator_keys(&p.actuators[seen - 1]);
           else keys = sensor_keys(&p.sensors[seen - 1]);
+          section_index = seen - 1;
         }
       } else {
         err(line, "[" + section + "]",
@@ -511,13 +513,11 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
     seen_keys[k] = line;
     if (section == "halbach") halbach_set.insert(k);
     if (section.rfind("sensor ", 0) == 0 && (k == "sensitivity_V_per_T" || k == "height_m")) {
-      hall_keys.push_back({sensors_seen - 1, line, k});
+      hall_keys.push_back({section_index, line, k});
     }
     if (section.rfind("axis ", 0) == 0 && (k == "kp" || k == "ki" || k == "kd" || k == "imr_omega0_rad_per_s" ||
                                            k == "antiwindup_gain" || k == "lqr_weight_h")) {
-      for (int a = 0; a < sp::kAxes; ++a) {
-        if (section == std::string("axis ") + kAxisNames[a]) loop_keys.push_back({a, line, k});
-      }
+      loop_keys.push_back({section_index, line, k});
     }
     const std::string why = it->second(v);
     if (!why.empty()) err(line, k, why);
@@ -561,8 +561,8 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
   }
   // A regulator's key on an axis run by the other regulator was taken and
   // never used (a kp on an internal-model axis): said, not ignored.
-  for (const LoopKey& l : loop_keys) {
-    const sp::ControllerKind kind = p.axis[l.axis].controller.kind;
+  for (const KindKey& l : loop_keys) {
+    const sp::ControllerKind kind = p.axis[l.index].controller.kind;
     const bool pid_key = l.key == "kp" || l.key == "ki" || l.key == "kd";
     if (pid_key && kind == sp::ControllerKind::kInternalModel) {
       err(l.line, l.key, "belongs to controller = pid2dof; this axis' internal-model regulator is designed by pole "
@@ -571,9 +571,9 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
       err(l.line, l.key, "belongs to controller = internal_model; this axis runs pid2dof");
     }
   }
-  for (const HallKey& h : hall_keys) {
-    if (p.sensors[h.sensor].kind != sp::SensorKind::kHall) {
-      err(h.line, h.key, "only a hall sensor has this key (sensor " + std::to_string(h.sensor + 1) + " is not one)");
+  for (const KindKey& h : hall_keys) {
+    if (p.sensors[h.index].kind != sp::SensorKind::kHall) {
+      err(h.line, h.key, "only a hall sensor has this key (sensor " + std::to_string(h.index + 1) + " is not one)");
     }
   }
   if (p.limits.peak_current_A > p.limits.hardware_current_A) {

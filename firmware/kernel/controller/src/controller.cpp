@@ -119,17 +119,15 @@ ConfigError Controller<Scalar>::apply_config(const KernelConfig& c) {
 }
 
 template <typename Scalar>
-MAGLEV_CONFIG_CODE double HoverPeakCurrent_A(const ForceAllocationState<Scalar>& state, double pitch_m) {
+MAGLEV_CONFIG_CODE double PeakCoilCurrent_A(const Scalar effort_A[kAxisCount], const ForceAllocationState<Scalar>& state,
+                                            double pitch_m, int places_per_pitch) {
   using Traits = numeric::ScalarTraits<Scalar>;
-  Scalar effort[kAxisCount];
-  for (Scalar& e : effort) e = Traits::zero();
-  effort[axis_index(Axis::kZ)] = GravityFeedForward_A(Traits::one(), state);
   double peak = 0.0;
-  for (int i = 0; i < 4; ++i) {
-    for (int j = 0; j < 4; ++j) {
+  for (int i = 0; i < places_per_pitch; ++i) {
+    for (int j = 0; j < places_per_pitch; ++j) {
       AllocationOutput<Scalar> out;
-      AllocateCurrents<Scalar>(effort, numeric::si_to_pico(pitch_m * i / 4.0), numeric::si_to_pico(pitch_m * j / 4.0),
-                               state, &out);
+      AllocateCurrents<Scalar>(effort_A, numeric::si_to_pico(pitch_m * i / places_per_pitch),
+                               numeric::si_to_pico(pitch_m * j / places_per_pitch), state, &out);
       // The demand itself, before the current limit's common scale k.
       const double k = Traits::to_double(out.scale_k);
       for (const Scalar& cur : out.current_A) {
@@ -139,6 +137,18 @@ MAGLEV_CONFIG_CODE double HoverPeakCurrent_A(const ForceAllocationState<Scalar>&
     }
   }
   return peak;
+}
+template double PeakCoilCurrent_A<float>(const float[kAxisCount], const ForceAllocationState<float>&, double, int);
+template double PeakCoilCurrent_A<numeric::Q7_24>(const numeric::Q7_24[kAxisCount],
+                                                  const ForceAllocationState<numeric::Q7_24>&, double, int);
+
+template <typename Scalar>
+MAGLEV_CONFIG_CODE double HoverPeakCurrent_A(const ForceAllocationState<Scalar>& state, double pitch_m) {
+  using Traits = numeric::ScalarTraits<Scalar>;
+  Scalar effort[kAxisCount];
+  for (Scalar& e : effort) e = Traits::zero();
+  effort[axis_index(Axis::kZ)] = GravityFeedForward_A(Traits::one(), state);
+  return PeakCoilCurrent_A(effort, state, pitch_m, 4);
 }
 template double HoverPeakCurrent_A<float>(const ForceAllocationState<float>&, double);
 template double HoverPeakCurrent_A<numeric::Q7_24>(const ForceAllocationState<numeric::Q7_24>&, double);
@@ -263,13 +273,8 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
   }
   // The nominal height must sit inside the reference and supervisor z range.
   if (c.sequencer.nominal_height_m > sv.z_max_m) return refuse_config(ConfigError::kSequencer);
-  // The z window's top inside what the laser displacement sensors measure
-  // (their zero height + full scale: 300 um above rest on the seed board).
-  {
-    const SensorsToPoseConfig& m = c.measurement;
-    const double lds_top_m = m.displacement_zero_height_m + m.adc_full_scale_V * m.displacement_scale_m_per_V;
-    if (!(static_cast<double>(sv.z_max_m) < lds_top_m)) return refuse_config(ConfigError::kSupervisor);
-  }
+  // The z window's top inside what the laser displacement sensors measure.
+  if (!(static_cast<double>(sv.z_max_m) < HeightSensorsTop_m(c.measurement))) return refuse_config(ConfigError::kSupervisor);
   prepared_ = true;
   return ConfigError::kOk;
 }

@@ -135,9 +135,13 @@ struct KernelConfig {
 
 KernelConfig default_kernel_config();
 
-// The largest coil current that hovers the platen and its payload (the
-// allocation's gravity feed-forward, current limit undone), over 4 x 4
-// places per pitch. The payload check's measure.
+// The largest coil current the allocation asks for an effort vector (current
+// limit undone), over places_per_pitch^2 places in one pitch of x and y.
+template <typename Scalar>
+double PeakCoilCurrent_A(const Scalar effort_A[kAxisCount], const ForceAllocationState<Scalar>& state, double pitch_m,
+                         int places_per_pitch);
+// That for the gravity feed-forward (platen and payload) over 4 x 4 places:
+// the payload check's measure.
 template <typename Scalar>
 double HoverPeakCurrent_A(const ForceAllocationState<Scalar>& state, double pitch_m);
 

@@ -161,6 +161,13 @@ SensorsToPoseConfig DefaultSensorsToPoseConfig();
 // thickness delta (the sign (-1)^k is NOT included).
 double HalbachHarmonicRatio(int n, double z_m, double delta_m, double pitch_m);
 
+// The highest platen height above rest the laser displacement sensors
+// measure: their zero height + full scale (300 um on the seed board). The
+// supervisor's z window must stay below it.
+constexpr double HeightSensorsTop_m(const SensorsToPoseConfig& c) {
+  return c.displacement_zero_height_m + c.adc_full_scale_V * c.displacement_scale_m_per_V;
+}
+
 enum class SensorsToPoseError : std::uint8_t {
   kOk = 0,
   kBadInterferometerScale,   // wavelength/fold/interpolation not positive / too fine
