@@ -597,10 +597,10 @@ void SetSensorGeometry(const StageProfile& p, kernel::SensorsToPoseConfig* m) {
         if (halls++ == 0) {
           m->hall_a_x_m = sensor.x_m;
           m->hall_a_y_m = sensor.y_m;
-          // The 5th harmonic's share at Hall A's height over this array (it
-          // was the seed stage's whatever the profile said).
-          m->hall_fifth_harmonic_ratio = kernel::HalbachHarmonicRatio(5, hall_height_m(sensor),
-                                                                      p.halbach.magnet_thickness_m, p.halbach.pitch_m);
+          // The harmonics' shares at Hall A's height over this array (the
+          // 5th was the seed stage's whatever the profile said).
+          kernel::HallHarmonicRatios(hall_height_m(sensor), p.halbach.magnet_thickness_m, p.halbach.pitch_m,
+                                     m->hall_harmonic_ratio);
         }
         break;
       default:

@@ -209,10 +209,10 @@ TEST(Profiles, AHallSensorThatWouldRailTheAdcIsRefusedAndALessSensitiveOneHomes)
   const auto base = shipped("nk2017-cross").profile;
   // The seed: the swing the check predicts is what the plant's sensors read
   // (the plant calibrates its magnets to 2 b* on its own; 5th harmonic and
-  // coil-side averaging included). Homing places sensor A to within 0.3 mm:
-  // the solve models the 5th harmonic, not the 9th (2.9 % of the
-  // fundamental at 1.6 mm, up to 0.029 rad = 0.23 mm of phase; measured
-  // -0.28 .. +0.20 mm over these places, 0.05 mm at 3 mm height).
+  // coil-side averaging included). Homing places sensor A to within
+  // 1e-6: the solve removes the 5th, 9th and 13th harmonics (with the
+  // 5th alone it was off by -0.28 .. +0.20 mm over these places: the 9th is
+  // 2.9 % of the fundamental at 1.6 mm).
   const sp::HallSwing seed = sp::HallSignalSwing(base, base.sensors[6]);
   DOUBLES_EQUAL(0.4154, seed.fundamental_T, 1e-4);
   DOUBLES_EQUAL(0.950, seed.peak_fraction, 1e-3);
@@ -225,10 +225,13 @@ TEST(Profiles, AHallSensorThatWouldRailTheAdcIsRefusedAndALessSensitiveOneHomes)
     CHECK_TRUE(r.phase.plausible);
     // |B| of the pair swings between (1 - eps) and (1 + eps) of B_1.
     const double b1_codes = seed.amplitude_fraction * 32768.0;
-    const double eps = kernel::HalbachHarmonicRatio(5, seed.height_m, base.halbach.magnet_thickness_m, base.halbach.pitch_m);
+    double e[kernel::kHallHarmonics];
+    kernel::HallHarmonicRatios(seed.height_m, base.halbach.magnet_thickness_m, base.halbach.pitch_m, e);
+    const double eps = e[0] + e[1] + e[2];
     CHECK_TRUE(r.phase.amplitude_x_codes > b1_codes * (1.0 - eps) * 0.99);
     CHECK_TRUE(r.phase.amplitude_x_codes < b1_codes * (1.0 + eps) * 1.01);
-    CHECK_TRUE(std::fabs(r.x_error_m) < 0.3e-3);
+    std::printf("\n  homing at x = %.4f m: sensor A placed %+.2f um off", x, r.x_error_m * 1e6);
+    CHECK_TRUE(std::fabs(r.x_error_m) < 1e-6);
   }
 
   // The 2.2 N/A array on the seed's sensors: the check refuses it, because
@@ -280,9 +283,12 @@ TEST(Profiles, AHallSensorThatWouldRailTheAdcIsRefusedAndALessSensitiveOneHomes)
   p.sensors[6].height_m = p.sensors[7].height_m = 3e-3;
   kernel::KernelConfig kc{};
   CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == sp::ProfileError::kOk);
-  DOUBLES_EQUAL(kernel::HalbachHarmonicRatio(5, 3e-3, 0.0127, 0.0508), kc.measurement.hall_fifth_harmonic_ratio, 0.0);
-  CHECK_TRUE(kc.measurement.hall_fifth_harmonic_ratio < kernel::DefaultSensorsToPoseConfig().hall_fifth_harmonic_ratio);
-  for (double x : {0.0, 0.0127}) CHECK_TRUE(std::fabs(read_halls_at_rest(p, x).x_error_m) < 0.1e-3);
+  for (int k = 0; k < kernel::kHallHarmonics; ++k) {
+    DOUBLES_EQUAL(kernel::HalbachHarmonicRatio(kernel::HallHarmonicOrder(k), 3e-3, 0.0127, 0.0508),
+                  kc.measurement.hall_harmonic_ratio[k], 0.0);
+    CHECK_TRUE(kc.measurement.hall_harmonic_ratio[k] < kernel::DefaultSensorsToPoseConfig().hall_harmonic_ratio[k]);
+  }
+  for (double x : {0.0, 0.0127}) CHECK_TRUE(std::fabs(read_halls_at_rest(p, x).x_error_m) < 1e-6);
 
   // Homing needs the pair: one Hall sensor, or B off its quarter pitch, is refused.
   p = base;

@@ -83,6 +83,38 @@ MAGLEV_CONFIG_CODE double HalbachHarmonicRatio(int n, double z_m, double delta_m
          numeric::dexp(-(gn - g1) * z_m);
 }
 
+MAGLEV_CONFIG_CODE void HallHarmonicRatios(double z_m, double delta_m, double pitch_m,
+                                           double (&ratio)[kHallHarmonics]) {
+  for (int k = 0; k < kHallHarmonics; ++k) ratio[k] = HalbachHarmonicRatio(HallHarmonicOrder(k), z_m, delta_m, pitch_m);
+}
+
+namespace {
+// w(theta) and u(theta) of HallSolveStep from cos / sin 4 theta.
+struct HallW {
+  double wr, wi, ur, ui;
+};
+HallW HallWOf(const double (&e)[kHallHarmonics], double c4, double s4) {
+  const double c8 = c4 * c4 - s4 * s4, s8 = 2.0 * s4 * c4;
+  const double c12 = c8 * c4 - s8 * s4, s12 = s8 * c4 + c8 * s4;
+  return HallW{1.0 - e[0] * c4 + e[1] * c8 - e[2] * c12, -e[0] * s4 + e[1] * s8 - e[2] * s12,
+               -4.0 * e[0] * c4 + 8.0 * e[1] * c8 - 12.0 * e[2] * c12,
+               -4.0 * e[0] * s4 + 8.0 * e[1] * s8 - 12.0 * e[2] * s12};
+}
+double HallSlope(const HallW& w) { return 1.0 + (w.ur * w.wr + w.ui * w.wi) / (w.wr * w.wr + w.wi * w.wi); }
+}  // namespace
+
+MAGLEV_CONFIG_CODE double HallPhaseSlopeMin(const double (&ratio)[kHallHarmonics]) {
+  // w has period pi/2 in theta: 4 theta over one turn, 1024 points (the
+  // slope is smooth: between points it dips by < 1e-4 at the bound).
+  double least = 1.0;
+  for (int i = 0; i < 1024; ++i) {
+    const double a = 2.0 * stage::kPi * (i + 0.5) / 1024.0;
+    const double slope = HallSlope(HallWOf(ratio, numeric::dcos(a), numeric::dsin(a)));
+    least = slope < least ? slope : least;
+  }
+  return least;
+}
+
 MAGLEV_CONFIG_CODE SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   SensorsToPoseConfig c{};
   c.wavelength_m = stage::kWavelength_m;
@@ -109,8 +141,8 @@ MAGLEV_CONFIG_CODE SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   c.pitch_m = stage::kPitch_m;
   c.hall_a_x_m = stage::kHallAX_m;
   c.hall_a_y_m = stage::kHallAY_m;
-  c.hall_fifth_harmonic_ratio = HalbachHarmonicRatio(5, stage::kHallHeightAboveMagnets_m,
-                                                     stage::kMagnetThickness_m, stage::kPitch_m);
+  HallHarmonicRatios(stage::kHallHeightAboveMagnets_m, stage::kMagnetThickness_m, stage::kPitch_m,
+                     c.hall_harmonic_ratio);
   // (ours) accept 10%..105% of full scale: a detached/unpowered sensor reads ~0.
   c.hall_min_amplitude_codes = 3276.8;
   c.hall_max_amplitude_codes = 34406.0;
@@ -212,15 +244,18 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
   // --- Hall / pitch ------------------------------------------------------------
   if (!(config.pitch_m > 1e-4 && config.pitch_m < 1.0)) return SensorsToPoseError::kBadPitch;
   s.pitch_pm = RoundToInt64(config.pitch_m * 1e12);
-  // < 0.19: where the Hall solve's fixed 7 steps still converge (HallSolveStep).
-  if (!(config.hall_fifth_harmonic_ratio >= 0.0 && config.hall_fifth_harmonic_ratio < 0.19) ||
+  // A phase monotonic with margin: where the Hall solve's fixed 7 steps
+  // still converge (HallSolveStep; for the 5th alone eps_5 < 0.19).
+  bool harmonics_ok = true;
+  for (double r : config.hall_harmonic_ratio) harmonics_ok = harmonics_ok && r >= 0.0 && r < 1.0;
+  if (!harmonics_ok || !(HallPhaseSlopeMin(config.hall_harmonic_ratio) >= kHallPhaseSlopeMin) ||
       !(config.hall_min_amplitude_codes >= 0.0) ||
       !(config.hall_max_amplitude_codes > config.hall_min_amplitude_codes)) {
     return SensorsToPoseError::kBadHallConfig;
   }
   s.hall_a_x_pm = RoundToInt64(config.hall_a_x_m * 1e12);
   s.hall_a_y_pm = RoundToInt64(config.hall_a_y_m * 1e12);
-  s.hall_fifth_harmonic_ratio = config.hall_fifth_harmonic_ratio;
+  for (int k = 0; k < kHallHarmonics; ++k) s.hall_harmonic_ratio[k] = config.hall_harmonic_ratio[k];
   s.hall_min_amplitude_codes = config.hall_min_amplitude_codes;
   s.hall_max_amplitude_codes = config.hall_max_amplitude_codes;
 
@@ -567,34 +602,34 @@ std::uint32_t RadToTurn(double rad) {
 
 }  // namespace
 
-// Phase of  B + jA = e^{j theta} - eps e^{j 5 theta}  (eq (1): the n = 5 term
-// has sign (-1)^1). atan2 gives phi = theta + arg(1 - eps e^{j 4 theta}), so
-// theta solves  f(theta) = theta + arg(1 - eps e^{j4 theta}) - phi = 0, with
-//   f'(theta) = 1 - 4 eps (cos 4theta - eps) / (1 - 2 eps cos 4theta + eps^2)
-// (> 0 for eps < 0.2: f is monotonic). Step 0 is one fixed-point pass
-// (theta = phi - arg(...)), steps 1..6 are Newton steps. Measured on exact
-// phases over a sweep of theta (kernel_sensors_to_pose_test,
-// HallSolveConvergesOverTheValidHarmonicRange): after all 7 steps the error
-// is <= 6.4e-15 rad for every eps up to 0.189 (after 4: 1.1e-11 rad at the
-// seed stage's 0.114, 3.4e-3 rad at 0.189). Plain Newton from phi diverges
-// near eps = 0.2, hence the fixed-point pass first and the bound eps < 0.19.
-// The fixed-point iteration it replaces contracted by 4 eps / (1 - eps) per
-// pass: 24 passes left 1e-7 rad at eps = 0.114 and ~2e-2 rad at 0.19.
+// Phase of  B + jA = e^{j theta} w(theta),
+//   w(theta) = 1 - eps_5 e^{j4 theta} + eps_9 e^{j8 theta} - eps_13 e^{j12 theta}
+// (eq (1): harmonic n = 4k + 1 has sign (-1)^k). atan2 gives
+// phi = theta + arg w(theta), so theta solves f(theta) = theta + arg w - phi = 0,
+//   f'(theta) = 1 + Im(w'/w) = 1 + Re(u conj(w)) / |w|^2,
+//   u = sum_k (-1)^k 4k eps e^{j4k theta}   (w' = j u).
+// Configuration refuses harmonics whose least f' over a pitch is below 0.2
+// (HallPhaseSlopeMin, kHallPhaseSlopeMin; the seed's three at 1.6 mm give
+// 0.63). Step 0
+// is one fixed-point pass (theta = phi - arg w), steps 1..6 are Newton steps.
+// Measured on exact phases (kernel_sensors_to_pose_test,
+// HallSolveConvergesOverTheValidHarmonicRange): after all 7 steps the error is
+// at the double floor (< 2e-14 rad) wherever the least slope is >= 0.2 (Hall
+// heights 0.5-6 mm over arrays of thickness pitch/8 .. pitch/2, the 5th alone
+// up to 0.165). Plain Newton from phi diverges near the bound, hence the
+// fixed-point pass first. The 9th and 13th cost one complex product
+// each per step (the angle-multiplied e^{j8 theta}, e^{j12 theta}).
 void HallSolveStep(HallSolve* solve) {
   HallSolve& h = *solve;
   if (h.steps >= kHallSolveSteps) return;
-  const double eps = h.eps;
   for (int a = 0; a < 2; ++a) {
     const double th = h.theta[a];
-    const double c = numeric::dcos(4.0 * th);
-    const double s = numeric::dsin(4.0 * th);
-    const double arg = numeric::datan2(-eps * s, 1.0 - eps * c);
+    const HallW w = HallWOf(h.eps, numeric::dcos(4.0 * th), numeric::dsin(4.0 * th));
+    const double arg = numeric::datan2(w.wi, w.wr);
     if (h.steps == 0) {
       h.theta[a] = h.phi[a] - arg;
     } else {
-      const double f = th + arg - h.phi[a];
-      const double fp = 1.0 - 4.0 * eps * (c - eps) / (1.0 - 2.0 * eps * c + eps * eps);
-      h.theta[a] = th - f / fp;
+      h.theta[a] = th - (th + arg - h.phi[a]) / HallSlope(w);
     }
   }
   ++h.steps;
@@ -605,7 +640,7 @@ HallSolveInputs HallSolveInputsOf(const io::SensorSample& sample, const SensorsT
   for (int i = 0; i < io::kHallChannels; ++i) in.hall_adc[i] = sample.hall_adc[i];
   in.status_flags = sample.status_flags;
   in.adc_rail_code = state.adc_rail_code;
-  in.eps = state.hall_fifth_harmonic_ratio;
+  for (int k = 0; k < kHallHarmonics; ++k) in.eps[k] = state.hall_harmonic_ratio[k];
   in.min_amplitude_codes = state.hall_min_amplitude_codes;
   in.max_amplitude_codes = state.hall_max_amplitude_codes;
   in.pitch_pm = state.pitch_pm;
@@ -620,7 +655,7 @@ void HallSolveBegin(const HallSolveInputs& in, HallSolve* solve) {
   const double a_y = in.hall_adc[1];
   const double b_x = in.hall_adc[2];
   const double b_y = in.hall_adc[3];
-  h.eps = in.eps;
+  for (int k = 0; k < kHallHarmonics; ++k) h.eps[k] = in.eps[k];
   h.phi[0] = numeric::datan2(a_x, b_x);
   h.phi[1] = numeric::datan2(a_y, b_y);
   h.theta[0] = h.phi[0];

@@ -67,6 +67,12 @@ struct BeamConfig {
   std::int8_t sign;  // +1 or -1: counts increase with +axis motion or not
 };
 
+// The Hall signal's harmonics above the fundamental that the homing solve
+// removes: n = 5, 9, 13 (a Halbach array's n = 4k + 1; the plant models these
+// four). The 17th is below 2e-4 of the fundamental at the seed's 1.6 mm.
+inline constexpr int kHallHarmonics = 3;
+constexpr int HallHarmonicOrder(int k) { return 4 * k + 5; }  // k = 0, 1, 2 -> 5, 9, 13
+
 struct SensorsToPoseConfig {
   // Interferometer: LSB = wavelength / (fold * interpolation).
   double wavelength_m;
@@ -93,9 +99,12 @@ struct SensorsToPoseConfig {
   double pitch_m;
   double hall_a_x_m;  // sensor A, platen frame; B is a quarter pitch further in X and Y
   double hall_a_y_m;
-  // c_5 / c_1 of eq (3) at the Hall height (the 5th harmonic enters eq (1)
-  // with sign (-1)^1). Removed from the phase by a fixed-count iteration.
-  double hall_fifth_harmonic_ratio;
+  // c_n / c_1 of eq (3) at the Hall height for n = 5, 9, 13 (harmonic n =
+  // 4k + 1 enters eq (1) with sign (-1)^k; HalbachHarmonicRatio). Removed
+  // from the phase by a fixed-count iteration. The 9th is 2.9 % of the
+  // fundamental at the seed stage's 1.6 mm: left out, it misplaced homing
+  // by up to 0.28 mm (1.4 deg of commutation phase on the default run).
+  double hall_harmonic_ratio[kHallHarmonics];
   // sqrt(A^2 + B^2) must be within [min, max] ADC codes to trust the phase.
   double hall_min_amplitude_codes;
   double hall_max_amplitude_codes;
@@ -160,6 +169,18 @@ SensorsToPoseConfig DefaultSensorsToPoseConfig();
 // c_n(z) / c_1(z) of eq (3) for harmonic n at height z over an array of
 // thickness delta (the sign (-1)^k is NOT included).
 double HalbachHarmonicRatio(int n, double z_m, double delta_m, double pitch_m);
+// hall_harmonic_ratio of a Hall sensor at height z over that array: n = 5, 9, 13.
+void HallHarmonicRatios(double z_m, double delta_m, double pitch_m, double (&ratio)[kHallHarmonics]);
+// The least slope d phi / d theta of the Hall phase over a pitch with these
+// harmonics (HallSolveStep's f'; 1 without harmonics). The solve needs the
+// phase monotonic with margin: configuration refuses a slope below
+// kHallPhaseSlopeMin. 0.2: where the solve's fixed steps are measured to
+// converge for a Halbach array's three harmonics (a Hall sensor down to
+// 0.5 mm over the seed's array; 0.45 mm still converges, 0.33 mm diverges)
+// and for the 5th alone (eps_5 <= 0.165; the bound was eps_5 < 0.19 before
+// the 9th and 13th were modelled, i.e. a sensor above ~0.53 mm here).
+double HallPhaseSlopeMin(const double (&ratio)[kHallHarmonics]);
+inline constexpr double kHallPhaseSlopeMin = 0.2;
 
 // The highest platen height above rest the laser displacement sensors
 // measure: their zero height + full scale (300 um on the seed board). The
@@ -212,7 +233,7 @@ struct SensorsToPoseState {
   std::int64_t pitch_pm;
   std::int64_t hall_a_x_pm;
   std::int64_t hall_a_y_pm;
-  double hall_fifth_harmonic_ratio;
+  double hall_harmonic_ratio[kHallHarmonics];
   double hall_min_amplitude_codes;
   double hall_max_amplitude_codes;
 
@@ -320,7 +341,7 @@ inline constexpr int kHallSolveSteps = 7;
 struct HallSolve {
   double phi[2];    // atan2(A, B) of x and y
   double theta[2];  // the solution so far
-  double eps;       // fifth-harmonic ratio
+  double eps[kHallHarmonics];  // hall_harmonic_ratio (n = 5, 9, 13)
   int steps;        // steps done
   HallPhase result;  // amplitudes and plausibility (phases: HallSolveFinish)
 };
@@ -331,7 +352,7 @@ struct HallSolveInputs {
   std::int16_t hall_adc[io::kHallChannels];
   std::uint16_t status_flags;
   std::int16_t adc_rail_code;
-  double eps;  // hall_fifth_harmonic_ratio
+  double eps[kHallHarmonics];  // hall_harmonic_ratio
   double min_amplitude_codes;
   double max_amplitude_codes;
   // And what ComputeHomingOffsets reads of the geometry.
