@@ -1096,3 +1096,36 @@ TEST(ClosedLoop, CommandsNeverTakeTheReferenceBeyondItsLimits) {
   for (int n = 0; n < 1000; ++n) s.tick(c);
   CHECK(c.status().state == SequencerState::kReady);
 }
+
+// A measurement configuration written at rest replaces the pose solver's
+// state, and with it the homing offsets (the Hall zero of the magnet frame).
+// The sequencer used to keep "homed": the next levitate went straight to
+// InPlaneLock and commutated from wherever the interferometers re-seeded
+// (a stage switch, or a beam sign written, left the coils' phase off by the
+// platen's place within the pitch). Now the next levitate homes again.
+TEST(ClosedLoop, AMeasurementConfigWrittenAtRestIsHomedAgainBeforeTheNextLift) {
+  static Controller<float> c;
+  AxisStage s(3);
+  CHECK(levitate_to_ready(c, s));
+  CHECK(c.command(MotionCommand{MotionType::kLand}) == CommandResult::kAccepted);
+  CHECK(s.run_until(c, SequencerState::kIdle, 40000));
+  // A gain-only write keeps the homing: no Homing on the next lift.
+  KernelConfig kc = c.config();
+  kc.axis[0].pid.kp *= 1.01f;
+  CHECK(c.apply_config(kc) == ConfigError::kOk);
+  CHECK(c.command(MotionCommand{MotionType::kLevitate}) == CommandResult::kAccepted);
+  CHECK(c.status().state != SequencerState::kHoming);
+  s.tick(c);
+  CHECK(c.status().state == SequencerState::kInPlaneLock);
+  CHECK(s.run_until(c, SequencerState::kReady, 40000));
+  CHECK(c.command(MotionCommand{MotionType::kLand}) == CommandResult::kAccepted);
+  CHECK(s.run_until(c, SequencerState::kIdle, 40000));
+  // A measurement write: the next lift homes first, and reaches Ready homed.
+  kc = c.config();
+  kc.measurement.max_speed_m_per_s *= 1.5;
+  CHECK(c.apply_config(kc) == ConfigError::kOk);
+  CHECK(c.command(MotionCommand{MotionType::kLevitate}) == CommandResult::kAccepted);
+  s.tick(c);
+  CHECK(c.status().state == SequencerState::kHoming);
+  CHECK(s.run_until(c, SequencerState::kReady, 40000));
+}

@@ -323,7 +323,13 @@ ConfigError Controller<Scalar>::commit_config(const KernelConfig& c) {
 
   // --- 3. swap. Measurement state is only replaced when its config changed
   // (re-seeding the counters would lose the interferometer zero).
-  if (!same_bytes(c.measurement, config_.measurement) || !s2p_.lsb_den) s2p_ = s2p_next_;
+  // A new measurement state has no homing offsets: the sequencer forgets
+  // that it homed, so the next levitate homes again (it went straight to
+  // InPlaneLock, commutating from wherever the counters re-seeded).
+  if (!same_bytes(c.measurement, config_.measurement) || !s2p_.lsb_den) {
+    s2p_ = s2p_next_;
+    sequencer_.invalidate_homing();
+  }
   active_ = 1 - active_;
   config_ = c;
   // On rest a running coupling ramp ends (the correction cannot change while
