@@ -313,14 +313,32 @@ ProfileCheck CheckStageProfile(const StageProfile& p) {
   // placement.
   {
     int beams = 0, heights = 0;
+    // One counter resolution for the three beams and one scale for the three
+    // heights (one interpolator, one ADC scale in the pose solver): they were
+    // parsed and ignored, so a lab's 1.24 nm counter read as 0.618 nm (every
+    // length halved, every loop gain doubled).
+    double beam_resolution = -1.0, height_scale = -1.0;
+    const auto one_value = [](double* kept, double v) {
+      if (*kept < 0.0) *kept = v;
+      return *kept == v;
+    };
     for (int s = 0; s < p.sensor_count && s < kMaxSensors; ++s) {
       const Sensor& sensor = p.sensors[s];
       if (sensor.kind == SensorKind::kInterferometer) {
         ++beams;
         const double c = std::fabs(numeric::dcos(sensor.direction_rad)), sn = std::fabs(numeric::dsin(sensor.direction_rad));
         if (!(c > 1.0 - 1e-9 || sn > 1.0 - 1e-9)) return fail(ProfileError::kUnsupportedSensors);
+        if (!one_value(&beam_resolution, sensor.resolution) ||
+            (sensor.resolution != 0.0 && InterferometerInterpolation(sensor.resolution) == 0)) {
+          return fail(ProfileError::kUnsupportedSensors);
+        }
       } else if (sensor.kind == SensorKind::kLaserDisplacement) {
         ++heights;
+        // m per V on the +-10 V ADC: 0.1 um .. 1 mm of range per side.
+        if (!one_value(&height_scale, sensor.resolution) ||
+            (sensor.resolution != 0.0 && !(sensor.resolution >= 1e-8 && sensor.resolution <= 1e-4))) {
+          return fail(ProfileError::kUnsupportedSensors);
+        }
       } else if (sensor.kind != SensorKind::kHall) {
         return fail(ProfileError::kUnsupportedSensors);
       }
@@ -565,6 +583,15 @@ kernel::KernelConfig config_of(const StageProfile& p) {
 }
 }  // namespace
 
+int InterferometerInterpolation(double resolution_m) {
+  if (!(resolution_m > 0.0 && resolution_m < 1.0)) return 0;
+  const double per_count = io::stage::kWavelength_m / io::stage::kInterferometerFold;
+  const double n = std::floor(per_count / resolution_m + 0.5);
+  if (!(n >= 1.0 && n <= 65536.0)) return 0;
+  const double exact = per_count / n;
+  return std::fabs(exact - resolution_m) <= kResolutionRounding * resolution_m ? static_cast<int>(n) : 0;
+}
+
 void SetSensorGeometry(const StageProfile& p, kernel::SensorsToPoseConfig* m) {
   // The sensor geometry sensors_to_pose solves with: the profile's sensors, in
   // order of kind (interferometers -> the three beams, laser displacement
@@ -584,12 +611,15 @@ void SetSensorGeometry(const StageProfile& p, kernel::SensorsToPoseConfig* m) {
           b.perpendicular_m = along_x ? sensor.y_m : sensor.x_m;
           // A beam that looks along -X or -Y counts down as the stage moves +.
           b.sign = (along_x ? numeric::dcos(sensor.direction_rad) : numeric::dsin(sensor.direction_rad)) < 0.0 ? -1 : 1;
+          // The counter's resolution (the check requires one for all three).
+          if (sensor.resolution != 0.0) m->interpolation = InterferometerInterpolation(sensor.resolution);
         }
         break;
       case SensorKind::kLaserDisplacement:
         if (heights < io::kDisplacementSensors) {
           m->displacement_sensor_x_m[heights] = sensor.x_m;
           m->displacement_sensor_y_m[heights] = sensor.y_m;
+          if (sensor.resolution != 0.0) m->displacement_scale_m_per_V = sensor.resolution;
           ++heights;
         }
         break;

@@ -151,6 +151,31 @@ int check_profile_main(const std::string& name_or_path) {
                                 : "  TOO WEAK: raise sensitivity_V_per_T or lower height_m");
     }
   }
+  // 5b. The counters' and heights' scales (one interpolator, one ADC scale).
+  if (p.family == sp::ActuatorFamily::kHalbachLorentz) {
+    for (int i = 0; i < p.sensor_count && i < sp::kMaxSensors; ++i) {
+      const sp::Sensor& s = p.sensors[i];
+      if (s.kind == sp::SensorKind::kInterferometer) {
+        const int n = sp::InterferometerInterpolation(s.resolution);
+        if (s.resolution == 0.0) {
+          std::printf("  interferometer %d: resolution not given: the family's %.5g m per count\n", i + 1,
+                      io::stage::kInterferometerLsb_m);
+        } else if (n == 0) {
+          std::printf("  interferometer %d: resolution %.5g m per count is no wavelength / (%d x N) within %.1f %%: "
+                      "NOT SUPPORTED\n",
+                      i + 1, s.resolution, io::stage::kInterferometerFold, 100.0 * sp::kResolutionRounding);
+        } else {
+          std::printf("  interferometer %d: resolution %.5g m per count = wavelength / (%d x %d) = %.6g m\n", i + 1,
+                      s.resolution, io::stage::kInterferometerFold, n,
+                      io::stage::kWavelength_m / (io::stage::kInterferometerFold * n));
+        }
+      } else if (s.kind == sp::SensorKind::kLaserDisplacement) {
+        std::printf("  laser displacement %d: %.5g m per V (%s)\n", i + 1,
+                    s.resolution != 0.0 ? s.resolution : io::stage::kDisplacementScale_m_per_V,
+                    s.resolution != 0.0 ? "the profile's" : "the family's");
+      }
+    }
+  }
   // 6. Verdict, and whether the bench can build its plant.
   if (p.family == sp::ActuatorFamily::kSolenoidMagnet) return selfstab_check_profile(p);
   if (check.error != sp::ProfileError::kOk) {

@@ -67,6 +67,9 @@ bool PlantConfigForProfile(const stage_profile::StageProfile& p, const PlantConf
     }
     c.interferometer.sign[b] = m.beam[b].sign;
   }
+  // Their scales too: the counter's interpolation and the heights' m per V.
+  c.interferometer.interpolation = m.interpolation;
+  c.displacement.scale_m_per_V = m.displacement_scale_m_per_V;
   c.interferometer.x_beam_y_m = m.beam[0].perpendicular_m;
   c.interferometer.y_beam_x_m[0] = m.beam[1].perpendicular_m;
   c.interferometer.y_beam_x_m[1] = m.beam[2].perpendicular_m;

@@ -672,3 +672,68 @@ TEST(Profiles, TheCheckerRefusesWhatTheKernelWouldAndTheParserWhatIsMissing) {
   no_turns.erase(at, no_turns.find('\n', at) - at + 1);
   CHECK_TRUE(has(errors_of(no_turns), "coil_turns: missing in [halbach]"));
 }
+
+// The sensors' `resolution` was parsed and ignored in the Halbach family: a
+// lab's interferometer counting 1.236 nm (interpolation 128) was read with the
+// seed's 0.618 nm (every length halved, every loop gain doubled), and a laser
+// displacement sensor's m per V was the seed's 20 um/V whatever it said. Now
+// the kernel's pose solver and the bench's plant take both from the profile.
+TEST(Profiles, TheSensorsResolutionScalesThePoseSolverAndThePlant) {
+  const auto base = shipped("nk2017-cross").profile;
+  kernel::KernelConfig kc{};
+  CHECK_TRUE(sp::MakeKernelConfig(base, &kc).error == sp::ProfileError::kOk);
+  LONGS_EQUAL(256, kc.measurement.interpolation);  // 0.618e-9 rounds to 632.991 nm / (4 x 256)
+  DOUBLES_EQUAL(20e-6, kc.measurement.displacement_scale_m_per_V, 0.0);
+  LONGS_EQUAL(256, sp::InterferometerInterpolation(0.618e-9));
+  LONGS_EQUAL(128, sp::InterferometerInterpolation(1.2362e-9));
+  LONGS_EQUAL(0, sp::InterferometerInterpolation(1e-6));  // coarser than lambda / 4
+  LONGS_EQUAL(0, sp::InterferometerInterpolation(0.0));
+
+  sp::StageProfile p = base;
+  for (int s = 0; s < p.sensor_count; ++s) {
+    if (p.sensors[s].kind == sp::SensorKind::kInterferometer) p.sensors[s].resolution = 1.2362e-9;
+    if (p.sensors[s].kind == sp::SensorKind::kLaserDisplacement) p.sensors[s].resolution = 30e-6;
+  }
+  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == sp::ProfileError::kOk);
+  LONGS_EQUAL(128, kc.measurement.interpolation);
+  DOUBLES_EQUAL(30e-6, kc.measurement.displacement_scale_m_per_V, 0.0);
+  hil::PlantConfig pc{};
+  std::string why;
+  CHECK_TRUE(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &pc, &why));
+  LONGS_EQUAL(128, pc.interferometer.interpolation);
+  DOUBLES_EQUAL(30e-6, pc.displacement.scale_m_per_V, 0.0);
+  // The plant's counts and heights, read by the kernel's solver: 0.5 mm of x
+  // is 0.5 mm (it read 0.25 mm when the solver kept the seed's 0.618 nm), and the
+  // heights are where the plant puts them.
+  {
+    pc.sensor_noise_enabled = false;
+    hil::Plant plant(pc, 1);
+    kernel::SensorsToPoseState s2p;
+    CHECK_TRUE(kernel::ApplySensorsToPoseConfig(kc.measurement, &s2p) == kernel::SensorsToPoseError::kOk);
+    const kernel::PoseMeasurement m0 = kernel::SensorsToPoseStep(plant.sample(), &s2p);
+    hil::BodyState b = plant.body_state();
+    b.position_m.x() += 0.5e-3;  // within one tick's 0.8 mm speed bound
+    b.position_m.z() += 20e-6;
+    plant.set_body_state(b);
+    const kernel::PoseMeasurement m1 = kernel::SensorsToPoseStep(plant.sample(), &s2p);
+    const double dx = static_cast<double>(m1.pose_unhomed[kernel::Axis::kX] - m0.pose_unhomed[kernel::Axis::kX]) * 1e-12;
+    const double dz = static_cast<double>(m1.pose_unhomed[kernel::Axis::kZ] - m0.pose_unhomed[kernel::Axis::kZ]) * 1e-12;
+    DOUBLES_EQUAL(0.5e-3, dx, 2.5e-9);  // two counts of 1.24 nm
+    DOUBLES_EQUAL(20e-6, dz, 20e-9);  // ADC LSB 9.2 nm at 30 um/V
+  }
+
+  // Refused: beams that disagree (one interpolator), a resolution no whole
+  // interpolation gives, heights with two scales, a scale out of range.
+  sp::StageProfile q = base;
+  q.sensors[1].resolution = 1.2362e-9;
+  CHECK_TRUE(sp::CheckStageProfile(q).error == sp::ProfileError::kUnsupportedSensors);
+  q = base;
+  for (int s = 0; s < 3; ++s) q.sensors[s].resolution = 1e-6;
+  CHECK_TRUE(sp::CheckStageProfile(q).error == sp::ProfileError::kUnsupportedSensors);
+  q = base;
+  q.sensors[4].resolution = 30e-6;
+  CHECK_TRUE(sp::CheckStageProfile(q).error == sp::ProfileError::kUnsupportedSensors);
+  q = base;
+  for (int s = 3; s < 6; ++s) q.sensors[s].resolution = 1e-3;
+  CHECK_TRUE(sp::CheckStageProfile(q).error == sp::ProfileError::kUnsupportedSensors);
+}

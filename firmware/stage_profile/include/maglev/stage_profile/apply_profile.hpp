@@ -50,6 +50,14 @@ inline constexpr double kHallMinAmplitudeFraction = 0.20;
 // Hall solve takes the two as a quadrature pair; 10 um is 0.07 deg of phase.
 inline constexpr double kHallQuadratureTolerance_m = 10e-6;
 
+// An interferometer's `resolution` (m per count) is the family's wavelength /
+// (fold x N) for a whole interpolation N: the profile's figure may be rounded
+// (the seed's 0.618e-9 for 632.991 nm / 1024 = 0.61815e-9) by this much
+// relative. N = InterferometerInterpolation(resolution) (0 when none fits:
+// kUnsupportedSensors). A resolution of 0 keeps the family's counter.
+inline constexpr double kResolutionRounding = 1e-3;
+int InterferometerInterpolation(double resolution_m);
+
 // Validates the profile against this firmware (family, controllers, sensors
 // per active axis, allocation rank and condition, limits inside the
 // hardware, start-up sequence). Nothing is applied.
@@ -66,8 +74,11 @@ ProfileCheck MakeKernelConfig(const StageProfile& p, kernel::KernelConfig* out);
 // part of MakeKernelConfig that places the sensors, unchecked): its sensors
 // in order of kind -- interferometers -> the three beams (axis, perpendicular
 // offset, counting sign), laser displacement sensors -> the three heights,
-// the first Hall sensor -> Hall A -- and the pitch. The bench's plant places
-// its sensors from the same call, so the two cannot disagree.
+// the first Hall sensor -> Hall A -- and the pitch; and their scales: the
+// interferometers' interpolation from their resolution, the laser
+// displacement sensors' m per V (both only when given, else the family's).
+// The bench's plant places and scales its sensors from the same call, so the
+// two cannot disagree.
 void SetSensorGeometry(const StageProfile& p, kernel::SensorsToPoseConfig* m);
 
 }  // namespace maglev::stage_profile
