@@ -216,12 +216,20 @@ TEST(SensorsToPose, BeamLayoutSolveWithAbbeAndCosine) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> px(-0.028, 0.028), py(-0.0175, 0.0175), pth(-3.7e-3, 3.7e-3);
   double worst_xy = 0, worst_th = 0, worst_uncorrected = 0;
-  for (int layout = 0; layout < 2; ++layout) {
+  for (int layout = 0; layout < 3; ++layout) {
     if (layout == 1) {
       // A different layout: two X beams at y = -/+ 40 mm, one Y beam at x = 10 mm, one sign flipped.
       cfg.beam[0] = {BeamAxis::kX, -0.040, 0.06, 1};
       cfg.beam[1] = {BeamAxis::kX, 0.040, 0.06, -1};
       cfg.beam[2] = {BeamAxis::kY, 0.010, 0.05, 1};
+    }
+    if (layout == 2) {
+      // The closed form's quadratic branch: the pair's mirrors at different
+      // distances (its difference then holds a t^2 term), the pair listed
+      // first and in the order that makes dp < 0 (the configuration swaps it).
+      cfg.beam[0] = {BeamAxis::kY, 0.045, 0.0715, 1};
+      cfg.beam[1] = {BeamAxis::kY, -0.055, 0.030, 1};
+      cfg.beam[2] = {BeamAxis::kX, 0.005, 0.090, -1};
     }
     for (int n = 0; n < 300; ++n) {
       SensorsToPoseState& st = FreshState(cfg);

@@ -222,6 +222,49 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) s.inv_beam[r][c] = inv[r][c];
   s.abbe_cosine_correction = config.abbe_cosine_correction;
+  // The closed form's pair and single beam. Invert3 refused three beams
+  // along one axis, so exactly two share one.
+  {
+    int ys = 0;
+    for (int b = 0; b < 3; ++b) ys += s.beam_is_y[b];
+    const std::uint8_t pair_is_y = ys == 2 ? 1u : 0u;
+    int pair[2] = {-1, -1}, single = -1;
+    for (int b = 0; b < 3; ++b) {
+      if (s.beam_is_y[b] == pair_is_y) {
+        pair[pair[0] < 0 ? 0 : 1] = b;
+      } else {
+        single = b;
+      }
+    }
+    const auto p_pm = [&config](int b) { return config.beam[b].perpendicular_m * 1e12; };
+    // Along Y: m_a - m_b = (p_a - p_b) t + ...; along X: (p_b - p_a) t + ...
+    double dp = pair_is_y ? p_pm(pair[0]) - p_pm(pair[1]) : p_pm(pair[1]) - p_pm(pair[0]);
+    if (dp < 0.0) {
+      const int k = pair[0];
+      pair[0] = pair[1];
+      pair[1] = k;
+      dp = -dp;
+    }
+    if (!(dp > 0.0) || single < 0) return SensorsToPoseError::kSingularBeamLayout;
+    s.pair_a = static_cast<std::uint8_t>(pair[0]);
+    s.pair_b = static_cast<std::uint8_t>(pair[1]);
+    s.pair_dp_pm = dp;
+    s.pair_dp2_pm2 = dp * dp;
+    s.pair_two_dd_pm = 2.0 * (s.beam_mirror_pm[pair[0]] - s.beam_mirror_pm[pair[1]]);
+    double* w_pair = pair_is_y ? s.w_y : s.w_x;
+    double* w_single = pair_is_y ? s.w_x : s.w_y;
+    for (int b = 0; b < 3; ++b) {
+      w_pair[b] = (b == pair[0] || b == pair[1]) ? 0.5 : 0.0;
+      w_single[b] = b == single ? 1.0 : 0.0;
+    }
+    const double p_pair = 0.5 * (p_pm(pair[0]) + p_pm(pair[1]));
+    const double half_d_pair = 0.25 * (s.beam_mirror_pm[pair[0]] + s.beam_mirror_pm[pair[1]]);
+    const double half_d_single = 0.5 * s.beam_mirror_pm[single];
+    s.p_x_pm = pair_is_y ? p_pm(single) : p_pair;
+    s.half_d_x_pm = pair_is_y ? half_d_single : half_d_pair;
+    s.p_y_pm = pair_is_y ? p_pair : p_pm(single);
+    s.half_d_y_pm = pair_is_y ? half_d_pair : half_d_single;
+  }
 
   // --- laser displacement sensors: z_i = z + theta_x*y_i - theta_y*x_i ------
   if (!(config.displacement_scale_m_per_V > 0.0) || !(config.adc_full_scale_V > 0.0) ||
@@ -503,41 +546,43 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   s.stale_gap = static_cast<std::uint8_t>(stale && !seed ? (s.stale_gap < 255 ? s.stale_gap + 1 : 255) : 0);
   s.seeded = true;
 
-  // --- beam solve: linear inverse, then three fixed Abbe/cosine corrections ---
-  // (fixed count: no data-dependent exit). The non-linear terms are
-  //   X beam:  + y*theta + d*theta^2/2      Y beam:  - x*theta + d*theta^2/2
-  // so m_lin = m - nonlin(estimate); each pass shrinks the residual by about
-  // |theta| (< 4e-3 at the 3.72 mrad travel): 65 um worst-case Abbe term ->
-  // 260 nm -> 1 nm -> 5 pm. Three passes leave at most 5.4 pm in x / y at the
-  // corners of the travel (x +-28 mm, y +-17.5 mm, theta_z +-3.72 mrad; 18 pm
-  // at the supervisor's 5 mrad), 1/100 of the 618 pm LSB, and theta_z exact
-  // (the Abbe terms are common to the two y beams); a fourth pass (0.02 pm)
-  // cost ~32 M7 instructions a tick for nothing measurable. In double (pm,
-  // prad) the arithmetic adds < 1e-3 pm; the result is rounded to whole pm /
-  // prad once, at the end (docs/PERFORMANCE.md, "On-target": the three-pass
-  // bound and how it was computed).
-  // Pass 0 is the linear inverse of the measurement itself (no correction:
-  // theta = 0 makes the subtracted term exactly zero).
-  const double correct = s.abbe_cosine_correction ? 1.0 : 0.0;
+  // --- beam solve, closed form ---------------------------------------------------
+  // The beams read (sign applied; t = tan theta_z, the mirror's slope):
+  //   X beam at y = p:  m = x + (y - p) t + d t^2 / 2
+  //   Y beam at x = p:  m = y + (p - x) t + d t^2 / 2
+  // Two beams share an axis; their difference holds t alone:
+  //   (dd / 2) t^2 + dp t = m_a - m_b   (dp > 0: the configuration orders them),
+  // whose root near (m_a - m_b) / dp is t = 2 dm / (dp + sqrt(dp^2 + 2 dd dm))
+  // (exactly dm / dp when the mirrors are equally far: sqrt(dp^2) = dp in
+  // IEEE arithmetic). Then x and y from the x row and the y row (the single
+  // beam and the pair's mean):
+  //   x + t y = m_X + t (p_X - t d_X / 2),  y - t x = m_Y - t (p_Y + t d_Y / 2),
+  //   det = 1 + t^2.
+  // The exact solution of the model, where the three fixed-point passes it
+  // replaces (issue 16: "a closed-form or single-pass beam solve") were
+  // within 5.4 pm of it at the corners of the travel; what is left is the
+  // double arithmetic (< 1e-3 pm) and the final rounding to whole pm (0.5 pm).
+  // One square root and one division, no data-dependent loop.
   double est[3];
-#pragma GCC unroll 3
-  for (int r = 0; r < 3; ++r) {
-    est[r] = s.inv_beam[r][0] * meas_pm[0] + s.inv_beam[r][1] * meas_pm[1] + s.inv_beam[r][2] * meas_pm[2];
-  }
-  for (int pass = 1; pass < 4; ++pass) {
-    const double theta_rad = est[2] * 1e-12 * correct;
-    const double half_theta2 = 0.5 * theta_rad * theta_rad;
-    double lin[3];
-#pragma GCC unroll 3
-    for (int b = 0; b < 3; ++b) {
-      const double other = s.beam_is_y[b] ? -est[0] : est[1];
-      lin[b] = meas_pm[b] - (other * theta_rad + s.beam_mirror_pm[b] * half_theta2);
-    }
+  if (s.abbe_cosine_correction) {
+    const double dm = meas_pm[s.pair_a] - meas_pm[s.pair_b];
+    const double t = 2.0 * dm / (s.pair_dp_pm + std::sqrt(s.pair_dp2_pm2 + s.pair_two_dd_pm * dm));
+    const double m_x = s.w_x[0] * meas_pm[0] + s.w_x[1] * meas_pm[1] + s.w_x[2] * meas_pm[2];
+    const double m_y = s.w_y[0] * meas_pm[0] + s.w_y[1] * meas_pm[1] + s.w_y[2] * meas_pm[2];
+    const double r_x = m_x + t * (s.p_x_pm - t * s.half_d_x_pm);
+    const double r_y = m_y - t * (s.p_y_pm + t * s.half_d_y_pm);
+    const double inv_det = 1.0 / (1.0 + t * t);
+    est[0] = (r_x - t * r_y) * inv_det;
+    est[1] = (r_y + t * r_x) * inv_det;
+    est[2] = t * 1e12;
+  } else {
+    // The linear inverse alone (abbe_cosine_correction off).
 #pragma GCC unroll 3
     for (int r = 0; r < 3; ++r) {
-      est[r] = s.inv_beam[r][0] * lin[0] + s.inv_beam[r][1] * lin[1] + s.inv_beam[r][2] * lin[2];
+      est[r] = s.inv_beam[r][0] * meas_pm[0] + s.inv_beam[r][1] * meas_pm[1] + s.inv_beam[r][2] * meas_pm[2];
     }
   }
+  const double correct = s.abbe_cosine_correction ? 1.0 : 0.0;
 
   // --- laser displacement plane fit ------------------------------------------
   double h[3];
