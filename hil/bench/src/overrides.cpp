@@ -8,6 +8,7 @@
 
 #include "maglev/bench/axes.hpp"
 #include "maglev/bench/metrics_registry.hpp"
+#include "maglev/bench/profile_check.hpp"
 #include "maglev/bench/timeline.hpp"
 #include "maglev/bench/units.hpp"
 #include "maglev/io/stage_parameters.hpp"
@@ -501,13 +502,8 @@ bool apply_profile(const std::string& name_or_path, Overrides* o, std::vector<Sc
   }
   // As the firmware's stage selection (KernelConfigOfProfile): a value the
   // register map cannot hold could not be saved on the board.
-  if (const modbus::RegisterDef* d = modbus::FirstRegisterOutOfRange(kc)) {
-    double v = 0.0;
-    (void)modbus::get_config_field(kc, d->id, &v);
-    char text[160];
-    std::snprintf(text, sizeof text, "%s is %g, outside the register's range %g..%g", d->name, v, d->min, d->max);
-    errs->push_back({name_or_path + ": the controller refuses this profile: " +
-                     stage_profile::to_string(stage_profile::ProfileError::kRegisterRange) + " (" + text + ")"});
+  if (const std::string refusal = register_range_refusal(kc); !refusal.empty()) {
+    errs->push_back({name_or_path + ": the controller refuses this profile: " + refusal});
     return false;
   }
   std::string why;

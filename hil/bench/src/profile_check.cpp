@@ -71,6 +71,17 @@ int list_profiles_main() {
   return bad == 0 ? 0 : 1;
 }
 
+std::string register_range_refusal(const kernel::KernelConfig& kc) {
+  const modbus::RegisterDef* d = modbus::FirstRegisterOutOfRange(kc);
+  if (d == nullptr) return {};
+  double v = 0.0;
+  (void)modbus::get_config_field(kc, d->id, &v);
+  char text[200];
+  std::snprintf(text, sizeof text, "%s (%s is %g, outside the register's range %g..%g)",
+                stage_profile::to_string(stage_profile::ProfileError::kRegisterRange), d->name, v, d->min, d->max);
+  return text;
+}
+
 int check_profile_main(const std::string& name_or_path) {
   const profile::ProfileParse parsed = profile::find_profile(name_or_path, profile_dir());
   if (!parsed.ok()) {
@@ -183,11 +194,9 @@ int check_profile_main(const std::string& name_or_path) {
                 check.axis >= 0 ? " on axis " : "", check.axis >= 0 ? axis_name(static_cast<Axis>(check.axis)) : "");
     return 1;
   }
-  if (const modbus::RegisterDef* d = made.error == sp::ProfileError::kOk ? modbus::FirstRegisterOutOfRange(kc) : nullptr) {
-    double v = 0.0;
-    (void)modbus::get_config_field(kc, d->id, &v);
-    std::printf("  controller: REFUSES this profile: %s: %s is %g, outside %g..%g\n",
-                sp::to_string(sp::ProfileError::kRegisterRange), d->name, v, d->min, d->max);
+  if (const std::string refusal = made.error == sp::ProfileError::kOk ? register_range_refusal(kc) : std::string();
+      !refusal.empty()) {
+    std::printf("  controller: REFUSES this profile: %s\n", refusal.c_str());
     return 1;
   }
   hil::PlantConfig plant{};
