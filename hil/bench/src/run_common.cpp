@@ -168,4 +168,15 @@ void resize_rows(Trace* tr, std::size_t n) {
   tr->state.resize(n);
 }
 
+void platen_centre_m(const hil::Plant& plant, double out[2]) {
+  const hil::PlantState& truth = plant.truth();
+  const auto& ab = plant.config().as_built;
+  for (int a = 0; a < 2; ++a) out[a] = truth.position_m[a] - (ab.active ? ab.com_offset_m[a] : 0.0);
+}
+
+void add_homing_metrics(const double pose_xy_m[2], const double centre_xy_m[2], std::map<std::string, double>* M) {
+  (*M)["homing_error_x_m"] = pose_xy_m[0] - centre_xy_m[0];
+  (*M)["homing_error_y_m"] = pose_xy_m[1] - centre_xy_m[1];
+}
+
 }  // namespace maglev::bench::internal

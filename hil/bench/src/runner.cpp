@@ -127,7 +127,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
   double levitate_t = -1.0, ready_t = -1.0;
   // The homed in-plane frame against the plant's truth, on the first tick
   // after homing (the commutation's zero: 1 um of x is 0.0071 deg of phase).
-  double homing_error_m[2] = {0.0, 0.0};
+  double homed_pose_m[2] = {0.0, 0.0}, homed_centre_m[2] = {0.0, 0.0};
   bool homed_seen = false;
   std::uint64_t missed_actuator = 0;
   bool aborted = false;
@@ -218,15 +218,9 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     if (ready_t < 0 && st.state == kernel::SequencerState::kReady) ready_t = t;
     if (!homed_seen && st.state == kernel::SequencerState::kInPlaneLock) {
       homed_seen = true;
-      // The platen's centre: the plant's position is its centre of mass,
-      // which an as-built platen carries off the centre (theta_z is urad
-      // here: the offset's rotation is below 1e-8 m).
-      const hil::PlantState& truth = plant.truth();
-      const auto& ab = plant.config().as_built;
-      for (int a = 0; a < 2; ++a) {
-        const double centre_m = truth.position_m[a] - (ab.active ? ab.com_offset_m[a] : 0.0);
-        homing_error_m[a] = pose_si(st.pose, a == 0 ? Axis::kX : Axis::kY) - centre_m;
-      }
+      homed_pose_m[0] = pose_si(st.pose, Axis::kX);
+      homed_pose_m[1] = pose_si(st.pose, Axis::kY);
+      internal::platen_centre_m(plant, homed_centre_m);
     }
   }
   const auto wall1 = std::chrono::steady_clock::now();
@@ -256,10 +250,7 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     R.metrics["servo_rate_Hz"] = rate_Hz;
     R.metrics["plant_substeps_per_tick"] = static_cast<double>(ov.plant.integration.substeps_per_tick);
   }
-  if (homed_seen) {
-    R.metrics["homing_error_x_m"] = homing_error_m[0];
-    R.metrics["homing_error_y_m"] = homing_error_m[1];
-  }
+  if (homed_seen) internal::add_homing_metrics(homed_pose_m, homed_centre_m, &R.metrics);
   R.coupling = node.config().coupling;
   const kernel::ControllerStatus& fin = node.status();
   if (opt.coupling) R.metrics["coupling_correction_loaded"] = opt.coupling->enabled;

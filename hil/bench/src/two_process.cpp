@@ -126,6 +126,7 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
   const auto n_ticks = static_cast<std::uint64_t>(std::llround(sc.duration_s() / dt));
   Trace& tr = R.trace;
   std::vector<double> current_A[8];
+  std::vector<double> centre_x_m, centre_y_m;  // the platen's centre after each tick (homing metrics)
   lockstep::ActuatorWatchdog watchdog;  // the amplifier board's command watchdog
   std::uint64_t missed = 0;
   std::uint8_t cmd_counter = 0;
@@ -188,6 +189,10 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
     if (!got) ++missed;
     plant.apply(watchdog.update(got, received));  // hold <= 10 ms, then amplifiers off
     plant.advance_tick();
+    double centre[2];
+    internal::platen_centre_m(plant, centre);  // as the in-process runner reads it, after the tick
+    centre_x_m.push_back(centre[0]);
+    centre_y_m.push_back(centre[1]);
     tr.t_s.push_back(t);
     for (int j = 0; j < 8; ++j) current_A[j].push_back(truth_before.coil_current_A[j]);
   }
@@ -218,6 +223,8 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
                          std::to_string(tr.size()));
   }
   double ready_t = -1.0;
+  double homed_pose_m[2] = {0.0, 0.0}, homed_centre_m[2] = {0.0, 0.0};
+  bool homed_seen = false;
   for (std::size_t n = 0; n < tr.size(); ++n) {
     const bool have = have_record && n < rh.rows;
     const double* row = have ? &rows[n * kRecordDoubles] : nullptr;
@@ -233,6 +240,13 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
     }
     const int st = have ? states[n] : 0;
     tr.state.push_back(st);
+    if (!homed_seen && have && st == static_cast<int>(kernel::SequencerState::kInPlaneLock)) {
+      homed_seen = true;
+      homed_pose_m[0] = row[0];  // the record's pose columns: x, y first (Axis order)
+      homed_pose_m[1] = row[1];
+      homed_centre_m[0] = centre_x_m[n];
+      homed_centre_m[1] = centre_y_m[n];
+    }
     if (ready_t < 0 && st == static_cast<int>(kernel::SequencerState::kReady)) ready_t = tr.t_s[n];
   }
   const double sim_s = internal::set_run_timing(&R, std::chrono::duration<double>(wall1 - wall0).count(), meter, dt);
@@ -245,6 +259,7 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
                             internal::LinkTotals{missed, rh.rx_rejected, endpoint.receiver().stats().rejected_total(),
                                                  static_cast<double>(rh.final_state), static_cast<double>(rh.fault)});
   M["host_commands_acked"] = static_cast<double>(R.commands.size() - pending.size());
+  if (homed_seen) internal::add_homing_metrics(homed_pose_m, homed_centre_m, &M);
   if (paced) internal::add_realtime_metrics(timer, &M);
   internal::mark_refused_actions(R.commands, &actions);
   compute_metrics(sc, MetricInputs{actions, tr, {}, levitate_t, ready_t, sc.duration_s(), rate_Hz},

@@ -13,6 +13,7 @@
 #include "maglev/bench/timeline.hpp"
 #include "maglev/can_link/bus_load.hpp"
 #include "maglev/can_port/periodic_timer.hpp"
+#include "maglev/plant/plant.hpp"
 #include "maglev/virtual_can/virtual_can.hpp"
 
 namespace maglev::bench::internal {
@@ -64,6 +65,14 @@ struct LinkTotals {
 };
 // The run metrics both modes report (R's timing and completed already set).
 void add_run_metrics(RunResult* R, const can::BusLoadMeter& meter, double sim_s, const LinkTotals& l);
+
+// The platen's centre in x and y (the plant's position is its centre of
+// mass, which an as-built platen carries off the centre; theta_z is urad
+// where it is asked: the offset's rotation is below 1e-8 m).
+void platen_centre_m(const hil::Plant& plant, double out[2]);
+// homing_error_x_m / _y_m: the kernel's homed x, y on the first InPlaneLock
+// tick minus the platen's centre then (in process and over CAN alike).
+void add_homing_metrics(const double pose_xy_m[2], const double centre_xy_m[2], std::map<std::string, double>* M);
 // Marks the actions the controller refused (commands[i] is actions[i]'s
 // log: both executors log every action they run, in order).
 void mark_refused_actions(const std::vector<CommandLog>& commands, std::vector<TimelineAction>* actions);
