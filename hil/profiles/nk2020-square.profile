@@ -123,6 +123,9 @@ kd = 0.09
 setpoint_weight_p = 0.5
 effort_limit_A = 4
 
+# Sensor noise: rms per sample, the parts' datasheet figures (docs/PLANT.md
+# section 11: HP 5517D-class interferometer 0.3 nm, Keyence LK-G10-class laser
+# displacement sensor 10 nm); the bench's nominal and as-built plants use them.
 # Sensors: three interferometer axes (x; y1, y2 100 mm apart), three laser
 # displacement sensors (ours: 123 mm square), two two-axis Hall sensors.
 [sensor 1]
@@ -131,7 +134,7 @@ x_m = 0
 y_m = 0
 direction_rad = 0
 resolution = 0.618e-9
-noise = 0.5e-9
+noise = 0.3e-9
 
 [sensor 2]
 kind = interferometer
@@ -139,7 +142,7 @@ x_m = -0.05
 y_m = 0
 direction_rad = 1.5707963267948966
 resolution = 0.618e-9
-noise = 0.5e-9
+noise = 0.3e-9
 
 [sensor 3]
 kind = interferometer
@@ -147,28 +150,28 @@ x_m = 0.05
 y_m = 0
 direction_rad = 1.5707963267948966
 resolution = 0.618e-9
-noise = 0.5e-9
+noise = 0.3e-9
 
 [sensor 4]
 kind = laser_displacement
 x_m = 0.0615
 y_m = 0.0615
 resolution = 20e-6
-noise = 5e-9
+noise = 10e-9
 
 [sensor 5]
 kind = laser_displacement
 x_m = -0.0615
 y_m = 0.0615
 resolution = 20e-6
-noise = 5e-9
+noise = 10e-9
 
 [sensor 6]
 kind = laser_displacement
 x_m = -0.0615
 y_m = -0.0615
 resolution = 20e-6
-noise = 5e-9
+noise = 10e-9
 
 [sensor 7]
 kind = hall

@@ -71,8 +71,10 @@ void ApplyComponentNoise(PlantConfig* c) {
   c->amplifier.current_noise_density_A_per_rtHz =
       component_current_noise_density_A_per_rtHz(n, c->amplifier.gain_A_per_V);
   c->amplifier.current_noise_scale = 1.0;
-  c->interferometer.noise_m = n.interferometer_m;
-  c->displacement.noise_m = n.displacement_m;
+  // The stage's own sensors' figures where its profile gives them.
+  c->interferometer.noise_m =
+      c->interferometer.component_noise_m > 0.0 ? c->interferometer.component_noise_m : n.interferometer_m;
+  c->displacement.noise_m = c->displacement.component_noise_m > 0.0 ? c->displacement.component_noise_m : n.displacement_m;
   c->sensor_noise_enabled = true;
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "maglev/controller/controller.hpp"
+#include "maglev/plant/as_built.hpp"
 #include "maglev/plant/halbach_field.hpp"
 #include "maglev/plant/plant.hpp"
 #include "maglev/plant/plant_profile.hpp"
@@ -736,4 +737,41 @@ TEST(Profiles, TheSensorsResolutionScalesThePoseSolverAndThePlant) {
   q = base;
   for (int s = 3; s < 6; ++s) q.sensors[s].resolution = 1e-3;
   CHECK_TRUE(sp::CheckStageProfile(q).error == sp::ProfileError::kUnsupportedSensors);
+}
+
+// A profile's sensor `noise` was parsed and ignored: the bench's component
+// noise models (nominal, as-built) used the seed's parts' datasheet figures
+// whatever sensors a lab's profile described. Now they use the profile's
+// (the largest per kind); the default model keeps the bench's own figures.
+// The shipped Halbach profiles state the seed's parts' figures, so their
+// runs are what they were (checked byte for byte on as-built runs).
+TEST(Profiles, TheComponentNoiseModelsUseTheProfilesSensorNoise) {
+  const auto base = shipped("nk2017-cross").profile;
+  hil::PlantConfig pc{};
+  std::string why;
+  CHECK_TRUE(hil::PlantConfigForProfile(base, hil::PlantConfig::Default(), &pc, &why));
+  const hil::ComponentNoise parts = hil::component_noise();
+  DOUBLES_EQUAL(parts.interferometer_m, pc.interferometer.component_noise_m, 0.0);
+  DOUBLES_EQUAL(parts.displacement_m, pc.displacement.component_noise_m, 0.0);
+  // The default model: the bench's own figures, untouched by the profile.
+  DOUBLES_EQUAL(hil::PlantConfig::Default().interferometer.noise_m, pc.interferometer.noise_m, 0.0);
+  DOUBLES_EQUAL(hil::PlantConfig::Default().displacement.noise_m, pc.displacement.noise_m, 0.0);
+  const hil::PlantConfig seed_nominal = hil::NominalPlant(pc);
+  DOUBLES_EQUAL(parts.interferometer_m, seed_nominal.interferometer.noise_m, 0.0);
+  DOUBLES_EQUAL(parts.displacement_m, seed_nominal.displacement.noise_m, 0.0);
+
+  // A lab's 3 nm interferometers (one of them) and 20 nm heights.
+  sp::StageProfile p = base;
+  p.sensors[1].noise = 3e-9;
+  for (int s = 3; s < 6; ++s) p.sensors[s].noise = 20e-9;
+  CHECK_TRUE(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &pc, &why));
+  const hil::PlantConfig lab_nominal = hil::NominalPlant(pc);
+  DOUBLES_EQUAL(3e-9, lab_nominal.interferometer.noise_m, 0.0);  // the largest of the three beams
+  DOUBLES_EQUAL(20e-9, lab_nominal.displacement.noise_m, 0.0);
+  DOUBLES_EQUAL(hil::PlantConfig::Default().interferometer.noise_m, pc.interferometer.noise_m, 0.0);
+  // Not given (0): the seed's parts' figures.
+  for (int s = 0; s < 6; ++s) p.sensors[s].noise = 0.0;
+  CHECK_TRUE(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &pc, &why));
+  DOUBLES_EQUAL(parts.interferometer_m, hil::NominalPlant(pc).interferometer.noise_m, 0.0);
+  DOUBLES_EQUAL(parts.displacement_m, hil::NominalPlant(pc).displacement.noise_m, 0.0);
 }

@@ -167,6 +167,11 @@ struct InterferometerConfig {
   // (ours) beam height above the platen CoM (Abbe arm for tilts).
   double beam_height_m = 0.0;
   double noise_m = 0.5e-9;  // (ours) rms, white per sample
+  // The stage's own interferometers' figure (a profile's `noise`, the largest
+  // of its beams), rms per sample; 0 = not given. The component noise models
+  // (nominal, as-built: ApplyComponentNoise) use it, else the seed's parts'
+  // datasheet figure (docs/PLANT.md section 11).
+  double component_noise_m = 0.0;
   // Counter values at the reference pose (x = y = theta = 0): arbitrary,
   // chosen next to the unsigned and signed 32-bit wraps.
   std::uint32_t start_count[io::kInterferometerAxes] = {4294967040u, 2147483520u, 123456789u};
@@ -183,6 +188,8 @@ struct DisplacementConfig {
                                                  io::stage::kDisplacementSensorY_m[1],
                                                  io::stage::kDisplacementSensorY_m[2]};
   double noise_m = 5e-9;  // (ours) rms
+  // As InterferometerConfig::component_noise_m, for the laser displacement sensors.
+  double component_noise_m = 0.0;
 };
 
 struct HallConfig {
