@@ -524,6 +524,8 @@ kernel::KernelConfig config_of(const StageProfile& p) {
     l.pid.effort_limit_A = static_cast<float>(k.effort_limit_A);
     l.imr.effort_limit_A = l.pid.effort_limit_A;
     if (k.imr_omega0_rad_per_s > 0.0) l.imr.omega0_rad_s = static_cast<float>(k.imr_omega0_rad_per_s);
+    if (k.imr_bandwidth_Hz > 0.0) l.imr.bandwidth_Hz = static_cast<float>(k.imr_bandwidth_Hz);
+    if (k.imr_model_bandwidth_Hz > 0.0) l.imr.internal_model_bandwidth_Hz = static_cast<float>(k.imr_model_bandwidth_Hz);
     if (k.kind == ControllerKind::kInternalModel) {
       // The regulator's own 2-DOF weight and derivative filter (they reached
       // only the unused PID before: an internal-model axis ran b = 1 and the

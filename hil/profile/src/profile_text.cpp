@@ -324,6 +324,8 @@ Keys axis_keys(sp::Axis* a) {
       {"setpoint_weight_p", real(&c->setpoint_weight_p, 0.0, 1.0)},
       {"effort_limit_A", real(&c->effort_limit_A, 1e-3, 100.0)},
       {"imr_omega0_rad_per_s", real(&c->imr_omega0_rad_per_s, 0.0, 1e4)},
+      {"imr_bandwidth_Hz", real(&c->imr_bandwidth_Hz, 1e-3, 1e4)},
+      {"imr_model_bandwidth_Hz", real(&c->imr_model_bandwidth_Hz, 1e-3, 1e4)},
       {"antiwindup_gain", real(&c->antiwindup_gain, 0.0, 1e6)},
       {"feedback_linearization", flag(&c->feedback_linearization)},
       {"lqr_weight_h", [=](const std::string& v) -> std::string {
@@ -516,6 +518,7 @@ ProfileParse parse_profile(const std::string& text, const std::string& source) {
       hall_keys.push_back({section_index, line, k});
     }
     if (section.rfind("axis ", 0) == 0 && (k == "kp" || k == "ki" || k == "kd" || k == "imr_omega0_rad_per_s" ||
+                                           k == "imr_bandwidth_Hz" || k == "imr_model_bandwidth_Hz" ||
                                            k == "antiwindup_gain" || k == "lqr_weight_h")) {
       loop_keys.push_back({section_index, line, k});
     }

@@ -23,6 +23,15 @@ using namespace maglev;
 namespace sp = maglev::stage_profile;
 
 namespace {
+
+// Whether the parse reported an error that starts with `prefix` (file:line: key: reason).
+bool said(const profile::ProfileParse& parse, const std::string& prefix) {
+  for (const auto& e : parse.errors) {
+    if (e.find(prefix) == 0) return true;
+  }
+  return false;
+}
+
 profile::ProfileParse shipped(const char* name) { return profile::find_profile(name, MAGLEV_PROFILE_DIR); }
 
 // The kernel's configuration and the bench plant's (sensor noise off) for a
@@ -355,13 +364,8 @@ controller = pid2dof
 antiwindup_gain = 7e-5
 )";
   const profile::ProfileParse bad = profile::parse_profile(text, "lab.profile");
-  bool kp_said = false, e_said = false;
-  for (const auto& e : bad.errors) {
-    kp_said = kp_said || e.find("lab.profile:4: kp: belongs to controller = pid2dof") == 0;
-    e_said = e_said || e.find("lab.profile:10: antiwindup_gain: belongs to controller = internal_model") == 0;
-  }
-  CHECK_TRUE(kp_said);
-  CHECK_TRUE(e_said);
+  CHECK_TRUE(said(bad, "lab.profile:4: kp: belongs to controller = pid2dof"));
+  CHECK_TRUE(said(bad, "lab.profile:10: antiwindup_gain: belongs to controller = internal_model"));
 
   sp::StageProfile p = shipped("nk2017-cross").profile;
   p.axis[0].controller.kind = sp::ControllerKind::kInternalModel;
@@ -774,4 +778,43 @@ TEST(Profiles, TheComponentNoiseModelsUseTheProfilesSensorNoise) {
   CHECK_TRUE(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &pc, &why));
   DOUBLES_EQUAL(parts.interferometer_m, hil::NominalPlant(pc).interferometer.noise_m, 0.0);
   DOUBLES_EQUAL(parts.displacement_m, hil::NominalPlant(pc).displacement.noise_m, 0.0);
+}
+
+// The internal-model regulator's two design bandwidths were the family's
+// (20 Hz plant poles, 30 Hz on theta_z; 1.5 Hz internal model) whatever the
+// profile said: a lab's slower or stiffer axis could not have its own. Now
+// imr_bandwidth_Hz / imr_model_bandwidth_Hz of an internal_model axis reach
+// the design; on a pid2dof axis they are refused at their line; a design the
+// servo rate cannot hold is refused by the check.
+TEST(Profiles, AnInternalModelAxisTakesItsOwnDesignBandwidths) {
+  const profile::ProfileParse bad = profile::parse_profile(R"([axis x]
+mode = active
+controller = pid2dof
+imr_bandwidth_Hz = 30
+[axis y]
+mode = active
+controller = internal_model
+imr_model_bandwidth_Hz = 0
+)",
+                                                           "lab.profile");
+  CHECK_TRUE(said(bad, "lab.profile:4: imr_bandwidth_Hz: belongs to controller = internal_model"));
+  CHECK_TRUE(said(bad, "lab.profile:8: imr_model_bandwidth_Hz: out of range"));
+
+  sp::StageProfile p = shipped("nk2017-cross").profile;
+  p.axis[0].controller.kind = sp::ControllerKind::kInternalModel;
+  p.axis[0].controller.kp = p.axis[0].controller.ki = p.axis[0].controller.kd = 0.0;
+  kernel::KernelConfig kc{};
+  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == sp::ProfileError::kOk);
+  DOUBLES_EQUAL(20.0, kc.axis[0].imr.bandwidth_Hz, 0.0);  // not given: the family's
+  DOUBLES_EQUAL(1.5, kc.axis[0].imr.internal_model_bandwidth_Hz, 1e-7);
+  p.axis[0].controller.imr_bandwidth_Hz = 35.0;
+  p.axis[0].controller.imr_model_bandwidth_Hz = 2.5;
+  CHECK_TRUE(sp::MakeKernelConfig(p, &kc).error == sp::ProfileError::kOk);
+  DOUBLES_EQUAL(35.0, kc.axis[0].imr.bandwidth_Hz, 0.0);
+  DOUBLES_EQUAL(2.5, kc.axis[0].imr.internal_model_bandwidth_Hz, 0.0);
+  static kernel::Controller<float> c;
+  CHECK_TRUE(c.apply_config(kc) == kernel::ConfigError::kOk);
+  // w_c T >= 1 at 2.5 kHz (398 Hz and above): no discrete design.
+  p.axis[0].controller.imr_bandwidth_Hz = 500.0;
+  CHECK_TRUE(sp::CheckStageProfile(p).error != sp::ProfileError::kOk);
 }

@@ -94,6 +94,13 @@ struct AxisController {
   double effort_limit_A;  // clamp of the loop output (A of effort)
   // Internal-model regulator (paper 002): omega0 and the anti-windup gain E.
   double imr_omega0_rad_per_s;
+  // The Halbach family's internal-model regulator, designed by pole
+  // placement on the axis plant: the closed loop's plant pole pair (w_c / 2
+  // pi) and the internal model's poles (w_im / 2 pi), Hz; 0 = the family's
+  // (20 Hz, 30 Hz on theta_z; 1.5 Hz). They were the seed's whatever the
+  // profile said.
+  double imr_bandwidth_Hz;
+  double imr_model_bandwidth_Hz;
   double antiwindup_gain;
   bool feedback_linearization;
   // LQR weights of the internal-model design plant z = [e e' xi1 xi2 xi3]
