@@ -200,12 +200,14 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
 
   // --- beam layout -----------------------------------------------------------
   double m[3][3];
+  bool beam_is_y[io::kInterferometerAxes];
+  double mirror_pm[io::kInterferometerAxes];
   for (int b = 0; b < io::kInterferometerAxes; ++b) {
     const BeamConfig& beam = config.beam[b];
     if (beam.sign != 1 && beam.sign != -1) return SensorsToPoseError::kBadBeamSign;
     s.beam_sign[b] = beam.sign;
-    s.beam_is_y[b] = beam.axis == BeamAxis::kY ? 1u : 0u;
-    s.beam_mirror_pm[b] = beam.mirror_distance_m * 1e12;
+    beam_is_y[b] = beam.axis == BeamAxis::kY;
+    mirror_pm[b] = beam.mirror_distance_m * 1e12;
     // Linear part, units pm per (pm, pm, prad): prad * m = pm.
     if (beam.axis == BeamAxis::kX) {
       m[b][0] = 1.0;
@@ -226,11 +228,11 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
   // along one axis, so exactly two share one.
   {
     int ys = 0;
-    for (int b = 0; b < 3; ++b) ys += s.beam_is_y[b];
-    const std::uint8_t pair_is_y = ys == 2 ? 1u : 0u;
+    for (int b = 0; b < 3; ++b) ys += beam_is_y[b] ? 1 : 0;
+    const bool pair_is_y = ys == 2;
     int pair[2] = {-1, -1}, single = -1;
     for (int b = 0; b < 3; ++b) {
-      if (s.beam_is_y[b] == pair_is_y) {
+      if (beam_is_y[b] == pair_is_y) {
         pair[pair[0] < 0 ? 0 : 1] = b;
       } else {
         single = b;
@@ -248,18 +250,14 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
     if (!(dp > 0.0) || single < 0) return SensorsToPoseError::kSingularBeamLayout;
     s.pair_a = static_cast<std::uint8_t>(pair[0]);
     s.pair_b = static_cast<std::uint8_t>(pair[1]);
+    s.single = static_cast<std::uint8_t>(single);
+    s.pair_is_y = pair_is_y;
     s.pair_dp_pm = dp;
     s.pair_dp2_pm2 = dp * dp;
-    s.pair_two_dd_pm = 2.0 * (s.beam_mirror_pm[pair[0]] - s.beam_mirror_pm[pair[1]]);
-    double* w_pair = pair_is_y ? s.w_y : s.w_x;
-    double* w_single = pair_is_y ? s.w_x : s.w_y;
-    for (int b = 0; b < 3; ++b) {
-      w_pair[b] = (b == pair[0] || b == pair[1]) ? 0.5 : 0.0;
-      w_single[b] = b == single ? 1.0 : 0.0;
-    }
+    s.pair_two_dd_pm = 2.0 * (mirror_pm[pair[0]] - mirror_pm[pair[1]]);
     const double p_pair = 0.5 * (p_pm(pair[0]) + p_pm(pair[1]));
-    const double half_d_pair = 0.25 * (s.beam_mirror_pm[pair[0]] + s.beam_mirror_pm[pair[1]]);
-    const double half_d_single = 0.5 * s.beam_mirror_pm[single];
+    const double half_d_pair = 0.25 * (mirror_pm[pair[0]] + mirror_pm[pair[1]]);
+    const double half_d_single = 0.5 * mirror_pm[single];
     s.p_x_pm = pair_is_y ? p_pm(single) : p_pair;
     s.half_d_x_pm = pair_is_y ? half_d_single : half_d_pair;
     s.p_y_pm = pair_is_y ? p_pair : p_pm(single);
@@ -567,8 +565,10 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   if (s.abbe_cosine_correction) {
     const double dm = meas_pm[s.pair_a] - meas_pm[s.pair_b];
     const double t = 2.0 * dm / (s.pair_dp_pm + std::sqrt(s.pair_dp2_pm2 + s.pair_two_dd_pm * dm));
-    const double m_x = s.w_x[0] * meas_pm[0] + s.w_x[1] * meas_pm[1] + s.w_x[2] * meas_pm[2];
-    const double m_y = s.w_y[0] * meas_pm[0] + s.w_y[1] * meas_pm[1] + s.w_y[2] * meas_pm[2];
+    const double m_pair = 0.5 * (meas_pm[s.pair_a] + meas_pm[s.pair_b]);
+    const double m_single = meas_pm[s.single];
+    const double m_x = s.pair_is_y ? m_single : m_pair;
+    const double m_y = s.pair_is_y ? m_pair : m_single;
     const double r_x = m_x + t * (s.p_x_pm - t * s.half_d_x_pm);
     const double r_y = m_y - t * (s.p_y_pm + t * s.half_d_y_pm);
     const double inv_det = 1.0 / (1.0 + t * t);

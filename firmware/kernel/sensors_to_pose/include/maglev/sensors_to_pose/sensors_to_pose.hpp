@@ -219,8 +219,6 @@ struct SensorsToPoseState {
   // the M7, where int64 products need 128-bit limbs and divisions are
   // library calls); positions stay int64 pm / prad at the interfaces.
   double lsb_pm;  // lsb_num / lsb_den
-  double beam_mirror_pm[io::kInterferometerAxes];
-  std::uint8_t beam_is_y[io::kInterferometerAxes];
   bool abbe_cosine_correction;
   // [x, y, theta_z] = inv_beam * m (rows x, y in pm/pm, theta_z in prad/pm):
   // the solve without the Abbe / cosine terms.
@@ -230,12 +228,13 @@ struct SensorsToPoseState {
   // t = tan theta_z from (dd/2) t^2 + dp t = m_a - m_b, then x and y solve a
   // 2 x 2 system. All in pm; t dimensionless.
   std::uint8_t pair_a, pair_b;  // the two beams along one axis, ordered so that dp > 0
+  std::uint8_t single;          // the third beam, along the other axis
+  bool pair_is_y;               // the pair is along Y (the y row), the single beam along X
   double pair_dp_pm, pair_dp2_pm2, pair_two_dd_pm;
   // The x row: x + t y = m_X + t (p_X - t d_X / 2); the y row: y - t x =
-  // m_Y - t (p_Y + t d_Y / 2). m_X, m_Y = w_x . m, w_y . m (the single beam,
-  // or the pair's mean), p and d the same beams' perpendicular offsets and
-  // mirror distances.
-  double w_x[3], w_y[3];
+  // m_Y - t (p_Y + t d_Y / 2). m_X, m_Y: the single beam's reading and the
+  // pair's mean; p and d the same beams' perpendicular offsets and mirror
+  // distances.
   double p_x_pm, half_d_x_pm, p_y_pm, half_d_y_pm;
   // heights: lds_zero_pm + code * lds_gain_pm
   double lds_zero_pm;
