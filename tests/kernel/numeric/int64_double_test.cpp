@@ -4,6 +4,7 @@
 // fixed seed: the same arguments on every run and on the M7 build).
 #include <cmath>
 #include <cstdint>
+#include <initializer_list>
 
 #include "maglev/numeric/int64_double.hpp"
 #include "test_random.hpp"
@@ -123,4 +124,49 @@ TEST(Int64Double, DivRoundHalfUpEqualsTheIntegerDivision) {
     const std::uint64_t got = DivRoundHalfUp(nn, d);
     if (got != expect) CHECK_EQUAL(expect, got);
   }
+}
+
+// PicoToSi is odd, and the integer thresholds give the float comparison's
+// outcome: at the threshold and its neighbours for limits of every size and
+// sign, and at random values near and far from random limits.
+TEST(Int64Double, PicoThresholdsGiveTheFloatComparisonsOutcome) {
+  using maglev::numeric::kPicoDomain;
+  using maglev::numeric::PicoFirstAbove;
+  using maglev::numeric::PicoFirstAtOrAbove;
+  using maglev::numeric::PicoToSi;
+  std::uint64_t s = 11;
+  for (int i = 0; i < kSamples / 10; ++i) {
+    const std::int64_t v = random_int64(&s, 62);
+    if (PicoToSi(-v) != -PicoToSi(v)) CHECK_EQUAL(-PicoToSi(v), PicoToSi(-v));
+  }
+  constexpr int kFixed = 20, kRandom = 200;
+  float limits[kFixed + kRandom] = {0.0f,   -0.0f,  1e-12f,  5e-13f,  -1e-12f, 200e-6f, 15e-6f,
+                                    -5e-6f, 40e-6f, 3e-4f,   5e-3f,   0.029f,  -0.029f, 0.0185f,
+                                    -0.0185f, 0.1f, 1e6f,    -1e6f,   1e7f,    -1e7f};
+  for (int i = kFixed; i < kFixed + kRandom; ++i) {
+    const double mag = std::ldexp(static_cast<double>(next(&s) >> 11) * 0x1.0p-53, -static_cast<int>(next(&s) % 40));
+    limits[i] = static_cast<float>((next(&s) & 1u) ? -mag : mag);
+  }
+  for (float lim : limits) {
+    const std::int64_t above = PicoFirstAbove(lim), at_or_above = PicoFirstAtOrAbove(lim);
+    CHECK(above >= -kPicoDomain && above <= kPicoDomain + 1);
+    CHECK(at_or_above >= -kPicoDomain && at_or_above <= kPicoDomain + 1);
+    const auto in_domain = [](std::int64_t v) { return v >= -kPicoDomain && v <= kPicoDomain; };
+    for (std::int64_t d = -3; d <= 3; ++d) {
+      for (std::int64_t v : {above + d, at_or_above + d}) {
+        if (!in_domain(v)) continue;  // the stated domain, |v| <= 2^62
+        if ((v >= above) != (PicoToSi(v) > lim)) CHECK_EQUAL(PicoToSi(v) > lim, v >= above);
+        if ((v < at_or_above) != (PicoToSi(v) < lim)) CHECK_EQUAL(PicoToSi(v) < lim, v < at_or_above);
+      }
+    }
+    for (int k = 0; k < 200; ++k) {
+      const std::int64_t v = (k % 2 == 0 ? above : 0) + random_int64(&s, k % 2 == 0 ? 16 : 61);
+      if (!in_domain(v)) continue;
+      if ((v >= above) != (PicoToSi(v) > lim)) CHECK_EQUAL(PicoToSi(v) > lim, v >= above);
+      if ((v < at_or_above) != (PicoToSi(v) < lim)) CHECK_EQUAL(PicoToSi(v) < lim, v < at_or_above);
+    }
+  }
+  // Beyond the domain: a limit no v reaches, and one every v passes.
+  CHECK_EQUAL(kPicoDomain + 1, PicoFirstAbove(1e30f));
+  CHECK_EQUAL(-kPicoDomain, PicoFirstAbove(-1e30f));
 }

@@ -25,10 +25,32 @@ struct Rig {
     const float ff = seq.output().feedforward_fraction;
     in.z_m = ff > 1.0f ? (ff - 1.0f) * 100e-6f : 0.0f;
   }
+  // check_unread: every step in a state that Sequencer::ReadsFollowingErrors
+  // excludes is also taken by a copy with absurd errors, and must give the
+  // same output (the controller leaves those errors unformed there).
+  bool check_unread = false;
+  int unread_checked = 0;
+  void step() {
+    if (!check_unread || Sequencer::ReadsFollowingErrors(seq.output().state)) {
+      seq.step(in);
+      return;
+    }
+    Sequencer other = seq;
+    SequencerInputs wild = in;
+    for (float& e : wild.abs_error) e = 1e30f;
+    const SequencerOutput& b = other.step(wild);
+    const SequencerOutput& a = seq.step(in);
+    CHECK(a.state == b.state && a.last_reason == b.last_reason && a.closed_axes == b.closed_axes &&
+          a.amplifier_enable == b.amplifier_enable && a.feedforward_fraction == b.feedforward_fraction &&
+          a.z_reference_m == b.z_reference_m && a.homing_active == b.homing_active && a.homed == b.homed &&
+          a.lifted_off == b.lifted_off && a.levitated == b.levitated && a.motion_allowed == b.motion_allowed &&
+          seq.ticks_in_state() == other.ticks_in_state());
+    ++unread_checked;
+  }
   int run_until(SequencerState s, int max_ticks, bool model = false) {
     for (int n = 1; n <= max_ticks; ++n) {
       if (model) lift_model();
-      seq.step(in);
+      step();
       if (seq.output().state == s) return n;
     }
     return -1;
@@ -356,4 +378,34 @@ TEST(Sequencer, ConfigValidation) {
   CHECK(validate(bad, kRate) == SequencerConfigError::kBadRampRate);
   bad.tilt_reference_rate_rad_per_s = 1.0f;  // 1 rad/s: no levelling ramp
   CHECK(validate(bad, kRate) == SequencerConfigError::kBadRampRate);
+}
+
+// The controller forms SequencerInputs::abs_error only in the states
+// Sequencer::ReadsFollowingErrors names: every other state's step must not
+// read them. A start-up, a landing and a fault landing, with absurd errors
+// in a copy at every such tick.
+TEST(Sequencer, OnlyTheLockStatesReadTheFollowingErrors) {
+  Rig r;
+  r.check_unread = true;
+  r.go_ready();
+  for (int n = 0; n < 100; ++n) r.step();  // Ready
+  CHECK(r.seq.command(SequencerCommand::kLand, false) == SequencerCommandResult::kAccepted);
+  r.in.z_m = 0.0f;
+  CHECK(r.run_until(SequencerState::kIdle, 10000) > 0);
+  r.go_ready();
+  r.in.fault_reaction = FaultReaction::kLand;
+  r.step();
+  CHECK(r.seq.output().state == SequencerState::kLanding);
+  r.in.z_m = 0.0f;
+  CHECK(r.run_until(SequencerState::kFault, 20000) > 0);
+  for (int n = 0; n < 10; ++n) r.step();
+  CHECK(r.unread_checked > 1000);
+  // The lock states do read them: absurd errors keep InPlaneLock from settling.
+  Rig q;
+  CHECK(q.seq.command(SequencerCommand::kLevitate, false) == SequencerCommandResult::kAccepted);
+  q.in.homing_done = true;
+  CHECK(q.run_until(SequencerState::kInPlaneLock, 10) > 0);
+  q.in.homing_done = false;
+  for (float& e : q.in.abs_error) e = 1e30f;
+  CHECK(q.run_until(SequencerState::kLift, 1000) < 0);
 }

@@ -1,7 +1,13 @@
 // Every supervisor fault path, the reaction choice and first-fault latching.
-#include <CppUTest/TestHarness.h>
-
 #include "maglev/supervisor/supervisor.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <initializer_list>
+
+#include "maglev/numeric/int64_double.hpp"
+
+#include <CppUTest/TestHarness.h>
 
 using namespace maglev;
 using namespace maglev::kernel;
@@ -15,6 +21,12 @@ struct Rig {
   io::SensorSample sample{};
   SupervisorInputs in{};
   float coil_current_cmd_A[io::kCoils] = {};  // in.coil_current_cmd_A points here
+  // The pose and the following errors in SI, as a test states them; tick()
+  // hands them over as the controller does, in pm / prad (nearest).
+  double pose_m[kSequencedAxes] = {};
+  double error_m[kSequencedAxes] = {};
+  std::int64_t pose_pico[kSequencedAxes] = {};
+  std::int64_t reference_pico[kSequencedAxes] = {};
   Rig() {
     SupervisorConfig c;
     CHECK(validate(c, kRate) == SupervisorConfigError::kOk);
@@ -25,10 +37,20 @@ struct Rig {
     in.positions_valid = true;
     in.envelope_active = true;
     in.closed_axes = kAxisMaskAll;
-    in.pose[3] = 30e-6f;
+    in.pose_pico = pose_pico;
+    in.reference_pico = reference_pico;
+    pose_m[3] = 30e-6;
   }
   bool live = true;  // one LSB of Hall noise per tick, as live sensors have
   const SupervisorStatus& tick() {
+    for (int a = 0; a < kSequencedAxes; ++a) {
+      pose_pico[a] = std::llround(pose_m[a] * 1e12);
+      reference_pico[a] = pose_pico[a] + std::llround(error_m[a] * 1e12);
+    }
+    return tick_pico();
+  }
+  // One tick on pose_pico / reference_pico as they are.
+  const SupervisorStatus& tick_pico() {
     ++in.tick;
     if (live) sample.hall_adc[0] = static_cast<std::int16_t>(in.tick & 1u);
     return sup.step(in);
@@ -53,7 +75,7 @@ TEST(Supervisor, NominalTicksRaiseNothing) {
 TEST(Supervisor, TravelWindowLatchesWithAxisAndValueAndLands) {
   Rig r;
   r.tick();
-  r.in.pose[0] = 0.0295f;  // window: 28 mm travel + 1 mm
+  r.pose_m[0] = 0.0295;  // window: 28 mm travel + 1 mm
   const auto& s = r.tick();
   CHECK(s.first_fault.code == FaultCode::kTravelX);
   LONGS_EQUAL(2, s.first_fault.tick);
@@ -61,7 +83,7 @@ TEST(Supervisor, TravelWindowLatchesWithAxisAndValueAndLands) {
   DOUBLES_EQUAL(0.0295, s.first_fault.value, 1e-7);
   CHECK(s.reaction == FaultReaction::kLand);
   // A later, different fault does not overwrite the first-fault record.
-  r.in.pose[1] = -0.02f;
+  r.pose_m[1] = -0.02;
   r.tick();
   CHECK(r.sup.status().first_fault.code == FaultCode::kTravelX);
   CHECK(r.sup.status().active == FaultCode::kTravelX);
@@ -70,21 +92,21 @@ TEST(Supervisor, TravelWindowLatchesWithAxisAndValueAndLands) {
 
 TEST(Supervisor, TravelYAndThetaZ) {
   Rig r;
-  r.in.pose[1] = 0.019f;  // window: 17.5 mm travel + 1 mm
+  r.pose_m[1] = 0.019;  // window: 17.5 mm travel + 1 mm
   CHECK(r.tick().first_fault.code == FaultCode::kTravelY);
   Rig r2;
-  r2.in.pose[2] = -6e-3f;
+  r2.pose_m[2] = -6e-3;
   CHECK(r2.tick().first_fault.code == FaultCode::kTravelThetaZ);
   // Not homed: positions mean nothing, the travel check is off.
   Rig r3;
   r3.in.positions_valid = false;
-  r3.in.pose[0] = 1.0f;
+  r3.pose_m[0] = 1.0;
   CHECK(r3.tick().active == FaultCode::kNone);
 }
 
 TEST(Supervisor, ZAndTiltEnvelopeOnlyWhileZClosed) {
   Rig r;
-  r.in.pose[3] = 45e-6f;
+  r.pose_m[3] = 45e-6;
   r.in.envelope_active = false;
   CHECK(r.tick().active == FaultCode::kNone);
   r.in.envelope_active = true;
@@ -92,7 +114,7 @@ TEST(Supervisor, ZAndTiltEnvelopeOnlyWhileZClosed) {
   CHECK(s.first_fault.code == FaultCode::kZEnvelope);
   LONGS_EQUAL(3, s.first_fault.axis);
   Rig t;
-  t.in.pose[5] = -400e-6f;
+  t.pose_m[5] = -400e-6;
   const auto& st = t.tick();
   CHECK(st.first_fault.code == FaultCode::kTiltEnvelope);
   LONGS_EQUAL(5, st.first_fault.axis);
@@ -102,13 +124,72 @@ TEST(Supervisor, ZAndTiltEnvelopeOnlyWhileZClosed) {
 TEST(Supervisor, FollowingErrorOnlyOnClosedAxes) {
   Rig r;
   r.in.closed_axes = kAxisMaskInPlane;
-  r.in.following_error[3] = 1e-3f;  // z open: ignored
+  r.error_m[3] = 1e-3;  // z open: ignored
   CHECK(r.tick().active == FaultCode::kNone);
-  r.in.following_error[1] = -250e-6f;
+  r.error_m[1] = -250e-6;
   const auto& s = r.tick();
   CHECK(s.first_fault.code == FaultCode::kFollowingError);
   LONGS_EQUAL(1, s.first_fault.axis);
   DOUBLES_EQUAL(-250e-6, s.first_fault.value, 1e-10);
+}
+
+// The checks compare pm / prad with integer thresholds (PicoFirstAbove /
+// PicoFirstAtOrAbove). Held here to the float comparison they replace, at
+// the exact boundary found by a plain scan (not by the bisection): the last
+// value inside each limit does not trip, the first one beyond it does.
+TEST(Supervisor, IntegerLimitsTripAtTheFirstPicoWhoseFloatValueIsBeyondTheLimit) {
+  const SupervisorConfig c;
+  using maglev::numeric::PicoToSi;
+  // First v from start upwards with beyond(v) (a linear scan: the float
+  // ulp at these limits is at most ~4e3 pm).
+  auto first = [](std::int64_t start, auto beyond) {
+    std::int64_t v = start;
+    while (!beyond(v)) ++v;
+    return v;
+  };
+  struct Case {
+    int axis;
+    bool upper;  // the max side (v >= T trips) or the min side (v < T trips)
+    float limit;
+  };
+  const Case cases[] = {{0, true, c.x_max_m},  {0, false, c.x_min_m}, {1, true, c.y_max_m},
+                        {1, false, c.y_min_m}, {2, true, c.theta_z_limit_rad}, {2, false, -c.theta_z_limit_rad},
+                        {3, true, c.z_max_m},  {3, false, c.z_min_m}, {4, true, c.tilt_limit_rad},
+                        {5, false, -c.tilt_limit_rad}};
+  for (const Case& k : cases) {
+    const auto start = std::llround(static_cast<double>(k.limit) * 1e12) - 10000;
+    // Upper: the first v with f(v) > max trips, v - 1 does not. Lower: the
+    // first v with f(v) >= min does not trip, v - 1 does.
+    const std::int64_t edge = k.upper ? first(start, [&](std::int64_t v) { return PicoToSi(v) > k.limit; })
+                                      : first(start, [&](std::int64_t v) { return PicoToSi(v) >= k.limit; });
+    for (std::int64_t v : {edge - 1, edge}) {
+      Rig r;
+      r.tick();
+      for (int a = 0; a < kSequencedAxes; ++a) r.reference_pico[a] = r.pose_pico[a];
+      r.pose_pico[k.axis] = v;
+      r.reference_pico[k.axis] = v;
+      const bool trips = r.tick_pico().active != FaultCode::kNone;
+      CHECK_EQUAL(k.upper ? v == edge : v == edge - 1, trips);
+    }
+  }
+  // The following error, both signs, every axis.
+  for (int axis = 0; axis < kSequencedAxes; ++axis) {
+    const float lim = c.following_error_limit[axis];
+    const std::int64_t edge = first(std::llround(static_cast<double>(lim) * 1e12) - 10000,
+                                    [&](std::int64_t v) { return PicoToSi(v) > lim; });
+    for (std::int64_t e : {edge - 1, edge, -(edge - 1), -edge}) {
+      Rig r;
+      r.tick();
+      for (int a = 0; a < kSequencedAxes; ++a) r.reference_pico[a] = r.pose_pico[a];
+      r.reference_pico[axis] = r.pose_pico[axis] + e;
+      const auto& s = r.tick_pico();
+      CHECK_EQUAL(e == edge || e == -edge, s.active == FaultCode::kFollowingError);
+      if (s.active == FaultCode::kFollowingError) {
+        LONGS_EQUAL(axis, s.first_fault.axis);
+        CHECK_EQUAL(PicoToSi(e), s.first_fault.value);
+      }
+    }
+  }
 }
 
 TEST(Supervisor, RmsCurrentFollowsTheThermalTimeConstant) {
@@ -256,13 +337,13 @@ TEST(Supervisor, AdcFaultAndCurrentMonitorRail) {
 TEST(Supervisor, SensorCauseOutranksItsSymptoms) {
   Rig r;
   r.sample.status_flags = io::kBeamLoss0;
-  r.in.following_error[0] = 1e-3f;  // a lost beam also looks like a following error
+  r.error_m[0] = 1e-3;  // a lost beam also looks like a following error
   CHECK(r.tick().first_fault.code == FaultCode::kBeamLoss);
 }
 
 TEST(Supervisor, LandingEscalatesToCurrentsOffNeverBack) {
   Rig r;
-  r.in.pose[0] = 0.03f;
+  r.pose_m[0] = 0.03;
   r.tick();
   CHECK(r.sup.status().reaction == FaultReaction::kLand);
   r.sample.status_flags = io::kBeamLoss0;
@@ -276,11 +357,11 @@ TEST(Supervisor, LandingEscalatesToCurrentsOffNeverBack) {
 
 TEST(Supervisor, ClearOnlyWhenTheCauseIsGone) {
   Rig r;
-  r.in.pose[0] = 0.03f;
+  r.pose_m[0] = 0.03;
   r.tick();
   CHECK_FALSE(r.sup.clear_fault());
   CHECK(r.sup.status().first_fault.code == FaultCode::kTravelX);
-  r.in.pose[0] = 0.0f;
+  r.pose_m[0] = 0.0;
   r.tick();
   CHECK(r.sup.cause_present() == false);
   CHECK(r.sup.clear_fault());

@@ -16,7 +16,7 @@ namespace {
 
 namespace stage = io::stage;
 
-float pico_to_si(std::int64_t v) { return static_cast<float>(numeric::Int64ToDouble(v) * 1e-12); }
+float pico_to_si(std::int64_t v) { return numeric::PicoToSi(v); }
 
 template <typename T>
 bool same_bytes(const T& a, const T& b) {
@@ -275,6 +275,8 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
   if (c.sequencer.nominal_height_m > sv.z_max_m) return refuse_config(ConfigError::kSequencer);
   // The z window's top inside what the laser displacement sensors measure.
   if (!(static_cast<double>(sv.z_max_m) < HeightSensorsTop_m(c.measurement))) return refuse_config(ConfigError::kSupervisor);
+  // Its integer limits here, with interrupts enabled: commit_config copies them.
+  supervisor_next_ = PrepareSupervisorSettings(c.supervisor, c.servo_rate_Hz);
   prepared_ = true;
   return ConfigError::kOk;
 }
@@ -356,7 +358,7 @@ ConfigError Controller<Scalar>::commit_config(const KernelConfig& c) {
   // a newly enabled chain gets the state tracking every stage would have left.
   filters_.reconfigure(applied_[1 - active_].filtered, applied_[active_].filtered);
   sequencer_.configure(c.sequencer, c.servo_rate_Hz);
-  supervisor_.configure(c.supervisor, c.servo_rate_Hz);
+  supervisor_.configure(supervisor_next_);
   homing_needed_ticks_ = static_cast<std::uint32_t>(c.sequencer.homing_time_s * c.servo_rate_Hz) + 1u;
   coupling_ramp_ticks_ = static_cast<std::uint32_t>(std::lround(kCouplingRamp_s * c.servo_rate_Hz));
   for (int k = 0; k < 2; ++k) {
@@ -798,10 +800,16 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
   si.positions_valid = prev.homed;
   si.envelope_active = (prev.closed_axes & kAxisBitZ) != 0;
   si.closed_axes = prev.closed_axes;
-  for (int a = 0; a < kAxisCount; ++a) {
-    si.pose[a] = pico_to_si(status_.pose.pico[a]);
-    si.following_error[a] = pico_to_si(status_.reference.pico[a] - status_.pose.pico[a]);
-    t.qi.abs_error[a] = std::fabs(si.following_error[a]);
+  // The supervisor compares the pose and the following errors in pm / prad
+  // (integer thresholds with the outcome of the float limits): read in place.
+  si.pose_pico = status_.pose.pico;
+  si.reference_pico = status_.reference.pico;
+  // The sequencer reads |e| in SI only in its settle checks: formed then
+  // (Sequencer::ReadsFollowingErrors; 6 conversions a tick otherwise).
+  if (Sequencer::ReadsFollowingErrors(prev.state)) {
+    for (int a = 0; a < kAxisCount; ++a) {
+      t.qi.abs_error[a] = std::fabs(pico_to_si(status_.reference.pico[a] - status_.pose.pico[a]));
+    }
   }
   si.current_limited = last_current_limited_;
   si.beam_glitch = t.m.beam_glitch;
@@ -907,7 +915,7 @@ void Controller<Scalar>::sequence(Tick& t) {
   qi.z_valid = t.sup->z_sensors_valid && (t.m.valid_axes & kPoseValidZ) != 0;
   // supervise()'s conversion of the same value: homing between them moves x
   // and y only (ApplyHomingOffsets), never z.
-  qi.z_m = t.si.pose[axis_index(Axis::kZ)];
+  qi.z_m = pico_to_si(status_.pose.pico[axis_index(Axis::kZ)]);
   qi.tilt_references_in_range = tilt_references_in_range_;
   qi.fault_reaction = t.sup->reaction;
   t.so = &sequencer_.step(qi);

@@ -183,7 +183,6 @@ const SequencerOutput& Sequencer::step(const SequencerInputs& in) {
   }
 
   ++ticks_in_state_;
-  const float z_err = in.abs_error[3];
   switch (out_.state) {
     case S::kIdle:
     case S::kFault:
@@ -245,7 +244,7 @@ const SequencerOutput& Sequencer::step(const SequencerInputs& in) {
       out_.z_reference_m = approach(out_.z_reference_m, config_.nominal_height_m,
                                     config_.z_reference_rate_m_per_s * dt_s_);
       const bool inside = out_.z_reference_m == config_.nominal_height_m &&
-                          z_err <= config_.z_settle_error_m;
+                          in.abs_error[3] <= config_.z_settle_error_m;
       settle_ticks_ = inside ? settle_ticks_ + 1 : 0;
       if (settle_ticks_ >= ticks_.z_settle) {
         enter(S::kTiltLock, TransitionReason::kZSettled);

@@ -2,6 +2,7 @@
 #include "maglev/supervisor/supervisor.hpp"
 
 #include "maglev/io/stage_parameters.hpp"
+#include "maglev/numeric/int64_double.hpp"
 
 #include <cmath>
 
@@ -72,8 +73,9 @@ MAGLEV_CONFIG_CODE SupervisorConfigError validate(const SupervisorConfig& c, flo
   return SupervisorConfigError::kOk;
 }
 
-MAGLEV_CONFIG_CODE void Supervisor::configure(const SupervisorConfig& c, float servo_rate_Hz) {
-  config_ = c;
+MAGLEV_CONFIG_CODE SupervisorSettings PrepareSupervisorSettings(const SupervisorConfig& c, float servo_rate_Hz) {
+  SupervisorSettings st{};
+  st.config = c;
   // The two durations counted in ticks of the default 2.5 kHz rate (50 ms of
   // saturation, 4 ms of current mismatch) keep their time at any servo rate.
   const double per_default_tick = static_cast<double>(servo_rate_Hz) / io::stage::kServoRate_Hz;
@@ -81,11 +83,34 @@ MAGLEV_CONFIG_CODE void Supervisor::configure(const SupervisorConfig& c, float s
     const double n = std::round(static_cast<double>(ticks) * per_default_tick);
     return static_cast<std::uint16_t>(n < 1.0 ? 1.0 : (n > 65535.0 ? 65535.0 : n));
   };
-  config_.max_saturated_ticks = held(c.max_saturated_ticks);
-  config_.current_mismatch_ticks = held(c.current_mismatch_ticks);
-  thermal_alpha_ = 1.0f / (c.thermal_time_constant_s * servo_rate_Hz);
-  max_count_step_ = static_cast<std::int32_t>(c.max_interferometer_speed_m_per_s / servo_rate_Hz /
-                                              c.interferometer_lsb_m);
+  st.config.max_saturated_ticks = held(c.max_saturated_ticks);
+  st.config.current_mismatch_ticks = held(c.current_mismatch_ticks);
+  st.thermal_alpha = 1.0f / (c.thermal_time_constant_s * servo_rate_Hz);
+  st.max_count_step = static_cast<std::int32_t>(c.max_interferometer_speed_m_per_s / servo_rate_Hz /
+                                                c.interferometer_lsb_m);
+  // The limits validate() admits are positive where compared with |v|, so
+  // those thresholds are positive and fit the uint64 compare.
+  const auto above = [](float limit) { return numeric::PicoFirstAbove(limit); };
+  const auto below = [](float limit) { return numeric::PicoFirstAtOrAbove(limit); };
+  const auto mag_above = [](float limit) { return static_cast<std::uint64_t>(numeric::PicoFirstAbove(limit)); };
+  SupervisorPicoLimits& p = st.pico;
+  p.x_below = below(c.x_min_m);
+  p.x_above = above(c.x_max_m);
+  p.y_below = below(c.y_min_m);
+  p.y_above = above(c.y_max_m);
+  p.z_below = below(c.z_min_m);
+  p.z_above = above(c.z_max_m);
+  p.theta_z_above = mag_above(c.theta_z_limit_rad);
+  p.tilt_above = mag_above(c.tilt_limit_rad);
+  for (int a = 0; a < kSequencedAxes; ++a) p.following_above[a] = mag_above(c.following_error_limit[a]);
+  return st;
+}
+
+MAGLEV_CONFIG_CODE void Supervisor::configure(const SupervisorSettings& st) {
+  config_ = st.config;
+  thermal_alpha_ = st.thermal_alpha;
+  max_count_step_ = st.max_count_step;
+  pico_ = st.pico;
 }
 
 MAGLEV_CONFIG_CODE void Supervisor::reset() {
@@ -211,17 +236,21 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   c.rms = max_i2 > lim.rms2_A2;
 
   // --- position limits ---------------------------------------------------------
-  const float x = in.pose[0], y = in.pose[1], tz = in.pose[2], z = in.pose[3];
+  // In pm / prad against the integer thresholds (configure()): the outcome of
+  // comparing PicoToSi of each with the float limits, for every value.
+  const std::int64_t* p = in.pose_pico;
+  const std::int64_t* r = in.reference_pico;
   const bool travel = in.positions_valid, envelope = in.envelope_active;
+  using numeric::UnsignedMagnitude64;
   c.limits = static_cast<std::uint8_t>(
-      ((travel && (x < config_.x_min_m || x > config_.x_max_m)) ? 1u : 0u) |
-      ((travel && (y < config_.y_min_m || y > config_.y_max_m)) ? 2u : 0u) |
-      ((travel && abs_f(tz) > config_.theta_z_limit_rad) ? 4u : 0u) |
-      ((envelope && (z < config_.z_min_m || z > config_.z_max_m)) ? 8u : 0u) |
-      ((envelope && abs_f(in.pose[4]) > config_.tilt_limit_rad) ? 16u : 0u) |
-      ((envelope && abs_f(in.pose[5]) > config_.tilt_limit_rad) ? 32u : 0u));
+      ((travel && (p[0] < pico_.x_below || p[0] >= pico_.x_above)) ? 1u : 0u) |
+      ((travel && (p[1] < pico_.y_below || p[1] >= pico_.y_above)) ? 2u : 0u) |
+      ((travel && UnsignedMagnitude64(p[2]) >= pico_.theta_z_above) ? 4u : 0u) |
+      ((envelope && (p[3] < pico_.z_below || p[3] >= pico_.z_above)) ? 8u : 0u) |
+      ((envelope && UnsignedMagnitude64(p[4]) >= pico_.tilt_above) ? 16u : 0u) |
+      ((envelope && UnsignedMagnitude64(p[5]) >= pico_.tilt_above) ? 32u : 0u));
   for (int a = 0; a < kSequencedAxes; ++a) {
-    const bool over = abs_f(in.following_error[a]) > config_.following_error_limit[a];
+    const bool over = UnsignedMagnitude64(r[a] - p[a]) >= pico_.following_above[a];
     c.following = static_cast<std::uint8_t>(c.following | (over ? (1u << a) : 0u));
   }
   c.following = static_cast<std::uint8_t>(c.following & in.closed_axes);
@@ -327,13 +356,15 @@ Supervisor::Trip Supervisor::attribute(const SupervisorInputs& in, const Checks&
   for (int j = 0; j < io::kCoils; ++j) {
     note(t, bit(cm.rms, j), FaultCode::kRmsCurrent, u8(j), rms_current_A(j));
   }
-  note(t, bit(c.limits, 0), FaultCode::kTravelX, 0, in.pose[0]);
-  note(t, bit(c.limits, 1), FaultCode::kTravelY, 1, in.pose[1]);
-  note(t, bit(c.limits, 2), FaultCode::kTravelThetaZ, 2, in.pose[2]);
-  note(t, bit(c.limits, 3), FaultCode::kZEnvelope, 3, in.pose[3]);
-  for (int a = 4; a < kSequencedAxes; ++a) note(t, bit(c.limits, a), FaultCode::kTiltEnvelope, u8(a), in.pose[a]);
+  const auto pose = [&in](int a) { return numeric::PicoToSi(in.pose_pico[a]); };
+  note(t, bit(c.limits, 0), FaultCode::kTravelX, 0, pose(0));
+  note(t, bit(c.limits, 1), FaultCode::kTravelY, 1, pose(1));
+  note(t, bit(c.limits, 2), FaultCode::kTravelThetaZ, 2, pose(2));
+  note(t, bit(c.limits, 3), FaultCode::kZEnvelope, 3, pose(3));
+  for (int a = 4; a < kSequencedAxes; ++a) note(t, bit(c.limits, a), FaultCode::kTiltEnvelope, u8(a), pose(a));
   for (int a = 0; a < kSequencedAxes; ++a) {
-    note(t, bit(c.following, a), FaultCode::kFollowingError, u8(a), in.following_error[a]);
+    note(t, bit(c.following, a), FaultCode::kFollowingError, u8(a),
+         numeric::PicoToSi(in.reference_pico[a] - in.pose_pico[a]));
   }
   return t;
 }

@@ -1,6 +1,7 @@
 #include "maglev/lab_tools/recorder.hpp"
 
 #include "maglev/io/stage_parameters.hpp"
+#include "maglev/numeric/int64_double.hpp"
 
 namespace maglev::lab {
 namespace {
@@ -9,14 +10,9 @@ namespace {
 constexpr float kMonitorA_per_code =
     static_cast<float>(io::stage::kAdcFullScale_V / 32768.0 / io::stage::kCurrentMonitorGain_V_per_A);
 
-// int64 pm -> float m. Through two 32-bit halves: the M7 converts 32-bit
-// integers in one instruction, a 64-bit one is a library call (~40
-// instructions). Exact (|pico| < 2^53), so the same value as double(pico).
-float pico_to_si(std::int64_t pico) {
-  const auto hi = static_cast<std::int32_t>(pico >> 32);
-  const auto lo = static_cast<std::uint32_t>(pico & 0xFFFFFFFF);
-  return static_cast<float>((static_cast<double>(hi) * 4294967296.0 + static_cast<double>(lo)) * 1e-12);
-}
+// int64 pm -> float m: the kernel's one form (numeric::PicoToSi, no
+// library conversion on the M7).
+float pico_to_si(std::int64_t pico) { return numeric::PicoToSi(pico); }
 
 }  // namespace
 

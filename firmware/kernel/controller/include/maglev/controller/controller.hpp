@@ -597,6 +597,7 @@ class Controller {
   // prepare_config's results for commit_config (the designs are in the idle
   // slot of applied_).
   SensorsToPoseState s2p_next_{};
+  SupervisorSettings supervisor_next_{};  // prepare_config's, for commit_config
   bool prepared_ = false;
 };
 

@@ -83,4 +83,55 @@ constexpr std::uint64_t DivRoundHalfUp(std::uint64_t n, std::uint64_t d) {
   return m / d;
 }
 
+// pm (prad) -> m (rad) as a float, the one form in which the kernel reports
+// and checks a position or an error (the controller's supervisor inputs,
+// fault values, the recorder): one correctly rounded conversion, product
+// and narrowing each.
+constexpr float PicoToSi(std::int64_t v) { return static_cast<float>(Int64ToDouble(v) * 1e-12); }
+
+// Every step of PicoToSi is a correctly rounded, monotone operation, so
+// PicoToSi is monotone (non-decreasing) and odd (round-to-nearest-even is
+// symmetric: PicoToSi(-v) = -PicoToSi(v)). A comparison of PicoToSi(v) with
+// a float limit is then a comparison of v with ONE integer, found once at
+// configuration (a 64-step bisection) -- the supervisor's limit checks with
+// no int64 -> float conversion in the tick, and the same outcome for every
+// v with |v| <= 2^62 (4.6e6 m in pm: any pose and any difference of two):
+//   PicoToSi(v) >  limit  <=>  v >= PicoFirstAbove(limit)
+//   PicoToSi(v) <  limit  <=>  v <  PicoFirstAtOrAbove(limit)
+//   |PicoToSi(v)| > limit <=>  |v| >= PicoFirstAbove(limit)   (limit >= 0)
+// A limit no v in the domain passes gives 2^62 + 1 (never reached), one
+// that every v passes gives -2^62.
+inline constexpr std::int64_t kPicoDomain = std::int64_t{1} << 62;
+
+template <typename Pred>
+constexpr std::int64_t PicoFirstWhere(Pred holds) {
+  std::int64_t lo = -kPicoDomain, hi = kPicoDomain;
+  if (holds(lo)) return lo;
+  if (!holds(hi)) return kPicoDomain + 1;
+  // !holds(lo), holds(hi); hi - lo <= 2^63 is formed unsigned (no overflow).
+  while (static_cast<std::uint64_t>(hi) - static_cast<std::uint64_t>(lo) > 1u) {
+    const auto mid = static_cast<std::int64_t>(static_cast<std::uint64_t>(lo) +
+                                               (static_cast<std::uint64_t>(hi) - static_cast<std::uint64_t>(lo)) / 2u);
+    if (holds(mid)) {
+      hi = mid;
+    } else {
+      lo = mid;
+    }
+  }
+  return hi;
+}
+
+constexpr std::int64_t PicoFirstAbove(float limit) {
+  return PicoFirstWhere([limit](std::int64_t v) { return PicoToSi(v) > limit; });
+}
+
+constexpr std::int64_t PicoFirstAtOrAbove(float limit) {
+  return PicoFirstWhere([limit](std::int64_t v) { return PicoToSi(v) >= limit; });
+}
+
+// |v| as uint64, exact for every int64 (INT64_MIN: 2^63).
+constexpr std::uint64_t UnsignedMagnitude64(std::int64_t v) {
+  return v < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(v) : static_cast<std::uint64_t>(v);
+}
+
 }  // namespace maglev::numeric

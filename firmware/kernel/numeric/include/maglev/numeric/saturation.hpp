@@ -56,10 +56,10 @@ constexpr Scalar pico_to_micro(std::int64_t diff_pico) {
     const double q = Int64ToDouble(diff_pico) * kRawPerPico;
     if (q >= 0.0) {
       const double t = q + 0.5;
-      return Scalar::from_raw(t < 2147483648.0 ? static_cast<std::int32_t>(t) : detail::kRaw32Max);
+      return Scalar::from_raw_in_range(t < 2147483648.0 ? static_cast<std::int32_t>(t) : detail::kRaw32Max);
     }
     const double t = 0.5 - q;
-    return Scalar::from_raw(t < 2147483648.0 ? -static_cast<std::int32_t>(t) : detail::kRaw32Min);
+    return Scalar::from_raw_in_range(t < 2147483648.0 ? -static_cast<std::int32_t>(t) : detail::kRaw32Min);
   } else {
     // No int64 clamp (two 64-bit compares and selects on the M7): the
     // conversion is exact below 2^53 pm, and from_double's own clamp at
@@ -79,7 +79,7 @@ constexpr Scalar pico_to_micro_exact(std::int64_t diff_pico) {
   const std::int64_t d = diff_pico > kClampPico ? kClampPico : (diff_pico < -kClampPico ? -kClampPico : diff_pico);
   constexpr int F = Scalar::kFracBits;
   const std::int64_t raw = detail::div_round(d * (std::int64_t{1} << F), kPicoPerMicro);
-  return Scalar::from_raw(detail::saturate32(raw));
+  return Scalar::from_raw_in_range(detail::saturate32(raw));
 }
 
 // Positions in um (urad) as double -> 64-bit pm (prad), round half away from

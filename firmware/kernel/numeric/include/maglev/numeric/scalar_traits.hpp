@@ -123,7 +123,7 @@ struct ScalarTraits<Fixed<F>> {
   static constexpr Scalar sin(std::uint32_t phase) { return from_q30(sin_q30(phase)); }
   static constexpr Scalar from_q30(std::int32_t v) {
     static_assert(F <= 30);
-    return Scalar::from_raw(static_cast<std::int32_t>(detail::shift_round(v, 30 - F)));
+    return Scalar::from_raw_in_range(static_cast<std::int32_t>(detail::shift_round(v, 30 - F)));
   }
   static constexpr SinCos<Scalar> from_q30(SinCosQ30 q) { return {from_q30(q.sin), from_q30(q.cos)}; }
 };

@@ -184,6 +184,14 @@ class Sequencer {
   // One tick: applies the fault reaction, advances the state, returns the output.
   const SequencerOutput& step(const SequencerInputs& in);
 
+  // The states whose step reads SequencerInputs::abs_error (the settle
+  // checks of InPlaneLock, ZLock and TiltLock): in every other state the
+  // controller leaves those errors unformed (no conversion per tick).
+  // Test Sequencer.OnlyTheLockStatesReadTheFollowingErrors holds it to step().
+  static constexpr bool ReadsFollowingErrors(SequencerState s) {
+    return s == SequencerState::kInPlaneLock || s == SequencerState::kZLock || s == SequencerState::kTiltLock;
+  }
+
   const SequencerOutput& output() const { return out_; }
   std::uint32_t ticks_in_state() const { return ticks_in_state_; }
   // Homing is lost after any fault: the interferometer zero may have slipped.

@@ -122,6 +122,29 @@ struct SupervisorConfig {
 
 SupervisorConfigError validate(const SupervisorConfig& config, float servo_rate_Hz);
 
+// The position limits as integers in pm / prad (numeric::PicoFirstAbove /
+// PicoFirstAtOrAbove of the float limits): v < *_below is PicoToSi(v) < min,
+// v >= *_above is PicoToSi(v) > max, |v| >= *_above (the uint64 ones) is
+// |PicoToSi(v)| > limit. The tick compares the pose and the following errors
+// with these and converts none of them.
+struct SupervisorPicoLimits {
+  std::int64_t x_below, x_above, y_below, y_above, z_below, z_above;
+  std::uint64_t theta_z_above, tilt_above;
+  std::uint64_t following_above[kSequencedAxes];
+};
+
+// A validated configuration as the tick uses it, prepared at configuration
+// time: the durations in ticks of the rate and the integer limits (twelve
+// 64-step bisections, ~20 k M7 instructions: the controller prepares it with
+// interrupts enabled, prepare_config, and commit_config only copies it).
+struct SupervisorSettings {
+  SupervisorConfig config;  // max_saturated_ticks, current_mismatch_ticks at the rate
+  float thermal_alpha;      // dt / tau
+  std::int32_t max_count_step;
+  SupervisorPicoLimits pico;
+};
+SupervisorSettings PrepareSupervisorSettings(const SupervisorConfig& config, float servo_rate_Hz);
+
 // An aggregate without member initializers: the controller fills every
 // field each tick (zeroing it first cost a memset per step()); elsewhere
 // value-initialize it (`SupervisorInputs in{};`).
@@ -132,8 +155,13 @@ struct SupervisorInputs {
   bool positions_valid;     // homed: the pose means something
   bool envelope_active;     // z closed: z/tilt envelope applies
   std::uint8_t closed_axes;     // following error applies to these
-  float pose[kSequencedAxes];      // measured, SI, Axis order
-  float following_error[kSequencedAxes];  // reference - measured, SI
+  // Measured pose and reference, Axis order, pm / prad: the controller's own
+  // arrays, read in place. The checks compare them with integer thresholds
+  // that give the outcome of comparing numeric::PicoToSi(v) with the float
+  // limits (configure()), so no position is converted in the tick; only a
+  // fault record's value is (attribute()).
+  const std::int64_t* pose_pico;
+  const std::int64_t* reference_pico;
   // Last tick's commanded coil currents (io::kCoils of them), read in place
   // from the caller's own copy (the controller's status().coil_current_A): no copy per tick.
   const float* coil_current_cmd_A;
@@ -161,7 +189,10 @@ struct SupervisorStatus {
 
 class Supervisor {
  public:
-  void configure(const SupervisorConfig& config, float servo_rate_Hz);
+  void configure(const SupervisorSettings& settings);  // a copy: cheap
+  void configure(const SupervisorConfig& config, float servo_rate_Hz) {
+    configure(PrepareSupervisorSettings(config, servo_rate_Hz));
+  }
   void reset();  // clears the latch AND the thermal state (power-on only)
 
   const SupervisorStatus& step(const SupervisorInputs& in);
@@ -200,6 +231,7 @@ class Supervisor {
   static void note(Trip& t, bool tripped, FaultCode code, std::uint8_t axis, float value);
 
   SupervisorConfig config_{};
+  SupervisorPicoLimits pico_{};
   float thermal_alpha_ = 0.0f;     // dt / tau
   std::int32_t max_count_step_ = 0;
   SupervisorStatus status_{};
