@@ -681,6 +681,107 @@ TEST(SensorsToPose, AStaleSampleIsNoStepAndTheNextFreshStepCoversTheTicksMissed)
   LONGS_EQUAL(v * (n - 1), st.counts[0]);
 }
 
+// The counter rule written once in its general form (any gap of n ticks),
+// as the tick's n = 1 fast path must agree with it: a reference model of
+// the three counters run beside SensorsToPoseStep over random motion with
+// glitches, spikes, speed violations, wraps and stale runs; counts, steps,
+// raw, flags and refused changes compared at every tick.
+TEST(SensorsToPose, TheCounterRuleOnEveryTickEqualsItsGeneralForm) {
+  SensorsToPoseState& st = FreshState(DefaultSensorsToPoseConfig());
+  const auto max_step = static_cast<std::uint32_t>(st.max_counts_per_tick);
+  const auto max_change = static_cast<std::uint32_t>(st.max_counts_step_change);
+  struct Ref {
+    std::uint32_t last_raw = 0;
+    std::int64_t counts = 0;
+    std::int32_t last_step = 0;
+  } ref[3];
+  int steps_seen = 0, stale_gap = 0;
+  bool seeded = false;
+  auto mag = [](std::int64_t v) { return static_cast<std::uint64_t>(v < 0 ? -v : v); };
+  std::mt19937_64 rng(7);
+  std::uint32_t raw[3] = {0xFFFF0000u, 12345u, 0x7FFFFFF0u};  // near both wraps
+  std::int64_t speed[3] = {0, 0, 0};
+  io::SensorSample prev = ZeroSample();
+  int glitches = 0, stale_ticks = 0, refused = 0, after_gap = 0;
+  for (int tick = 0; tick < 200000; ++tick) {
+    const unsigned kind = static_cast<unsigned>(rng() % 100);
+    io::SensorSample smp = ZeroSample();
+    const bool stale = tick > 2 && kind < 8;  // the transport repeats the previous sample
+    if (stale) {
+      smp = prev;
+      smp.status_flags = io::kStaleFrame;
+      ++stale_ticks;
+    } else {
+      for (int b = 0; b < 3; ++b) {
+        // Motion within the acceleration bound, now and then a spike, a
+        // jump or a step beyond the speed bound.
+        speed[b] += static_cast<std::int64_t>(rng() % (2 * max_change + 1)) - max_change;
+        if (mag(speed[b]) > max_step / 2) speed[b] /= 2;
+        std::int64_t d = speed[b];
+        const unsigned r = static_cast<unsigned>(rng() % 1000);
+        if (r < 10) d += static_cast<std::int64_t>(rng() % 400000) - 200000;  // glitch-sized
+        if (r == 10 && rng() % 10 == 0) d += (rng() & 1u) ? 2000000000ll : -2000000000ll;  // beyond the speed bound
+        raw[b] += static_cast<std::uint32_t>(d);
+        smp.interferometer_counts[b] = raw[b];
+      }
+    }
+    prev = smp;
+    const PoseMeasurement pm = SensorsToPoseStep(smp, &st);
+    // The reference, general in n.
+    const bool seed = !seeded;
+    if (seed) {
+      steps_seen = 0;
+      stale_gap = 0;
+      for (int b = 0; b < 3; ++b) ref[b] = Ref{smp.interferometer_counts[b], 0, 0};
+    }
+    const std::int64_t n = stale_gap + 1;
+    const bool armed = max_change > 0 && steps_seen >= 2 && !stale;
+    after_gap += (n > 1 && !stale) ? 1 : 0;
+    for (int b = 0; b < 3; ++b) {
+      Ref& R = ref[b];
+      const auto step = static_cast<std::int32_t>(smp.interferometer_counts[b] - R.last_raw);
+      const std::uint64_t speed_mag = mag(R.last_step);
+      const bool in_speed = mag(step) <= max_step;
+      const std::int64_t expected = n * R.last_step;
+      const std::int64_t change = step - expected;
+      const bool glitch = armed && in_speed && mag(change) > std::uint64_t{max_change} * static_cast<std::uint64_t>(n * n) + speed_mag;
+      const std::uint32_t used = glitch ? R.last_raw + static_cast<std::uint32_t>(expected) : smp.interferometer_counts[b];
+      const auto delta = static_cast<std::int32_t>(used - R.last_raw);
+      const bool ok = mag(delta) <= max_step;
+      const std::int32_t moved = ok ? delta : 0;
+      R.counts += moved;
+      R.last_raw = glitch ? smp.interferometer_counts[b] : (ok ? used : R.last_raw);
+      const auto truncated = static_cast<std::int32_t>(moved / n);  // toward zero
+      R.last_step = stale ? R.last_step : truncated;
+      glitches += glitch ? 1 : 0;
+      refused += ok ? 0 : 1;
+      if (R.counts != st.counts[b] || R.last_raw != st.last_raw[b] || R.last_step != st.last_step[b] ||
+          glitch != ((pm.beam_glitch >> b) & 1u) || (glitch ? change : 0) != pm.glitch_counts[b] ||
+          (!ok && ((st.jump_latched >> b) & 1u) == 0)) {
+        std::printf("tick %d beam %d n %lld: counts %lld / %lld, last_raw %lu / %lu, last_step %ld / %ld, glitch %d / %d\n",
+                    tick, b, static_cast<long long>(n), static_cast<long long>(R.counts),
+                    static_cast<long long>(st.counts[b]), static_cast<unsigned long>(R.last_raw),
+                    static_cast<unsigned long>(st.last_raw[b]), static_cast<long>(R.last_step),
+                    static_cast<long>(st.last_step[b]), glitch ? 1 : 0, (pm.beam_glitch >> b) & 1);
+        FAIL("SensorsToPoseStep's counter rule differs from its general form");
+      }
+    }
+    const bool counted = !stale || seed;
+    steps_seen = counted && steps_seen < 2 ? steps_seen + 1 : steps_seen;
+    stale_gap = stale && !seed ? (stale_gap < 255 ? stale_gap + 1 : 255) : 0;
+    seeded = true;
+    // A refused step latches the beam's jump flag until a re-seed: re-seed
+    // both (the model and the kernel) now and then, so the run goes on.
+    if (tick % 1000 == 999) {
+      ReseedInterferometers(&st);
+      seeded = false;
+    }
+  }
+  std::printf("[counter rule] 200000 ticks: %d glitches, %d refused steps, %d stale ticks, %d ticks after a gap\n",
+              glitches, refused, stale_ticks, after_gap);
+  CHECK(glitches > 1000 && refused > 100 && stale_ticks > 10000 && after_gap > 10000);
+}
+
 TEST(SensorsToPose, TheAccelerationCheckArmsTwoStepsAfterASeedAndCanBeSwitchedOff) {
   SensorsToPoseState& st = FreshState(DefaultSensorsToPoseConfig());
   // Seed while the counters read far from zero, then a first real step that
