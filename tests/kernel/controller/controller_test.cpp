@@ -414,6 +414,23 @@ TEST(Controller, StartUpReachesReadyAndStepNeverAllocates) {
   std::free(p);
 }
 
+// The supervisor takes the measurement's verdict on a laser displacement
+// reading (PoseMeasurement::displacement_bad): end to end, a code at the ADC
+// rail while levitated is a DisplacementOutOfRange fault on that sensor.
+TEST(Controller, ARailedDisplacementReadingFaultsThroughTheMeasurement) {
+  static Rig<float> r;
+  r.c.command(MotionCommand{MotionType::kLevitate});
+  CHECK(r.run_until(SequencerState::kReady, 40000));
+  for (int n = 0; n < 100; ++n) r.tick();
+  CHECK(r.c.status().fault == FaultCode::kNone);
+  io::SensorSample s = r.stage.sample();
+  s.displacement_adc[2] = -32768;
+  r.stage.last = r.c.step(s, false);
+  CHECK(r.c.status().fault == FaultCode::kDisplacementOutOfRange);
+  LONGS_EQUAL(2, r.c.status().first_fault.axis);
+  DOUBLES_EQUAL(-32768.0, r.c.status().first_fault.value, 0.0);
+}
+
 TEST(Controller, HugeErrorHitsTheCurrentLimitNeverExceedsPeak) {
   static Rig<float> r;
   // The allocation's coil limit at 3 A (the amplifiers' 4 A stays the

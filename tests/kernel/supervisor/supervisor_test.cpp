@@ -308,18 +308,27 @@ TEST(Supervisor, StaleFramesAfterConsecutiveLimit) {
   CHECK(s.reaction == FaultReaction::kCurrentsOff);
 }
 
+// The supervisor takes sensors_to_pose's verdict on each reading (its status
+// bit or its ADC code at a rail: SensorsToPose.ValidityFlags tests both) and
+// records the code.
 TEST(Supervisor, DisplacementOutOfRangeLandsWithoutZ) {
   Rig r;
   r.sample.displacement_adc[1] = 32767;  // at the rail
+  r.in.displacement_bad = 2;
   const auto& s = r.tick();
   CHECK(s.first_fault.code == FaultCode::kDisplacementOutOfRange);
   LONGS_EQUAL(1, s.first_fault.axis);
+  DOUBLES_EQUAL(32767.0, s.first_fault.value, 0.0);
   CHECK_FALSE(s.z_sensors_valid);
   CHECK(s.in_plane_sensors_valid);
   CHECK(s.reaction == FaultReaction::kLand);
   Rig b;
-  b.sample.status_flags = io::kDisplacementOutOfRange0;
+  b.in.displacement_bad = 1;
   CHECK(b.tick().first_fault.code == FaultCode::kDisplacementOutOfRange);
+  // Bits beyond the three sensors are not sensors.
+  Rig c;
+  c.in.displacement_bad = 0xF8;
+  CHECK(c.tick().active == FaultCode::kNone);
 }
 
 TEST(Supervisor, AdcFaultAndCurrentMonitorRail) {

@@ -813,6 +813,7 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
   }
   si.current_limited = last_current_limited_;
   si.beam_glitch = t.m.beam_glitch;
+  si.displacement_bad = t.m.displacement_bad;
   // Only a glitching beam's refused step needs converting (two int64
   // divisions each): the fault record's value, almost never.
   if (t.m.beam_glitch == 0) {

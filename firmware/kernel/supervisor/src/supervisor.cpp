@@ -154,7 +154,7 @@ struct Supervisor::Checks {
 const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   const io::SensorSample& s = *in.sample;
   Checks c;
-  c.jump = c.lds_bad = c.following = 0;
+  c.jump = c.following = 0;
 
   // --- sensor plausibility --------------------------------------------------
   const std::uint16_t flags = s.status_flags;
@@ -180,10 +180,7 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   c.frozen = config_.max_identical_samples != 0 && identical_run_ > config_.max_identical_samples;
   c.stale = stale_run_ > config_.max_consecutive_stale_frames;
   c.adc_fault = (flags & io::kAdcFault) != 0;
-  for (int k = 0; k < io::kDisplacementSensors; ++k) {
-    const bool bad = (flags & (io::kDisplacementOutOfRange0 << k)) != 0 || at_rail(s.displacement_adc[k]);
-    c.lds_bad = static_cast<std::uint8_t>(c.lds_bad | (bad ? (1u << k) : 0u));
-  }
+  c.lds_bad = static_cast<std::uint8_t>(in.displacement_bad & ((1u << io::kDisplacementSensors) - 1u));
 
   // --- timing ----------------------------------------------------------------
   overrun_run_ = next_run(in.tick_overrun, overrun_run_);

@@ -172,6 +172,11 @@ struct SupervisorInputs {
   // (PoseMeasurement::beam_glitch); beam_glitch_m: the refused change, SI.
   std::uint8_t beam_glitch;
   float beam_glitch_m[io::kInterferometerAxes];
+  // The laser displacement readings sensors_to_pose refused this tick
+  // (PoseMeasurement::displacement_bad, bit s: its out-of-range status bit,
+  // or its ADC code at a rail): kDisplacementOutOfRange. One definition of a
+  // bad reading, the measurement's, which the supervisor used to repeat.
+  std::uint8_t displacement_bad;
   // Nonzero: the stage profile selected in the persisted configuration was
   // refused at boot (its stage_profile::ProfileError). A cause that stays
   // present until a valid profile is selected: the stage cannot leave rest.
