@@ -756,8 +756,8 @@ TEST(SensorsToPose, TheCounterRuleOnEveryTickEqualsItsGeneralForm) {
       glitches += glitch ? 1 : 0;
       refused += ok ? 0 : 1;
       if (R.counts != st.counts[b] || R.last_raw != st.last_raw[b] || R.last_step != st.last_step[b] ||
-          glitch != ((pm.beam_glitch >> b) & 1u) || (glitch ? change : 0) != pm.glitch_counts[b] ||
-          (!ok && ((st.jump_latched >> b) & 1u) == 0)) {
+          glitch != (((static_cast<unsigned>(pm.beam_glitch) >> b) & 1u) != 0u) || (glitch ? change : 0) != pm.glitch_counts[b] ||
+          (!ok && ((static_cast<unsigned>(st.jump_latched) >> b) & 1u) == 0u)) {
         std::printf("tick %d beam %d n %lld: counts %lld / %lld, last_raw %lu / %lu, last_step %ld / %ld, glitch %d / %d\n",
                     tick, b, static_cast<long long>(n), static_cast<long long>(R.counts),
                     static_cast<long long>(st.counts[b]), static_cast<unsigned long>(R.last_raw),
