@@ -23,8 +23,8 @@ template <typename Scalar>
 cplx exact_discrete(const Pid2DofCoefficients<Scalar>& c, double f) {
   using Tr = ScalarTraits<Scalar>;
   const cplx z = std::polar(1.0, 2.0 * kPi * f * kT);
-  const double kp = Tr::coeff_to_double(c.kp), ki2 = Tr::coeff_to_double(c.ki_half_T);
-  const double ad = Tr::coeff_to_double(c.a_d), bd = Tr::coeff_to_double(c.b_d);
+  const double kp = Tr::acc_coeff_to_double(c.kp), ki2 = Tr::acc_coeff_to_double(c.ki_half_T);
+  const double ad = Tr::acc_coeff_to_double(c.a_d), bd = Tr::acc_coeff_to_double(c.b_d);
   return kp + ki2 * (z + 1.0) / (z - 1.0) + bd * (z - 1.0) / (z - ad);
 }
 
@@ -298,4 +298,24 @@ TEST(Pid2Dof, DesignRejectsInvalidConfigs) {
   Pid2DofCoefficients<float> cf;  // float coefficients have no such limit
   CHECK(design_pid2dof<float>(bad, kFs, &cf) == LoopDesignError::kOk);
   CHECK(design_pid2dof<Q7_24>(good, 0.0, &c) == LoopDesignError::kBadServoRate);
+}
+
+// The float kernel holds its MAC-only gains as double (ScalarTraits<float>::
+// AccCoeff): each must be exactly the float value the kernel's float
+// coefficient had, or the loops leave the M7's bits. Debian's GCC 12.2 on
+// x86-64 at -O2 once dropped that rounding for a_d and b_d (the derivative's
+// gains, set in a branch): every axis, every offered servo rate.
+TEST(Pid2Dof, TheAccumulatorGainsAreFloatValuesExactly) {
+  using Tr = ScalarTraits<float>;
+  const double rates[] = {2500.0, 5000.0, 10000.0, 20000.0};
+  for (Axis a : kAllAxes) {
+    for (double fs : rates) {
+      Pid2DofCoefficients<float> c;
+      CHECK(design_pid2dof<float>(default_axis_loop_config(a).pid, fs, &c) == LoopDesignError::kOk);
+      const double v[] = {Tr::acc_coeff_to_double(c.kp), Tr::acc_coeff_to_double(c.one_minus_b_kp),
+                          Tr::acc_coeff_to_double(c.ki_half_T), Tr::acc_coeff_to_double(c.antiwindup),
+                          Tr::acc_coeff_to_double(c.a_d), Tr::acc_coeff_to_double(c.b_d)};
+      for (double x : v) CHECK_EQUAL(static_cast<double>(static_cast<float>(x)), x);
+    }
+  }
 }

@@ -29,7 +29,9 @@ struct LoopTerms {
   using Acc = typename Traits::Acc;
   using Coeff = typename Traits::Coeff;
 
-  static void weight_step(Acc& state, Scalar& prev_d_input, Coeff one_minus_b_gain, Coeff c, Scalar step) {
+  // G, C: Coeff or the traits' AccCoeff (a gain held for the accumulator).
+  template <typename G>
+  static void weight_step(Acc& state, Scalar& prev_d_input, G one_minus_b_gain, Coeff c, Scalar step) {
     // Almost every tick has no explicit step: a zero step adds an exact zero
     // to both states (the caller's zero is +0, so no signed zero changes
     // either), so skipping it keeps every bit (issue 16).
@@ -38,7 +40,8 @@ struct LoopTerms {
     prev_d_input += step - Traits::mul(c, step);
   }
 
-  static void filtered_derivative(Scalar& derivative, Scalar& prev_d_input, Coeff a_d, Coeff b_d, Scalar e) {
+  template <typename C>
+  static void filtered_derivative(Scalar& derivative, Scalar& prev_d_input, C a_d, C b_d, Scalar e) {
     derivative = Traits::mul_sum2(a_d, derivative, b_d, e - prev_d_input);
     prev_d_input = e;
   }
@@ -47,7 +50,8 @@ struct LoopTerms {
   // the PID bounds its integrator to 64 A): the exact sum in Q52 (acc 2^20,
   // k e, (D + u_ff) 2^28: below 2^62 + 2^61), rounded once to the Scalar. The
   // general form (mac, then finish_output) rounds k e to the accumulator first.
-  static Scalar output(Acc acc, Coeff k, Scalar e, Scalar derivative, Scalar feedforward) {
+  template <typename C>
+  static Scalar output(Acc acc, C k, Scalar e, Scalar derivative, Scalar feedforward) {
     if constexpr (Traits::kIsFixed) {
       constexpr int kAccToProduct = Coeff::kFracBits + Scalar::kFracBits - Acc::kFracBits;  // 20
       constexpr int kScalarToProduct = Coeff::kFracBits;                                     // 28

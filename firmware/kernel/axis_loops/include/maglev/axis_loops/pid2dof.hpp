@@ -58,17 +58,20 @@ struct Pid2DofConfig {
 };
 
 // Discrete coefficients, computed in double at apply time, stored as Coeff.
+// The gains that enter only the accumulator's MACs are AccCoeff (the float
+// kernel holds its float values as double: ScalarTraits<float>::AccCoeff).
 template <typename Scalar>
 struct Pid2DofCoefficients {
   using Traits = numeric::ScalarTraits<Scalar>;
   using Coeff = typename Traits::Coeff;
-  Coeff kp{};            // A/um
-  Coeff one_minus_b_kp{};  // (1 - b) kp, A/um: step weighting
-  Coeff c{};             // setpoint weight, D (on steps)
-  Coeff ki_half_T{};     // ki T / 2, A/(um tick)
-  Coeff antiwindup{};    // T / Tt
-  Coeff a_d{};           // derivative filter pole
-  Coeff b_d{};           // derivative gain, A/um
+  using AccCoeff = typename Traits::AccCoeff;
+  AccCoeff kp{};            // A/um
+  AccCoeff one_minus_b_kp{};  // (1 - b) kp, A/um: step weighting
+  Coeff c{};                // setpoint weight, D (on steps)
+  AccCoeff ki_half_T{};     // ki T / 2, A/(um tick)
+  AccCoeff antiwindup{};    // T / Tt
+  AccCoeff a_d{};           // derivative filter pole
+  AccCoeff b_d{};           // derivative gain, A/um
   Scalar effort_limit{};  // A
 };
 
@@ -128,13 +131,13 @@ MAGLEV_CONFIG_CODE LoopDesignError design_pid2dof(const Pid2DofConfig& config, d
     if (!Traits::coeff_fits(v)) return LoopDesignError::kCoefficientOutOfRange;
   }
   Pid2DofCoefficients<Scalar> c;
-  c.kp = Traits::coeff_from_double(kp_k);
-  c.one_minus_b_kp = Traits::coeff_from_double((1.0 - bw) * kp_k);
+  c.kp = Traits::acc_coeff_from_double(kp_k);
+  c.one_minus_b_kp = Traits::acc_coeff_from_double((1.0 - bw) * kp_k);
   c.c = Traits::coeff_from_double(cw);
-  c.ki_half_T = Traits::coeff_from_double(ki_half_T);
-  c.antiwindup = Traits::coeff_from_double(aw);
-  c.a_d = Traits::coeff_from_double(a_d);
-  c.b_d = Traits::coeff_from_double(b_d);
+  c.ki_half_T = Traits::acc_coeff_from_double(ki_half_T);
+  c.antiwindup = Traits::acc_coeff_from_double(aw);
+  c.a_d = Traits::acc_coeff_from_double(a_d);
+  c.b_d = Traits::acc_coeff_from_double(b_d);
   c.effort_limit = Traits::from_double(lim);
   *out = c;
   return LoopDesignError::kOk;

@@ -50,26 +50,50 @@ struct ScalarTraits<float> {
   static constexpr bool coeff_fits(double v) { return v < kCoeffMaxMagnitude && v > -kCoeffMaxMagnitude; }
   static constexpr Scalar mul(Coeff c, Scalar v) { return c * v; }
 
+  // A gain that only ever enters the double accumulator (the loops' MACs):
+  // the float coefficient's value, held as a double. The same value exactly,
+  // so every MAC gives the bits it gave with the float, one VCVT fewer each
+  // (~30 M7 instructions a tick over the six loops, issue 16).
+  //
+  // Not inlined, on purpose: Debian's GCC 12.2 for x86-64 at -O2 / -O3
+  // miscompiles this double -> float -> double round trip when its SLP
+  // vectorizer packs several of them and one operand comes from a branch
+  // (design_pid2dof's a_d, b_d): the rounding to float is dropped and the
+  // host's loops then differ from the M7's in the last bits
+  // (kernel-bitexact-qemu-m7 caught it; -fno-tree-slp-vectorize or -O1 give
+  // the right value; the Cortex-M7 build has no double SIMD and was right).
+  // A call is configuration-time cost only, and the vectorizer does not
+  // reach into it.
+  using AccCoeff = double;
+  [[gnu::noinline, gnu::cold]] static AccCoeff acc_coeff_from_double(double v) {
+    return static_cast<double>(static_cast<float>(v));
+  }
+  static constexpr double acc_coeff_to_double(AccCoeff c) { return c; }
+
   static constexpr Acc acc_zero() { return 0.0; }
   static constexpr Acc acc_from_scalar(Scalar v) { return static_cast<double>(v); }
   static constexpr Acc acc_from_double(double v) { return v; }
   static constexpr double acc_to_double(Acc a) { return a; }
   static constexpr Scalar acc_to_scalar(Acc a) { return from_double(a); }
   static constexpr void mac(Acc& acc, Coeff c, Scalar v) { acc += static_cast<double>(c) * static_cast<double>(v); }
+  static constexpr void mac(Acc& acc, AccCoeff c, Scalar v) { acc += c * static_cast<double>(v); }
   // acc += c (v0 + v1) and c0 v0 + c1 v1: the fixed-point kernel rounds each
   // once (Fixed::mac_sum, mul_sum2); here they are the two macs they always
   // were, in the same order, so the float kernel keeps its bits.
-  static constexpr void mac_sum(Acc& acc, Coeff c, Scalar v0, Scalar v1) {
+  template <typename C>
+  static constexpr void mac_sum(Acc& acc, C c, Scalar v0, Scalar v1) {
     mac(acc, c, v0);
     mac(acc, c, v1);
   }
-  static constexpr Scalar mul_sum2(Coeff c0, Scalar v0, Coeff c1, Scalar v1) {
+  template <typename C>
+  static constexpr Scalar mul_sum2(C c0, Scalar v0, C c1, Scalar v1) {
     Acc acc = acc_zero();
     mac(acc, c0, v0);
     mac(acc, c1, v1);
     return acc_to_scalar(acc);
   }
   static constexpr Acc acc_mul(Acc a, Coeff c) { return a * static_cast<double>(c); }
+  static constexpr Acc acc_mul(Acc a, AccCoeff c) { return a * c; }
 
   static constexpr SinCos<Scalar> sin_cos(std::uint32_t phase) {
     return from_q30(sin_cos_q30(phase));
@@ -100,6 +124,10 @@ struct ScalarTraits<Fixed<F>> {
 
   static constexpr Coeff coeff_from_double(double v) { return Coeff::from_double(v); }
   static constexpr double coeff_to_double(Coeff c) { return c.to_double(); }
+  // Fixed point has one coefficient format (ScalarTraits<float>::AccCoeff).
+  using AccCoeff = Coeff;
+  static constexpr AccCoeff acc_coeff_from_double(double v) { return Coeff::from_double(v); }
+  static constexpr double acc_coeff_to_double(AccCoeff c) { return c.to_double(); }
   static constexpr bool coeff_fits(double v) { return v < kCoeffMaxMagnitude && v > -kCoeffMaxMagnitude; }
   static constexpr Scalar mul(Coeff c, Scalar v) { return Scalar::mul(c, v); }
 
