@@ -141,12 +141,9 @@ Scalar tracking_chain(const BiquadCoefficients<Scalar> (&c)[kMaxBiquadStages], B
   return x;
 }
 
-template <typename Scalar>
-void check_bank_equals_tracking() {
-  using Tr = ScalarTraits<Scalar>;
-  constexpr std::size_t kChains = 3;
-  // The stage kinds a configuration may hold: off, a notch, a low-pass, a lead-lag.
-  BiquadConfig kinds[4];
+// The stage kinds a configuration may hold: off, a notch, a low-pass, a lead-lag.
+void stage_kinds(BiquadConfig (&kinds)[4]) {
+  kinds[0] = BiquadConfig{};
   kinds[1].type = BiquadType::kNotch;
   kinds[1].frequency_Hz = 120.0f;
   kinds[1].q = 2.0f;
@@ -156,6 +153,14 @@ void check_bank_equals_tracking() {
   kinds[3].type = BiquadType::kLeadLag;
   kinds[3].frequency_Hz = 60.0f;
   kinds[3].pole_Hz = 240.0f;
+}
+
+template <typename Scalar>
+void check_bank_equals_tracking() {
+  using Tr = ScalarTraits<Scalar>;
+  constexpr std::size_t kChains = 3;
+  BiquadConfig kinds[4];
+  stage_kinds(kinds);
   BiquadCoefficients<Scalar> designed[4];
   for (int k = 0; k < 4; ++k) CHECK(design_biquad<Scalar>(kinds[k], kFs, &designed[k]) == LoopDesignError::kOk);
 
@@ -229,4 +234,24 @@ void check_bank_equals_tracking() {
 TEST(Biquad, BankSkippingPassThroughStagesEqualsTrackingEveryStage) {
   check_bank_equals_tracking<float>();
   check_bank_equals_tracking<Q7_24>();
+}
+
+// The float kernel's taps are held as double for its MACs (AccCoeff): each
+// exactly the float the tap rounds to, for every stage type at every
+// offered servo rate (Pid2Dof.TheAccumulatorGainsAreFloatValuesExactly has
+// the compiler bug this guards against).
+TEST(Biquad, TheFloatKernelsTapsAreFloatValuesExactly) {
+  const double rates[] = {2500.0, 5000.0, 10000.0, 20000.0};
+  BiquadConfig kinds[4];
+  stage_kinds(kinds);
+  for (int k = 1; k < 4; ++k) {
+    const BiquadConfig& cfg = kinds[k];
+    for (double fs : rates) {
+      BiquadCoefficients<float> c;
+      CHECK(design_biquad<float>(cfg, fs, &c) == LoopDesignError::kOk);
+      CHECK(c.enabled);
+      const double v[] = {c.b0, c.b1, c.b2, c.a1, c.a2};
+      for (double x : v) CHECK_EQUAL(static_cast<double>(static_cast<float>(x)), x);
+    }
+  }
 }

@@ -45,9 +45,12 @@ struct BiquadConfig {
 
 template <typename Scalar>
 struct BiquadCoefficients {
-  using Coeff = typename numeric::ScalarTraits<Scalar>::Coeff;
+  // Taps that only enter the accumulator's MACs: the float kernel holds the
+  // float taps' values as double (ScalarTraits<float>::AccCoeff, exact), one
+  // conversion fewer per MAC; Q7.24 its Q3.28.
+  using AccCoeff = typename numeric::ScalarTraits<Scalar>::AccCoeff;
   bool enabled = false;  // false: pass-through
-  Coeff b0{}, b1{}, b2{}, a1{}, a2{};
+  AccCoeff b0{}, b1{}, b2{}, a1{}, a2{};
 };
 
 template <typename Scalar>
@@ -133,11 +136,11 @@ MAGLEV_CONFIG_CODE LoopDesignError design_biquad(const BiquadConfig& config, dou
   }
   BiquadCoefficients<Scalar> c;
   c.enabled = d.enabled;
-  c.b0 = Traits::coeff_from_double(d.b0);
-  c.b1 = Traits::coeff_from_double(d.b1);
-  c.b2 = Traits::coeff_from_double(d.b2);
-  c.a1 = Traits::coeff_from_double(d.a1);
-  c.a2 = Traits::coeff_from_double(d.a2);
+  c.b0 = Traits::acc_coeff_from_double(d.b0);
+  c.b1 = Traits::acc_coeff_from_double(d.b1);
+  c.b2 = Traits::acc_coeff_from_double(d.b2);
+  c.a1 = Traits::acc_coeff_from_double(d.a1);
+  c.a2 = Traits::acc_coeff_from_double(d.a2);
   *out = c;
   return LoopDesignError::kOk;
 }
