@@ -62,19 +62,22 @@ struct InternalModelConfig {
 // Q3.28) and the states are in A: s0 = k_xi0 xi0, (s1, s2) = lambda (r1, r2)
 // with lambda = |(k_r1, k_r2)| (one common factor: the resonator matrix, and
 // so its exact poles, is unchanged).
+// Every gain but the setpoint weight c enters only the accumulator's MACs:
+// AccCoeff (the float kernel holds the float values as double, exactly).
 template <typename Scalar>
 struct InternalModelCoefficients {
   using Coeff = typename numeric::ScalarTraits<Scalar>::Coeff;
-  Coeff k_e{};          // A/um
-  Coeff step_gain{};    // k_e (1-b), A/um: step weighting injected into s0
-  Coeff c{};            // setpoint weight, D
-  Coeff a_d{};          // derivative filter pole
-  Coeff b_d{};          // k_de * Tustin derivative gain, A/um
-  Coeff in_xi0{};       // k_xi0 T, A/(um tick)
-  Coeff in_r{};         // lambda T
-  Coeff out_r[2]{};     // k_r1 / lambda, k_r2 / lambda
-  Coeff eps{};          // 2 sin(w0 T / 2)
-  Coeff E[3]{};         // eq (17) gains in the scaled states (A per A)
+  using AccCoeff = typename numeric::ScalarTraits<Scalar>::AccCoeff;
+  AccCoeff k_e{};          // A/um
+  AccCoeff step_gain{};    // k_e (1-b), A/um: step weighting injected into s0
+  Coeff c{};               // setpoint weight, D
+  AccCoeff a_d{};          // derivative filter pole
+  AccCoeff b_d{};          // k_de * Tustin derivative gain, A/um
+  AccCoeff in_xi0{};       // k_xi0 T, A/(um tick)
+  AccCoeff in_r{};         // lambda T
+  AccCoeff out_r[2]{};     // k_r1 / lambda, k_r2 / lambda
+  AccCoeff eps{};          // 2 sin(w0 T / 2)
+  AccCoeff E[3]{};         // eq (17) gains in the scaled states (A per A)
   Scalar effort_limit{};
 };
 
@@ -367,19 +370,19 @@ MAGLEV_CONFIG_CODE LoopDesignError design_internal_model(const InternalModelConf
     if (!Traits::coeff_fits(v)) return LoopDesignError::kCoefficientOutOfRange;
   }
   InternalModelCoefficients<Scalar> c;
-  c.k_e = Traits::coeff_from_double(d.k_e);
-  c.step_gain = Traits::coeff_from_double(step_gain);
+  c.k_e = Traits::acc_coeff_from_double(d.k_e);
+  c.step_gain = Traits::acc_coeff_from_double(step_gain);
   c.c = Traits::coeff_from_double(cw);
-  c.a_d = Traits::coeff_from_double(d.a_d);
-  c.b_d = Traits::coeff_from_double(d.b_d);
-  c.in_xi0 = Traits::coeff_from_double(in_xi0);
-  c.in_r = Traits::coeff_from_double(in_r);
-  c.out_r[0] = Traits::coeff_from_double(out1);
-  c.out_r[1] = Traits::coeff_from_double(out2);
-  c.eps = Traits::coeff_from_double(d.eps);
-  c.E[0] = Traits::coeff_from_double(E0);
-  c.E[1] = Traits::coeff_from_double(E1);
-  c.E[2] = Traits::coeff_from_double(E2);
+  c.a_d = Traits::acc_coeff_from_double(d.a_d);
+  c.b_d = Traits::acc_coeff_from_double(d.b_d);
+  c.in_xi0 = Traits::acc_coeff_from_double(in_xi0);
+  c.in_r = Traits::acc_coeff_from_double(in_r);
+  c.out_r[0] = Traits::acc_coeff_from_double(out1);
+  c.out_r[1] = Traits::acc_coeff_from_double(out2);
+  c.eps = Traits::acc_coeff_from_double(d.eps);
+  c.E[0] = Traits::acc_coeff_from_double(E0);
+  c.E[1] = Traits::acc_coeff_from_double(E1);
+  c.E[2] = Traits::acc_coeff_from_double(E2);
   c.effort_limit = Traits::from_double(lim);
   *out = c;
   return LoopDesignError::kOk;
