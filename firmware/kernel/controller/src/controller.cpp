@@ -914,7 +914,7 @@ template <typename Scalar>
 void Controller<Scalar>::sequence(Tick& t) {
   SequencerInputs& qi = t.qi;
   qi.z_valid = t.sup->z_sensors_valid && (t.m.valid_axes & kPoseValidZ) != 0;
-  // supervise()'s conversion of the same value: homing between them moves x
+  // The measured height as supervise() saw it: homing between them moves x
   // and y only (ApplyHomingOffsets), never z.
   qi.z_m = pico_to_si(status_.pose.pico[axis_index(Axis::kZ)]);
   qi.tilt_references_in_range = tilt_references_in_range_;
