@@ -16,7 +16,7 @@ namespace {
 
 namespace stage = io::stage;
 
-float pico_to_si(std::int64_t v) { return numeric::PicoToSi(v); }
+using numeric::PicoToSi;
 
 template <typename T>
 bool same_bytes(const T& a, const T& b) {
@@ -713,7 +713,7 @@ void Controller<Scalar>::calibration_accumulate() {
   }
   if (cal_.tick >= cal_.settle_ticks) {
     float y[kAxisCount];
-    for (int a = 0; a < kAxisCount; ++a) y[a] = pico_to_si(status_.pose.pico[a] - cal_.start.pico[a]);
+    for (int a = 0; a < kAxisCount; ++a) y[a] = PicoToSi(status_.pose.pico[a] - cal_.start.pico[a]);
     identifier_.accumulate(cal_.phase, calib_effort_, y);
     cal_.phase += cal_.increment;
   }
@@ -808,7 +808,7 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
   // (Sequencer::ReadsFollowingErrors; 6 conversions a tick otherwise).
   if (Sequencer::ReadsFollowingErrors(prev.state)) {
     for (int a = 0; a < kAxisCount; ++a) {
-      t.qi.abs_error[a] = std::fabs(pico_to_si(status_.reference.pico[a] - status_.pose.pico[a]));
+      t.qi.abs_error[a] = std::fabs(PicoToSi(status_.reference.pico[a] - status_.pose.pico[a]));
     }
   }
   si.current_limited = last_current_limited_;
@@ -821,7 +821,7 @@ void Controller<Scalar>::supervise(const io::SensorSample& sample, bool tick_ove
   } else {
     for (int b = 0; b < io::kInterferometerAxes; ++b) {
       si.beam_glitch_m[b] =
-          (t.m.beam_glitch & (1u << b)) != 0 ? pico_to_si(CountsToPicometres(t.m.glitch_counts[b], s2p_)) : 0.0f;
+          (t.m.beam_glitch & (1u << b)) != 0 ? PicoToSi(CountsToPicometres(t.m.glitch_counts[b], s2p_)) : 0.0f;
     }
   }
   si.stage_profile_error = stage_profile_error_;
@@ -916,7 +916,7 @@ void Controller<Scalar>::sequence(Tick& t) {
   qi.z_valid = t.sup->z_sensors_valid && (t.m.valid_axes & kPoseValidZ) != 0;
   // The measured height as supervise() saw it: homing between them moves x
   // and y only (ApplyHomingOffsets), never z.
-  qi.z_m = pico_to_si(status_.pose.pico[axis_index(Axis::kZ)]);
+  qi.z_m = PicoToSi(status_.pose.pico[axis_index(Axis::kZ)]);
   qi.tilt_references_in_range = tilt_references_in_range_;
   qi.fault_reaction = t.sup->reaction;
   t.so = &sequencer_.step(qi);
@@ -1094,7 +1094,7 @@ void Controller<Scalar>::excite(Tick& t) {
       if (pm > up) pm = up > 0 ? up : 0;
       if (pm < down) pm = down < 0 ? down : 0;
       t.reference_injection_pm = pm;
-      t.reference_injection = pm == asked_pm ? v : static_cast<float>(numeric::Int64ToDouble(pm) * 1e-12);
+      t.reference_injection = pm == asked_pm ? v : PicoToSi(pm);
     } else {
       // The sum with a running kExcite (or a calibration's excitation) on the
       // same axis is held to the same bound as each: alone, each was within

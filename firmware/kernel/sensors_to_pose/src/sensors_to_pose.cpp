@@ -602,6 +602,7 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   // double arithmetic (< 1e-3 pm) and the final rounding to whole pm (0.5 pm).
   // One square root and one division, no data-dependent loop.
   double est[3];
+  double theta_z_prad;
   if (s.abbe_cosine_correction) {
     const double dm = meas_pm[s.pair_a] - meas_pm[s.pair_b];
     const double t = 2.0 * dm / (s.pair_dp_pm + std::sqrt(s.pair_dp2_pm2 + s.pair_two_dd_pm * dm));
@@ -615,14 +616,18 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
     est[0] = (r_x - t * r_y) * inv_det;
     est[1] = (r_y + t * r_x) * inv_det;
     est[2] = t * 1e12;
+    // The beams see tan(theta_z) (the mirror's slope): theta = atan(t) = t - t^3/3
+    // (+ t^5/5 < 1.4e-13 rad at 3.72 mrad). Without it: 1.7e-8 rad at the travel limit.
+    const double t_rad = est[2] * 1e-12;
+    theta_z_prad = est[2] - est[2] * (t_rad * t_rad) / 3.0;
   } else {
     // The linear inverse alone (abbe_cosine_correction off).
 #pragma GCC unroll 3
     for (int r = 0; r < 3; ++r) {
       est[r] = s.inv_beam[r][0] * meas_pm[0] + s.inv_beam[r][1] * meas_pm[1] + s.inv_beam[r][2] * meas_pm[2];
     }
+    theta_z_prad = est[2];
   }
-  const double correct = s.abbe_cosine_correction ? 1.0 : 0.0;
 
   // --- laser displacement plane fit ------------------------------------------
   double h[3];
@@ -641,11 +646,6 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
   for (int r = 0; r < 3; ++r) {
     plane[r] = s.inv_plane[r][0] * h[0] + s.inv_plane[r][1] * h[1] + s.inv_plane[r][2] * h[2];
   }
-
-  // The beams see tan(theta_z) (the mirror's slope): theta = atan(t) = t - t^3/3
-  // (+ t^5/5 < 1.4e-13 rad at 3.72 mrad). Without it: 1.7e-8 rad at the travel limit.
-  const double t_rad = est[2] * 1e-12;
-  const double theta_z_prad = est[2] - correct * (est[2] * (t_rad * t_rad) / 3.0);
 
   out.pose_unhomed[Axis::kX] = numeric::RoundToInt64(est[0]);
   out.pose_unhomed[Axis::kY] = numeric::RoundToInt64(est[1]);

@@ -10,9 +10,7 @@ namespace {
 constexpr float kMonitorA_per_code =
     static_cast<float>(io::stage::kAdcFullScale_V / 32768.0 / io::stage::kCurrentMonitorGain_V_per_A);
 
-// int64 pm -> float m: the kernel's one form (numeric::PicoToSi, no
-// library conversion on the M7).
-float pico_to_si(std::int64_t pico) { return numeric::PicoToSi(pico); }
+using numeric::PicoToSi;  // int64 pm -> float m, the kernel's one form
 
 }  // namespace
 
@@ -34,9 +32,9 @@ RecorderConfig fault_watch_config(float servo_rate_Hz) {
 float signal_value(SignalRef s, const kernel::ControllerStatus& st, const io::SensorSample& sample) {
   const std::uint8_t i = s.index;
   switch (s.group) {
-    case SignalGroup::kPose: return pico_to_si(st.pose.pico[i]);
-    case SignalGroup::kReference: return pico_to_si(st.reference.pico[i]);
-    case SignalGroup::kError: return pico_to_si(st.reference.pico[i] - st.pose.pico[i]);
+    case SignalGroup::kPose: return PicoToSi(st.pose.pico[i]);
+    case SignalGroup::kReference: return PicoToSi(st.reference.pico[i]);
+    case SignalGroup::kError: return PicoToSi(st.reference.pico[i] - st.pose.pico[i]);
     case SignalGroup::kEffort: return st.effort_A[i];
     case SignalGroup::kLoopEffort: return st.loop_effort_A[i];
     case SignalGroup::kExcitation: return st.excitation_A[i];
