@@ -442,6 +442,34 @@ TEST(Supervisor, AnAmplifierThatDoesNotFollowItsCommandCutsTheCurrents) {
   for (int k = 0; k < 50; ++k) CHECK(q.tick().active == FaultCode::kNone);
 }
 
+// The mismatch runs are counted per coil only on ticks where the largest
+// |measured - commanded| is beyond the limit or a run is going: each coil
+// still keeps its own run. Coil 3 is off for 7 ticks and recovers (its run
+// restarts from zero), coil 6 goes off on tick 5 and trips on its own 10th
+// tick, and coil 1's NaN monitor beside them is off on no tick.
+TEST(Supervisor, MismatchRunsAreCountedPerCoilAndANaNIsNeverOff) {
+  Rig r;
+  r.in.coil_current_measured_A[1] = __builtin_nanf("");
+  r.coil_current_cmd_A[3] = 1.0f;
+  r.in.coil_current_measured_A[3] = -1.0f;  // 2 A off
+  int n = 1;
+  for (; n <= 20; ++n) {
+    if (n == 5) r.in.coil_current_measured_A[6] = 1.6f;   // 1.6 A off its 0 A command
+    if (n == 8) r.in.coil_current_measured_A[3] = 0.9f;   // coil 3 back after 7 ticks
+    if (n == 10) r.in.coil_current_measured_A[3] = -1.0f; // and off again: a new run
+    if (r.tick().active != FaultCode::kNone) break;
+  }
+  LONGS_EQUAL(14, n);  // coil 6's 10th tick off (5..14); coil 3's new run is at 5
+  CHECK(r.sup.status().first_fault.code == FaultCode::kCurrentMismatch);
+  LONGS_EQUAL(6, r.sup.status().first_fault.axis);
+  DOUBLES_EQUAL(1.6, r.sup.status().first_fault.value, 1e-6);
+  // With only the NaN coil, nothing is off however long it lasts.
+  Rig q;
+  q.in.coil_current_measured_A[1] = __builtin_nanf("");
+  q.coil_current_cmd_A[1] = 2.0f;
+  for (int k = 0; k < 40; ++k) CHECK(q.tick().active == FaultCode::kNone);
+}
+
 TEST(Supervisor, AFrozenSampleWhileALoopIsClosedCutsTheCurrents) {
   // A sensor node that freezes without its transport flagging the repeat
   // (campaign seed 1, run 1747): everything, the current monitor included,

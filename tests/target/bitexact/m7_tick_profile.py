@@ -150,6 +150,23 @@ def source_lines(elf, pcs):
     return {pc: line.rsplit('/', 1)[-1].split(' ')[0] for pc, line in zip(pcs, res)}
 
 
+def kernel(by_fn):
+    return {f: v for f, v in by_fn.items() if not any(h in f for h in HARNESS)}
+
+
+# A tick's kind: the reference generator or excitation it ran (the ticks that
+# set the replay's maximum are a kind, not noise).
+TICK_KINDS = (('circle', 'CircleReference'), ('move', 'MoveReference'), ('sinusoid', 'SinusoidReference'),
+              ('excitation', 'excite'))
+
+
+def tick_kind(by_fn):
+    for name, sub in TICK_KINDS:
+        if any(sub in f and v >= 20 for f, v in kernel(by_fn).items()):
+            return name
+    return 'quiet'
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     ap.add_argument('log')
@@ -164,16 +181,21 @@ def main():
                     help='count only what runs inside the tick function (not command() between ticks)')
     ap.add_argument('--kinds', action='store_true',
                     help='(implies --step-only) min / median / max per tick by the reference work it did')
+    ap.add_argument('--only-kind', default='',
+                    help='(implies --step-only) keep only the ticks of this kind (see --kinds): circle, move, ...')
     a = ap.parse_args()
-    ticks, blocks, ninsn, insns, fn_of = intervals(a.log, entry_address(a.elf, a.symbol), a.step_only or a.kinds)
+    ticks, blocks, ninsn, insns, fn_of = intervals(a.log, entry_address(a.elf, a.symbol),
+                                                  a.step_only or a.kinds or bool(a.only_kind))
     if a.last > 0:
         ticks = ticks[-a.last:]
         blocks = blocks[-a.last:]
+    if a.only_kind:
+        keep = [k for k, b in enumerate(ticks) if tick_kind(b) == a.only_kind]
+        ticks = [ticks[k] for k in keep]
+        blocks = [blocks[k] for k in keep]
     if not ticks:
         sys.exit('m7_tick_profile: no complete interval (is --symbol the tick function?)')
 
-    def kernel(by_fn):
-        return {f: v for f, v in by_fn.items() if not any(h in f for h in HARNESS)}
 
     totals = [(sum(kernel(b).values()), k, b) for k, b in enumerate(ticks)]
     order = sorted(totals, key=lambda t: t[0])
@@ -241,16 +263,9 @@ def main():
     if a.kinds:
         # A tick's kind: the reference generator or excitation it ran (the
         # ticks that set the replay's maximum are a kind, not noise).
-        kinds = (('circle', 'CircleReference'), ('move', 'MoveReference'), ('sinusoid', 'SinusoidReference'),
-                 ('excitation', 'excite'))
         by_kind = collections.defaultdict(list)
         for tick_total, _, b in totals:
-            kind = 'quiet'
-            for name, sub in kinds:
-                if any(sub in f and v >= 20 for f, v in kernel(b).items()):
-                    kind = name
-                    break
-            by_kind[kind].append(tick_total)
+            by_kind[tick_kind(b)].append(tick_total)
         print('%-12s %6s %8s %8s %8s' % ('tick kind', 'ticks', 'min', 'median', 'max'))
         for kind, v in sorted(by_kind.items(), key=lambda kv: max(kv[1])):
             v.sort()

@@ -18,3 +18,11 @@
 #pragma once
 
 #define MAGLEV_CONFIG_CODE [[gnu::cold]]
+
+// MAGLEV_FAULT_PATH_CODE marks code the tick runs only on a tick where a
+// fault check trips (the supervisor's attribution of the first fault):
+// flash, like configuration code. Such a tick runs a few hundred
+// instructions from flash instead of ITCM (a few microseconds at most,
+// once: the latch holds the reaction after it), and the ITCM keeps its
+// room for the tick's every-tick path (4.3 KB, issue 16).
+#define MAGLEV_FAULT_PATH_CODE [[gnu::cold]]
