@@ -385,6 +385,29 @@ double HallPhi(double th, const double (&e)[kHallHarmonics]) {
 }
 }  // namespace
 
+// A laser displacement reading is bad at an ADC rail, code >= rail or
+// code <= -rail - 1 (one unsigned compare in the tick), or with its
+// out-of-range status bit: every int16 code on sensor 1, at four rails, with
+// and without the status bits of the other two sensors.
+TEST(SensorsToPose, ADisplacementReadingIsBadExactlyAtItsRailsOrWithItsStatusBit) {
+  for (const std::int16_t rail : {std::int16_t{1}, std::int16_t{1000}, std::int16_t{32766}, std::int16_t{32767}}) {
+    SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
+    cfg.adc_rail_code = rail;
+    SensorsToPoseState& st = FreshState(cfg);
+    io::SensorSample s = ZeroSample();
+    long mismatches = 0;
+    for (std::int32_t code = -32768; code <= 32767; ++code) {
+      s.displacement_adc[1] = static_cast<std::int16_t>(code);
+      s.status_flags = (code & 1) != 0 ? static_cast<std::uint16_t>(io::kDisplacementOutOfRange0 | io::kDisplacementOutOfRange2) : 0u;
+      const PoseMeasurement pm = SensorsToPoseStep(s, &st);
+      const bool railed = code >= rail || code <= -rail - 1;
+      const unsigned expected = (railed ? 2u : 0u) | ((code & 1) != 0 ? 5u : 0u);
+      if (pm.displacement_bad != expected) ++mismatches;
+    }
+    LONGS_EQUAL(0, mismatches);
+  }
+}
+
 TEST(SensorsToPose, HallPhaseOverAFullPitchWithTheArraysHarmonics) {
   SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
   SensorsToPoseState& st = FreshState(cfg);
@@ -578,7 +601,15 @@ io::SensorSample MovingSample(int n, std::int32_t offset_beam1 = 0) {
   return s;
 }
 
-std::int64_t Beam1Pm(const SensorsToPoseState& st) { return CountsToPicometres(st.counts[1], st); }
+// Beam b's extended count as the integer it is (the state holds it in a
+// double, exact below 2^53): a fractional or out-of-range value fails here.
+std::int64_t Count(const SensorsToPoseState& st, int b) {
+  const double c = st.counts[b];
+  CHECK(c == std::floor(c) && std::fabs(c) < 9007199254740992.0);
+  return static_cast<std::int64_t>(c);
+}
+
+std::int64_t Beam1Pm(const SensorsToPoseState& st) { return CountsToPicometres(Count(st, 1), st); }
 
 }  // namespace
 
@@ -593,7 +624,7 @@ TEST(SensorsToPose, AJumpNoActuatorCanProduceIsReplacedByThePreviousStepAndFlagg
     const PoseMeasurement pm = SensorsToPoseStep(MovingSample(n), &st);
     LONGS_EQUAL(0, pm.beam_glitch);  // constant speed: no change of step at all
   }
-  const std::int64_t x_before = st.counts[0];
+  const std::int64_t x_before = Count(st, 0);
   const std::int64_t y1_before = Beam1Pm(st);
   // Run 5693 of the campaign: -35 943 counts (22 um) on beam 1 in one tick,
   // kept from then on, while the stage moves in x.
@@ -604,7 +635,7 @@ TEST(SensorsToPose, AJumpNoActuatorCanProduceIsReplacedByThePreviousStepAndFlagg
   CHECK_EQUAL(kPoseValidAll, pm.valid_axes);  // repaired: the pose stays usable
   LONGS_EQUAL(0, pm.beam_jump);
   LONGS_EQUAL(y1_before, Beam1Pm(st));          // beam 1 took its previous step (zero)
-  LONGS_EQUAL(x_before + 16181, st.counts[0]);  // beam 0 moved on untouched
+  LONGS_EQUAL(x_before + 16181, Count(st, 0));  // beam 0 moved on untouched
   // The jump stays in the raw counter: taken as an offset, the pose does not move.
   for (int k = 0; k < 20; ++k, ++n) {
     pm = SensorsToPoseStep(MovingSample(n, -35943), &st);
@@ -621,21 +652,21 @@ TEST(SensorsToPose, AOneTickSpikeIsRepairedBothWaysAndRealAccelerationIsMotion) 
   SensorsToPoseState& st = FreshState(DefaultSensorsToPoseConfig());
   int n = 0;
   for (; n < 5; ++n) (void)SensorsToPoseStep(MovingSample(n), &st);
-  const std::int64_t y1 = st.counts[1];
+  const std::int64_t y1 = Count(st, 1);
   // Out on one tick, back on the next: both steps are glitches, the count never moves.
   PoseMeasurement pm = SensorsToPoseStep(MovingSample(n++, 50000), &st);
   LONGS_EQUAL(2, pm.beam_glitch);
-  LONGS_EQUAL(y1, st.counts[1]);
+  LONGS_EQUAL(y1, Count(st, 1));
   pm = SensorsToPoseStep(MovingSample(n++, 0), &st);
   LONGS_EQUAL(2, pm.beam_glitch);
   LONGS_EQUAL(-50000, pm.glitch_counts[1]);
-  LONGS_EQUAL(y1, st.counts[1]);
+  LONGS_EQUAL(y1, Count(st, 1));
   pm = SensorsToPoseStep(MovingSample(n++, 0), &st);
   LONGS_EQUAL(0, pm.beam_glitch);
   // From rest, a step change just inside the bound (79.99 m/s^2) is motion.
   pm = SensorsToPoseStep(MovingSample(n++, 20707), &st);
   LONGS_EQUAL(0, pm.beam_glitch);
-  LONGS_EQUAL(y1 + 20707, st.counts[1]);
+  LONGS_EQUAL(y1 + 20707, Count(st, 1));
   // Stopping dead again is motion too: at speed, one tick's worth of steps
   // more or less is allowed (a sample a tick early or late over a link).
   pm = SensorsToPoseStep(MovingSample(n++, 20707), &st);
@@ -646,7 +677,7 @@ TEST(SensorsToPose, AOneTickSpikeIsRepairedBothWaysAndRealAccelerationIsMotion) 
   pm = SensorsToPoseStep(MovingSample(n++, 20707 + 20708), &st);
   LONGS_EQUAL(2, pm.beam_glitch);
   LONGS_EQUAL(20708, pm.glitch_counts[1]);
-  LONGS_EQUAL(y1 + 20707, st.counts[1]);
+  LONGS_EQUAL(y1 + 20707, Count(st, 1));
 }
 
 TEST(SensorsToPose, AStaleSampleIsNoStepAndTheNextFreshStepCoversTheTicksMissed) {
@@ -669,7 +700,7 @@ TEST(SensorsToPose, AStaleSampleIsNoStepAndTheNextFreshStepCoversTheTicksMissed)
   LONGS_EQUAL(0, SensorsToPoseStep(rep, &st).beam_glitch);
   n += 2;
   LONGS_EQUAL(0, SensorsToPoseStep(at(n++), &st).beam_glitch);
-  LONGS_EQUAL(v * (n - 1), st.counts[0]);
+  LONGS_EQUAL(v * (n - 1), Count(st, 0));
   LONGS_EQUAL(v, st.last_step[0]);
   LONGS_EQUAL(0, SensorsToPoseStep(at(n++), &st).beam_glitch);
   // A jump on beam 0 while it moves this fast: beyond 80 m/s^2 plus one
@@ -678,7 +709,7 @@ TEST(SensorsToPose, AStaleSampleIsNoStepAndTheNextFreshStepCoversTheTicksMissed)
   j.interferometer_counts[0] += 60000;
   const PoseMeasurement pm = SensorsToPoseStep(j, &st);
   LONGS_EQUAL(1, pm.beam_glitch);
-  LONGS_EQUAL(v * (n - 1), st.counts[0]);
+  LONGS_EQUAL(v * (n - 1), Count(st, 0));
 }
 
 // The counter rule written once in its general form (any gap of n ticks),
@@ -755,12 +786,12 @@ TEST(SensorsToPose, TheCounterRuleOnEveryTickEqualsItsGeneralForm) {
       R.last_step = stale ? R.last_step : truncated;
       glitches += glitch ? 1 : 0;
       refused += ok ? 0 : 1;
-      if (R.counts != st.counts[b] || R.last_raw != st.last_raw[b] || R.last_step != st.last_step[b] ||
+      if (R.counts != Count(st, b) || R.last_raw != st.last_raw[b] || R.last_step != st.last_step[b] ||
           glitch != (((static_cast<unsigned>(pm.beam_glitch) >> b) & 1u) != 0u) || (glitch ? change : 0) != pm.glitch_counts[b] ||
           (!ok && ((static_cast<unsigned>(st.jump_latched) >> b) & 1u) == 0u)) {
         std::printf("tick %d beam %d n %lld: counts %lld / %lld, last_raw %lu / %lu, last_step %ld / %ld, glitch %d / %d\n",
                     tick, b, static_cast<long long>(n), static_cast<long long>(R.counts),
-                    static_cast<long long>(st.counts[b]), static_cast<unsigned long>(R.last_raw),
+                    static_cast<long long>(Count(st, b)), static_cast<unsigned long>(R.last_raw),
                     static_cast<unsigned long>(st.last_raw[b]), static_cast<long>(R.last_step),
                     static_cast<long>(st.last_step[b]), glitch ? 1 : 0, (pm.beam_glitch >> b) & 1);
         FAIL("SensorsToPoseStep's counter rule differs from its general form");
@@ -805,9 +836,9 @@ TEST(SensorsToPose, TheAccelerationCheckArmsTwoStepsAfterASeedAndCanBeSwitchedOf
   LONGS_EQUAL(0, so.max_counts_step_change);
   int n = 0;
   for (; n < 5; ++n) (void)SensorsToPoseStep(MovingSample(n), &so);
-  const std::int64_t y1 = so.counts[1];
+  const std::int64_t y1 = Count(so, 1);
   CHECK_EQUAL(0, SensorsToPoseStep(MovingSample(n, -35943), &so).beam_glitch);
-  LONGS_EQUAL(y1 - 35943, so.counts[1]);
+  LONGS_EQUAL(y1 - 35943, Count(so, 1));
   // Bounds that are not numbers, negative, finer than a count or beyond the
   // speed bound are refused, and the state is left as it was.
   SensorsToPoseState other{};

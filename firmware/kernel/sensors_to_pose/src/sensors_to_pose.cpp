@@ -205,7 +205,7 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
   for (int b = 0; b < io::kInterferometerAxes; ++b) {
     const BeamConfig& beam = config.beam[b];
     if (beam.sign != 1 && beam.sign != -1) return SensorsToPoseError::kBadBeamSign;
-    s.beam_sign[b] = beam.sign;
+    s.signed_lsb_pm[b] = static_cast<double>(beam.sign) * s.lsb_pm;
     beam_is_y[b] = beam.axis == BeamAxis::kY;
     mirror_pm[b] = beam.mirror_distance_m * 1e12;
     // Linear part, units pm per (pm, pm, prad): prad * m = pm.
@@ -375,11 +375,27 @@ void ReseedInterferometers(SensorsToPoseState* state) {
 
 namespace {
 
+// A laser displacement reading at an ADC rail: code >= rail or
+// code <= -rail - 1, i.e. outside [-rail, rail - 1], as one unsigned
+// compare (rail is in (0, 32767], so code + rail and 2 rail - 1 are
+// nonnegative int32 where code is inside; a code below -rail wraps to a
+// large unsigned value).
+bool LdsCodeAtRail(std::int16_t code, const SensorsToPoseState& s) {
+  const std::int32_t rail = s.adc_rail_code;
+  return static_cast<std::uint32_t>(std::int32_t{code} + rail) > static_cast<std::uint32_t>(2 * rail - 1);
+}
+
+// The laser displacement sensors' out-of-range status bits, bit i = sensor i
+// (io::kDisplacementOutOfRange0..2 are three consecutive bits).
+static_assert(io::kDisplacementOutOfRange1 == io::kDisplacementOutOfRange0 << 1 &&
+              io::kDisplacementOutOfRange2 == io::kDisplacementOutOfRange0 << 2);
+std::uint8_t LdsOutOfRangeBits(std::uint16_t status_flags) {
+  return static_cast<std::uint8_t>((status_flags / io::kDisplacementOutOfRange0) & 7u);
+}
+
 // A laser displacement reading out of range (its status bit) or at an ADC rail.
 bool LdsReadingBad(const io::SensorSample& sample, int i, const SensorsToPoseState& s) {
-  const std::int16_t code = sample.displacement_adc[i];
-  return code >= s.adc_rail_code || code <= -s.adc_rail_code - 1 ||
-         (sample.status_flags & (io::kDisplacementOutOfRange0 << i)) != 0;
+  return LdsCodeAtRail(sample.displacement_adc[i], s) || (LdsOutOfRangeBits(sample.status_flags) & (1u << i)) != 0;
 }
 
 // The rare part of the LDS target-step repair (SensorsToPoseConfig::lds_target_*):
@@ -456,13 +472,13 @@ struct BeamStep {
 [[gnu::always_inline]] inline void FinishBeam(int b, bool glitch, bool ok, std::int32_t moved, std::int64_t change,
                                               SensorsToPoseState* state, PoseMeasurement* out, double* meas_pm) {
   SensorsToPoseState& s = *state;
-  s.counts[b] += moved;
+  s.counts[b] += static_cast<double>(moved);  // integers below 2^53: exact
   out->beam_glitch = static_cast<std::uint8_t>(out->beam_glitch | (glitch ? (1u << b) : 0u));
   out->glitch_counts[b] = glitch ? change : 0;
   s.jump_latched = static_cast<std::uint8_t>(s.jump_latched | (ok ? 0u : (1u << b)));
-  // counts * lsb in double: |counts| < 2^53 converts exactly, and the
-  // product's rounding is < 1e-4 pm anywhere within a metre of travel.
-  meas_pm[b] = static_cast<double>(s.beam_sign[b]) * (Int64ToDouble(s.counts[b]) * s.lsb_pm);
+  // counts * lsb in double: the product's rounding is < 1e-4 pm anywhere
+  // within a metre of travel.
+  meas_pm[b] = s.counts[b] * s.signed_lsb_pm[b];
 }
 
 }  // namespace
@@ -506,7 +522,7 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
     s.stale_gap = 0;
     for (int b = 0; b < io::kInterferometerAxes; ++b) {
       s.last_raw[b] = sample.interferometer_counts[b];
-      s.counts[b] = 0;
+      s.counts[b] = 0.0;
       s.last_step[b] = 0;
     }
   }
@@ -631,10 +647,11 @@ PoseMeasurement SensorsToPoseStep(const io::SensorSample& sample, SensorsToPoseS
 
   // --- laser displacement plane fit ------------------------------------------
   double h[3];
-  std::uint8_t lds_bad = 0;
+  // A bad reading: out of range (its status bit) or at an ADC rail.
+  std::uint8_t lds_bad = LdsOutOfRangeBits(sample.status_flags);
   for (int i = 0; i < io::kDisplacementSensors; ++i) {
     h[i] = s.lds_zero_pm + static_cast<double>(sample.displacement_adc[i]) * s.lds_gain_pm;
-    lds_bad = static_cast<std::uint8_t>(lds_bad | (LdsReadingBad(sample, i, s) ? (1u << i) : 0u));
+    lds_bad = static_cast<std::uint8_t>(lds_bad | (LdsCodeAtRail(sample.displacement_adc[i], s) ? (1u << i) : 0u));
   }
   if (s.lds_step_min_codes != 0 && !stale) {
     // The offsets of the target-step repair (below), and the track: a bad

@@ -214,11 +214,15 @@ struct SensorsToPoseState {
   std::int64_t max_counts_per_tick;
   // |step - previous step| above this is a glitch (0: check off).
   std::int64_t max_counts_step_change;
-  std::int8_t beam_sign[io::kInterferometerAxes];
   // The tick's arithmetic is double (one FPU instruction per operation on
   // the M7, where int64 products need 128-bit limbs and divisions are
   // library calls); positions stay int64 pm / prad at the interfaces.
   double lsb_pm;  // lsb_num / lsb_den
+  // Beam b's sign (BeamConfig::sign) times lsb_pm, exactly (a sign flip):
+  // counts * signed_lsb_pm[b] is the beam's reading with one multiply, the
+  // same bits as sign * (counts * lsb_pm) (rounding to nearest is symmetric
+  // about zero).
+  double signed_lsb_pm[io::kInterferometerAxes];
   bool abbe_cosine_correction;
   // [x, y, theta_z] = inv_beam * m (rows x, y in pm/pm, theta_z in prad/pm):
   // the solve without the Abbe / cosine terms.
@@ -251,7 +255,13 @@ struct SensorsToPoseState {
 
   // --- runtime ---
   std::uint32_t last_raw[io::kInterferometerAxes];
-  std::int64_t counts[io::kInterferometerAxes];
+  // The extended count of each beam: an integer, held in a double, where
+  // it is exact while |counts| < 2^53 (5 500 km at 0.618 nm a count; a step
+  // is at most max_counts_per_tick < 1e9). The tick adds its int32 step and
+  // multiplies by the LSB in the FPU; as an int64 it cost an add with carry
+  // and a conversion to double every tick (~40 M7 instructions over the
+  // three beams, issue 16).
+  double counts[io::kInterferometerAxes];
   std::uint8_t jump_latched;  // bit b: beam b saw an implausible jump (sticky until re-seed)
   // Counts per tick of the last fresh step: |.| <= max_counts_per_tick < 1e9.
   std::int32_t last_step[io::kInterferometerAxes];
