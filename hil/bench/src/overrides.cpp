@@ -138,8 +138,8 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     if (it->second == "fitted") {
       const hil::PlantConfig fitted{};
       o->plant.amplifier.current_noise_density_A_per_rtHz = fitted.amplifier.current_noise_density_A_per_rtHz;
-      o->plant.interferometer.noise_m = fitted.interferometer.noise_m;
-      o->plant.displacement.noise_m = fitted.displacement.noise_m;
+      o->plant.interferometer.set_noise_m(fitted.interferometer.noise_m);
+      o->plant.displacement.set_noise_m(fitted.displacement.noise_m);
     } else if (it->second == "component") {
       hil::ApplyComponentNoise(&o->plant);
     } else {
@@ -262,8 +262,15 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     else if (k == "current_noise_scale") num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_scale);
     else if (k == "current_noise_density_A_per_rtHz")
       num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_density_A_per_rtHz);
-    else if (k == "interferometer_noise_m") num("plant", k, v, Dim::kLength, &p.interferometer.noise_m);
-    else if (k == "displacement_noise_m") num("plant", k, v, Dim::kLength, &p.displacement.noise_m);
+    else if (k == "interferometer_noise_m") {  // one figure for every beam
+      double n = p.interferometer.noise_m;
+      num("plant", k, v, Dim::kLength, &n);
+      p.interferometer.set_noise_m(n);
+    } else if (k == "displacement_noise_m") {  // and for every height
+      double n = p.displacement.noise_m;
+      num("plant", k, v, Dim::kLength, &n);
+      p.displacement.set_noise_m(n);
+    }
     else if (k == "sensor_noise") flag("plant", k, v, &p.sensor_noise_enabled);
     else if (k == "initial_x_m" || k == "initial_y_m") {
       // Where the platen rests at power-on: on the magnet array, inside the

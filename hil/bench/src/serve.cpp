@@ -147,8 +147,13 @@ bool plant_overrides(const scenario::Scenario& sc, hil::PlantConfig* p, std::uin
     if (k == "model") continue;
     if (k == "payload_kg") ok = num(k, v, Dim::kMass, &p->body.payload_kg);
     else if (k == "current_noise_scale") ok = num(k, v, Dim::kNumber, &p->amplifier.current_noise_scale);
-    else if (k == "interferometer_noise_m") ok = num(k, v, Dim::kLength, &p->interferometer.noise_m);
-    else if (k == "displacement_noise_m") ok = num(k, v, Dim::kLength, &p->displacement.noise_m);
+    else if (k == "interferometer_noise_m" || k == "displacement_noise_m") {  // one figure for the kind
+      const bool beams = k == "interferometer_noise_m";
+      double n = beams ? p->interferometer.noise_m : p->displacement.noise_m;
+      ok = num(k, v, Dim::kLength, &n);
+      if (ok && beams) p->interferometer.set_noise_m(n);
+      if (ok && !beams) p->displacement.set_noise_m(n);
+    }
     else if (k == "sensor_noise") p->sensor_noise_enabled = v == "on" || v == "true" || v == "1" || v == "yes";
     else if (k == "initial_x_m") ok = num(k, v, Dim::kLength, &p->initial.position_m[0]);
     else if (k == "initial_y_m") ok = num(k, v, Dim::kLength, &p->initial.position_m[1]);

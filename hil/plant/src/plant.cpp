@@ -1353,7 +1353,7 @@ io::SensorSample Plant::sample() {
 
   // --- interferometers: wrapping counters ------------------------------------
   for (int a = 0; a < io::kInterferometerAxes; ++a) {
-    const double noise = noisy ? config_.interferometer.noise_m * rng_.Normal() : 0.0;
+    const double noise = noisy ? config_.interferometer.noise_of(a) * rng_.Normal() : 0.0;
     bool lost = manual_loss_[a];
     for (const BeamLossEvent& e : config_.interferometer.beam_loss_events) {
       lost = lost || (e.axis == a && t >= e.start_s && t < e.end_s);
@@ -1389,7 +1389,7 @@ io::SensorSample Plant::sample() {
       target = TargetHeight(w.x(), w.y()) - target_home_m_[i];
     }
     const double h = body_.position_m.z() + (r * rb).z() - rb.z() - target;
-    const double noise = noisy ? dc.noise_m * rng_.Normal() : 0.0;
+    const double noise = noisy ? dc.noise_of(i) * rng_.Normal() : 0.0;
     const double volts = (h + noise - dc.zero_height_m) / dc.scale_m_per_V;
     if (std::fabs(volts) > config_.adc.full_scale_V) {
       status = static_cast<std::uint16_t>(status | (io::kDisplacementOutOfRange0 << i));

@@ -82,16 +82,21 @@ bool PlantConfigForProfile(const stage_profile::StageProfile& p, const PlantConf
   c.hall.b_x_m = m.hall_a_x_m + p.halbach.pitch_m / 4;
   c.hall.b_y_m = m.hall_a_y_m + p.halbach.pitch_m / 4;
   // The sensors' own noise figures, for the component noise models (the
-  // default model keeps the bench's own; docs/PLANT.md section 11): one figure
-  // per kind in the plant, the largest the profile gives.
-  c.interferometer.component_noise_m = 0.0;
-  c.displacement.component_noise_m = 0.0;
+  // default model keeps the bench's own; docs/PLANT.md section 11), sensor by
+  // sensor in the order sp::SetSensorGeometry gives them their beams and
+  // heights (the profile's interferometers, then its laser displacement
+  // sensors, each kind in order).
+  int beams = 0, heights = 0;
+  for (double& v : c.interferometer.component_noise_m) v = 0.0;
+  for (double& v : c.displacement.component_noise_m) v = 0.0;
+  for (double& v : c.interferometer.sensor_noise_m) v = 0.0;
+  for (double& v : c.displacement.sensor_noise_m) v = 0.0;
   for (int s = 0; s < p.sensor_count && s < sp::kMaxSensors; ++s) {
     const sp::Sensor& sensor = p.sensors[s];
-    if (sensor.kind == sp::SensorKind::kInterferometer) {
-      c.interferometer.component_noise_m = std::max(c.interferometer.component_noise_m, sensor.noise);
-    } else if (sensor.kind == sp::SensorKind::kLaserDisplacement) {
-      c.displacement.component_noise_m = std::max(c.displacement.component_noise_m, sensor.noise);
+    if (sensor.kind == sp::SensorKind::kInterferometer && beams < io::kInterferometerAxes) {
+      c.interferometer.component_noise_m[beams++] = sensor.noise;
+    } else if (sensor.kind == sp::SensorKind::kLaserDisplacement && heights < io::kDisplacementSensors) {
+      c.displacement.component_noise_m[heights++] = sensor.noise;
     }
   }
   // Hall A's height and sensitivity as the check judged them

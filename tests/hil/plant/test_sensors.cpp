@@ -174,3 +174,48 @@ TEST(PlantSensors, NoiseIsDeterministicGivenTheSeed) {
   std::printf("\n  interferometer x reading at rest: rms %.3f nm\n", rms * 1e9);
   CHECK(rms > 0.3e-9 && rms < 1.0e-9);
 }
+
+// Each sensor draws its own figure (a lab's profile may mix parts: its
+// interferometers' and heights' `noise`, sensor by sensor): beam 1 at 5 nm
+// beside beams 0 and 2 at 0.5 nm, height 2 at 50 nm beside 0 and 1 at 5 nm.
+// One figure for the kind (set_noise_m) is every sensor's again.
+TEST(PlantSensors, EachSensorDrawsItsOwnNoiseFigure) {
+  PlantConfig c = Still();
+  c.sensor_noise_enabled = true;
+  c.interferometer.set_noise_m(0.5e-9);
+  c.interferometer.sensor_noise_m[1] = 5e-9;
+  c.displacement.set_noise_m(5e-9);
+  c.displacement.sensor_noise_m[2] = 50e-9;
+  const auto rms = [](const PlantConfig& cfg, double* beam, double* height) {
+    Plant plant(cfg, 7);
+    const io::SensorSample s0 = plant.sample();
+    double b2[3] = {}, h1[3] = {}, h2[3] = {};
+    const int n = 4000;
+    for (int k = 0; k < n; ++k) {
+      const io::SensorSample s = plant.sample();
+      for (int i = 0; i < 3; ++i) {
+        const double e = Delta(s.interferometer_counts[i], cfg.interferometer.start_count[i]) * stage::kInterferometerLsb_m;
+        b2[i] += e * e;
+        const double h = (s.displacement_adc[i] - s0.displacement_adc[i]);
+        h1[i] += h;
+        h2[i] += h * h;
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      beam[i] = std::sqrt(b2[i] / n);
+      height[i] = std::sqrt(h2[i] / n - (h1[i] / n) * (h1[i] / n));  // ADC codes
+    }
+  };
+  double beam[3], height[3];
+  rms(c, beam, height);
+  std::printf("\n  per-sensor noise: beams %.2f %.2f %.2f nm, heights %.2f %.2f %.2f codes\n", beam[0] * 1e9,
+              beam[1] * 1e9, beam[2] * 1e9, height[0], height[1], height[2]);
+  CHECK(beam[0] < 1.0e-9 && beam[2] < 1.0e-9);
+  CHECK(beam[1] > 4.5e-9 && beam[1] < 5.5e-9);
+  CHECK(height[2] > 8.0 * height[0] && height[2] > 8.0 * height[1]);  // 10x the rms (codes: 2.5 and 25 nominal)
+  c.interferometer.set_noise_m(0.5e-9);
+  c.displacement.set_noise_m(5e-9);
+  rms(c, beam, height);
+  CHECK(beam[1] < 1.0e-9);
+  CHECK(height[2] < 1.5 * height[0]);
+}

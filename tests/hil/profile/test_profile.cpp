@@ -745,8 +745,11 @@ TEST(Profiles, TheSensorsResolutionScalesThePoseSolverAndThePlant) {
 
 // A profile's sensor `noise` was parsed and ignored: the bench's component
 // noise models (nominal, as-built) used the seed's parts' datasheet figures
-// whatever sensors a lab's profile described. Now they use the profile's
-// (the largest per kind); the default model keeps the bench's own figures.
+// whatever sensors a lab's profile described. Then they used the profile's,
+// the largest per kind for every sensor of the kind; now sensor by sensor
+// (the profile's interferometers -> beams 1-3, its laser displacement
+// sensors -> heights 1-3, in order), and noise_m (metrics.json's figure per
+// kind) is the largest. The default model keeps the bench's own figures.
 // The shipped Halbach profiles state the seed's parts' figures, so their
 // runs are what they were (checked byte for byte on as-built runs).
 TEST(Profiles, TheComponentNoiseModelsUseTheProfilesSensorNoise) {
@@ -755,24 +758,46 @@ TEST(Profiles, TheComponentNoiseModelsUseTheProfilesSensorNoise) {
   std::string why;
   CHECK_TRUE(hil::PlantConfigForProfile(base, hil::PlantConfig::Default(), &pc, &why));
   const hil::ComponentNoise parts = hil::component_noise();
-  DOUBLES_EQUAL(parts.interferometer_m, pc.interferometer.component_noise_m, 0.0);
-  DOUBLES_EQUAL(parts.displacement_m, pc.displacement.component_noise_m, 0.0);
+  for (int k = 0; k < 3; ++k) {
+    DOUBLES_EQUAL(parts.interferometer_m, pc.interferometer.component_noise_m[k], 0.0);
+    DOUBLES_EQUAL(parts.displacement_m, pc.displacement.component_noise_m[k], 0.0);
+  }
   // The default model: the bench's own figures, untouched by the profile.
-  DOUBLES_EQUAL(hil::PlantConfig::Default().interferometer.noise_m, pc.interferometer.noise_m, 0.0);
-  DOUBLES_EQUAL(hil::PlantConfig::Default().displacement.noise_m, pc.displacement.noise_m, 0.0);
+  for (int k = 0; k < 3; ++k) {
+    DOUBLES_EQUAL(hil::PlantConfig::Default().interferometer.noise_m, pc.interferometer.noise_of(k), 0.0);
+    DOUBLES_EQUAL(hil::PlantConfig::Default().displacement.noise_m, pc.displacement.noise_of(k), 0.0);
+  }
   const hil::PlantConfig seed_nominal = hil::NominalPlant(pc);
   DOUBLES_EQUAL(parts.interferometer_m, seed_nominal.interferometer.noise_m, 0.0);
   DOUBLES_EQUAL(parts.displacement_m, seed_nominal.displacement.noise_m, 0.0);
+  for (int k = 0; k < 3; ++k) {
+    DOUBLES_EQUAL(parts.interferometer_m, seed_nominal.interferometer.noise_of(k), 0.0);
+    DOUBLES_EQUAL(parts.displacement_m, seed_nominal.displacement.noise_of(k), 0.0);
+  }
 
-  // A lab's 3 nm interferometers (one of them) and 20 nm heights.
+  // A lab's 3 nm interferometer (the second) and 20 nm height (the third).
   sp::StageProfile p = base;
   p.sensors[1].noise = 3e-9;
-  for (int s = 3; s < 6; ++s) p.sensors[s].noise = 20e-9;
+  p.sensors[5].noise = 20e-9;
   CHECK_TRUE(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &pc, &why));
   const hil::PlantConfig lab_nominal = hil::NominalPlant(pc);
+  DOUBLES_EQUAL(parts.interferometer_m, lab_nominal.interferometer.noise_of(0), 0.0);
+  DOUBLES_EQUAL(3e-9, lab_nominal.interferometer.noise_of(1), 0.0);
+  DOUBLES_EQUAL(parts.interferometer_m, lab_nominal.interferometer.noise_of(2), 0.0);
+  DOUBLES_EQUAL(parts.displacement_m, lab_nominal.displacement.noise_of(0), 0.0);
+  DOUBLES_EQUAL(parts.displacement_m, lab_nominal.displacement.noise_of(1), 0.0);
+  DOUBLES_EQUAL(20e-9, lab_nominal.displacement.noise_of(2), 0.0);
   DOUBLES_EQUAL(3e-9, lab_nominal.interferometer.noise_m, 0.0);  // the largest of the three beams
   DOUBLES_EQUAL(20e-9, lab_nominal.displacement.noise_m, 0.0);
   DOUBLES_EQUAL(hil::PlantConfig::Default().interferometer.noise_m, pc.interferometer.noise_m, 0.0);
+  // One figure for the kind (the [plant] keys, noise = fitted) is every sensor's again.
+  hil::PlantConfig one = lab_nominal;
+  one.interferometer.set_noise_m(1e-9);
+  one.displacement.set_noise_m(7e-9);
+  for (int k = 0; k < 3; ++k) {
+    DOUBLES_EQUAL(1e-9, one.interferometer.noise_of(k), 0.0);
+    DOUBLES_EQUAL(7e-9, one.displacement.noise_of(k), 0.0);
+  }
   // Not given (0): the seed's parts' figures.
   for (int s = 0; s < 6; ++s) p.sensors[s].noise = 0.0;
   CHECK_TRUE(hil::PlantConfigForProfile(p, hil::PlantConfig::Default(), &pc, &why));

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -151,7 +152,31 @@ struct BeamLossEvent {
   double end_s = 0.0;
 };
 
-struct InterferometerConfig {
+// One kind of sensor's noise, rms per sample, white (the interferometers'
+// beams, the laser displacement sensors' heights): noise_m is the kind's
+// figure, every sensor's unless sensor_noise_m gives the sensor its own.
+template <std::size_t kSensors, double kDefaultNoise_m>
+struct SensorNoise {
+  double noise_m = kDefaultNoise_m;
+  // The stage's own sensors' figures, sensor by sensor (a profile's `noise`,
+  // each kind's sensors in order), rms per sample; 0 = not given. The
+  // component noise models (nominal, as-built: ApplyComponentNoise) use them,
+  // else the seed's parts' datasheet figure (docs/PLANT.md section 11).
+  double component_noise_m[kSensors] = {};
+  // Sensor k's rms per sample where > 0, else noise_m: the component models
+  // set it sensor by sensor; set_noise_m() (one figure for the kind: the
+  // `interferometer_noise_m` / `displacement_noise_m` keys, noise = fitted)
+  // clears it.
+  double sensor_noise_m[kSensors] = {};
+  double noise_of(int k) const { return sensor_noise_m[k] > 0.0 ? sensor_noise_m[k] : noise_m; }
+  void set_noise_m(double v) {
+    noise_m = v;
+    for (double& n : sensor_noise_m) n = 0.0;
+  }
+};
+
+// noise_m: (ours) 0.5 nm rms per sample.
+struct InterferometerConfig : SensorNoise<std::size_t{io::kInterferometerAxes}, 0.5e-9> {
   double wavelength_m = io::stage::kWavelength_m;
   int fold = io::stage::kInterferometerFold;
   int interpolation = io::stage::kInterferometerInterpolation;
@@ -166,19 +191,14 @@ struct InterferometerConfig {
   double mirror_distance_m = 0.0715;  // (ours) mirror faces at the frame edge
   // (ours) beam height above the platen CoM (Abbe arm for tilts).
   double beam_height_m = 0.0;
-  double noise_m = 0.5e-9;  // (ours) rms, white per sample
-  // The stage's own interferometers' figure (a profile's `noise`, the largest
-  // of its beams), rms per sample; 0 = not given. The component noise models
-  // (nominal, as-built: ApplyComponentNoise) use it, else the seed's parts'
-  // datasheet figure (docs/PLANT.md section 11).
-  double component_noise_m = 0.0;
   // Counter values at the reference pose (x = y = theta = 0): arbitrary,
   // chosen next to the unsigned and signed 32-bit wraps.
   std::uint32_t start_count[io::kInterferometerAxes] = {4294967040u, 2147483520u, 123456789u};
   std::vector<BeamLossEvent> beam_loss_events;
 };
 
-struct DisplacementConfig {
+// noise_m: (ours) 5 nm rms per sample.
+struct DisplacementConfig : SensorNoise<std::size_t{io::kDisplacementSensors}, 5e-9> {
   double scale_m_per_V = io::stage::kDisplacementScale_m_per_V;
   double zero_height_m = io::stage::kDisplacementZeroHeight_m;
   double sensor_x_m[io::kDisplacementSensors] = {io::stage::kDisplacementSensorX_m[0],
@@ -187,9 +207,6 @@ struct DisplacementConfig {
   double sensor_y_m[io::kDisplacementSensors] = {io::stage::kDisplacementSensorY_m[0],
                                                  io::stage::kDisplacementSensorY_m[1],
                                                  io::stage::kDisplacementSensorY_m[2]};
-  double noise_m = 5e-9;  // (ours) rms
-  // As InterferometerConfig::component_noise_m, for the laser displacement sensors.
-  double component_noise_m = 0.0;
 };
 
 struct HallConfig {
