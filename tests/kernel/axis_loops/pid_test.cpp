@@ -3,10 +3,12 @@
 // anti-windup; float vs Q7.24 agreement; design validation.
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <cstdio>
 
 #include "CppUTest/TestHarness.h"
 #include "freq_response.hpp"
+#include "maglev/axis_loops/axis_loop.hpp"
 #include "maglev/axis_loops/defaults.hpp"
 
 using namespace maglev::kernel;
@@ -318,4 +320,51 @@ TEST(Pid2Dof, TheAccumulatorGainsAreFloatValuesExactly) {
       for (double x : v) CHECK_EQUAL(static_cast<double>(static_cast<float>(x)), x);
     }
   }
+}
+
+// The controller runs its loops as AxisLoop<Scalar, true> when every axis is
+// a PID (Applied::all_pid): the type tests compile out. The same calls on the
+// same loop, so the same bits as the dispatching AxisLoop<Scalar> with type
+// kPid2Dof: update, saturate, apply_limit, reset and last_output over 20 000
+// random ticks with steps, saturation and resets, both kernels.
+template <typename Scalar>
+void pid_only_loop_equals_the_dispatching_one() {
+  using Tr = ScalarTraits<Scalar>;
+  Pid2DofCoefficients<Scalar> c{};
+  CHECK(design_pid2dof<Scalar>(default_axis_loop_config(Axis::kX).pid, kFs, &c) == LoopDesignError::kOk);
+  InternalModelCoefficients<Scalar> imr{};
+  InternalModelState<Scalar> imr_state_a{}, imr_state_b{};
+  Pid2DofState<Scalar> sa{}, sb{};
+  AxisLoop<Scalar> general(LoopType::kPid2Dof, &c, &sa, &imr, &imr_state_a);
+  AxisLoop<Scalar, true> pid_only(LoopType::kPid2Dof, &c, &sb, &imr, &imr_state_b);
+  std::uint32_t seed = 12345u;
+  const auto uniform = [&seed](double lo, double hi) {
+    seed = seed * 1664525u + 1013904223u;
+    return lo + (hi - lo) * static_cast<double>(seed >> 8) / 16777216.0;
+  };
+  long differ = 0;
+  for (int n = 0; n < 20000; ++n) {
+    const Scalar e = Tr::from_double(uniform(-30.0, 30.0));
+    const Scalar step = (n % 97) == 0 ? Tr::from_double(uniform(-8.0, 8.0)) : Tr::zero();
+    const Scalar ff = Tr::from_double(uniform(-0.5, 0.5));
+    const Scalar va = general.update(e, step, ff), vb = pid_only.update(e, step, ff);
+    const Scalar la = general.saturate(va), lb = pid_only.saturate(vb);
+    const Scalar cut = Tr::from_double(uniform(0.5, 1.0));
+    general.apply_limit(la * cut);
+    pid_only.apply_limit(lb * cut);
+    if ((n % 1009) == 0) {
+      general.reset(e);
+      pid_only.reset(e);
+    }
+    differ += (Tr::to_double(va) != Tr::to_double(vb) || Tr::to_double(la) != Tr::to_double(lb) ||
+               Tr::to_double(general.last_output()) != Tr::to_double(pid_only.last_output()))
+                  ? 1
+                  : 0;
+  }
+  LONGS_EQUAL(0, differ);
+}
+
+TEST(Pid2Dof, ThePidOnlyAxisLoopGivesTheDispatchingLoopsBits) {
+  pid_only_loop_equals_the_dispatching_one<float>();
+  pid_only_loop_equals_the_dispatching_one<Q7_24>();
 }

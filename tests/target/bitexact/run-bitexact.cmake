@@ -2,6 +2,8 @@
 #       -DQEMU=<qemu-system-arm> -DELF=<maglev-qemu-kernel-replay.elf>
 #       -DWORKDIR=<dir> -DTIMEOUT=<s> [-DICOUNT_SHIFT=<n>] [-DPROFILE=<file.profile>] [-DNEAR_HOME=ON]
 #       [-DQ7_24=ON]  (the fixed-point kernel, Controller<Q7_24>, on both sides)
+#       [-DINTERNAL_MODEL_AXES=x,y]  (PROFILE with these axes' controllers
+#       made internal_model: their PID gains dropped, the rest as it is)
 #       -P run-bitexact.cmake
 #
 # 1. record: plant + host Controller<float> -> vectors.bin, host_outputs.bin
@@ -24,6 +26,35 @@ set(_target ${WORKDIR}/target_outputs.bin)
 file(REMOVE ${_target})
 
 set(_profile_args)
+if(DEFINED PROFILE AND DEFINED INTERNAL_MODEL_AXES)
+  string(REPLACE "," ";" INTERNAL_MODEL_AXES "${INTERNAL_MODEL_AXES}")
+  # The shipped profile, rewritten in the work folder: in each named axis'
+  # section, controller = internal_model and no PID gains (the profile check
+  # refuses a PID gain on an internal-model axis).
+  file(STRINGS ${PROFILE} _lines)
+  set(_out "")
+  set(_in_axis OFF)
+  foreach(_line IN LISTS _lines)
+    if(_line MATCHES "^\\[axis ([a-z_]+)\\]")
+      list(FIND INTERNAL_MODEL_AXES "${CMAKE_MATCH_1}" _at)
+      if(_at GREATER -1)
+        set(_in_axis ON)
+      else()
+        set(_in_axis OFF)
+      endif()
+    elseif(_line MATCHES "^\\[")
+      set(_in_axis OFF)
+    endif()
+    if(_in_axis AND _line MATCHES "^controller *=")
+      set(_line "controller = internal_model")
+    elseif(_in_axis AND _line MATCHES "^(kp|ki|kd|setpoint_weight_p|setpoint_weight_d) *=")
+      continue()
+    endif()
+    string(APPEND _out "${_line}\n")
+  endforeach()
+  set(PROFILE ${WORKDIR}/internal_model.profile)
+  file(WRITE ${PROFILE} "${_out}")
+endif()
 if(DEFINED PROFILE)
   set(_profile_args --profile ${PROFILE})
 endif()

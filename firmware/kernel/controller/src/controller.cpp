@@ -184,6 +184,8 @@ ConfigError Controller<Scalar>::prepare_config(const KernelConfig& c) {
     scratch.type[a] = c.axis[a].type;
     scratch.filtered[a] = biquad_chain_enabled(scratch.filter[a]);
   }
+  scratch.all_pid = true;
+  for (const LoopType type : scratch.type) scratch.all_pid = scratch.all_pid && type == LoopType::kPid2Dof;
   if (!(c.payload_mass_kg >= 0.0f && c.payload_mass_kg <= kMaxPayloadSanity_kg)) return refuse_config(ConfigError::kPayload);
   ForceAllocationConfig alloc = c.allocation;
   alloc.payload_kg = static_cast<double>(c.payload_mass_kg);
@@ -1111,9 +1113,16 @@ void Controller<Scalar>::excite(Tick& t) {
   }
 }
 
-// 6. axis loops (all run; outputs selected by the closed mask).
+// 6. axis loops (all run; outputs selected by the closed mask). Every axis a
+// PID (the usual configuration): the loops without their type tests.
 template <typename Scalar>
 void Controller<Scalar>::run_axis_loops(Tick& t) {
+  in_loop_form([&](auto pid_only) { run_axis_loops_as<decltype(pid_only)::value>(t); });
+}
+
+template <typename Scalar>
+template <bool kPidOnly>
+void Controller<Scalar>::run_axis_loops_as(Tick& t) {
   const Applied& ap = applied();
   const SequencerOutput& so = *t.so;
   const Scalar ff_fraction = Traits::from_float(so.feedforward_fraction);
@@ -1126,9 +1135,8 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
   // reference for the loops only, taken off again below (exact integers).
   const int inj_axis = injection_.axis;
   if (t.reference_injection_pm != 0) status_.reference.pico[inj_axis] += t.reference_injection_pm;
-#pragma GCC unroll 6
-  for (int a = 0; a < kAxisCount; ++a) {
-    AxisLoop<Scalar> l = loop(ap, a);
+  const auto axis = [&](int a) __attribute__((always_inline)) {
+    AxisLoop<Scalar, kPidOnly> l = loop<kPidOnly>(ap, a);
     // Only the error (and this tick's explicit step) become Scalar: +-128 um.
     const Scalar e_um = numeric::pico_to_micro<Scalar>(status_.reference.pico[a] - status_.pose.pico[a]);
     // The explicit step is zero on almost every tick (0 pm is exactly 0).
@@ -1145,6 +1153,18 @@ void Controller<Scalar>::run_axis_loops(Tick& t) {
     // Closed axis: the loop plus the excitation d (zero unless kExcite runs).
     t.effort[a] = closed ? loop_out + t.excitation[a] : (a == axis_index(Axis::kZ) ? gravity_A : Traits::zero());
     if (!closed) l.reset(e_um);
+  };
+  // The PID-only form unrolled (the usual configuration's tick); the form
+  // with internal-model axes rolled: unrolled it took 9 992 B of the board's
+  // ITCM, rolled ~1.7 KB, for +3.6 % of such a configuration's tick (the
+  // cross stage with internal-model x and y: Ready max 3 625 -> 3 755, test
+  // kernel-bitexact-qemu-m7-nk2017-cross-internal-model; docs/PERFORMANCE.md).
+  if constexpr (kPidOnly) {
+#pragma GCC unroll 6
+    for (int a = 0; a < kAxisCount; ++a) axis(a);
+  } else {
+#pragma GCC unroll 1
+    for (int a = 0; a < kAxisCount; ++a) axis(a);
   }
   filters_.end_tick();
   if (t.reference_injection_pm != 0) status_.reference.pico[inj_axis] -= t.reference_injection_pm;
@@ -1187,10 +1207,18 @@ void Controller<Scalar>::allocate_forces(Tick& t) {
     // The loops' anti-windup works in uncorrected efforts: what they got is k U.
     for (int a = 0; a < kAxisCount; ++a) t.out.applied_effort_A[a] = t.out.scale_k * t.effort[a];
   }
+  in_loop_form([&](auto pid_only) { apply_loop_limits_as<decltype(pid_only)::value>(t); });
+}
+
+// 8. the anti-windup, axis by axis (allocate_forces()).
+template <typename Scalar>
+template <bool kPidOnly>
+void Controller<Scalar>::apply_loop_limits_as(Tick& t) {
+  const Applied& ap = applied();
   const bool antiwindup = config_.antiwindup;
 #pragma GCC unroll 6
   for (int a = 0; a < kAxisCount; ++a) {
-    AxisLoop<Scalar> l = loop(ap, a);
+    AxisLoop<Scalar, kPidOnly> l = loop<kPidOnly>(ap, a);
     const bool closed = (t.so->closed_axes & (1u << a)) != 0;
     const Scalar applied_loop = t.out.applied_effort_A[a] - t.excitation[a] + t.aw_offset[a];
     // Open axes (state reset) and anti-windup off: no correction.

@@ -402,6 +402,7 @@ class Controller {
   // state; the internal-model coefficients, read only by such axes, last).
   struct Applied {
     LoopType type[kAxisCount];
+    bool all_pid;  // every type is kPid2Dof: the loops' PID-only form (AxisLoop<Scalar, true>)
     bool filtered[kAxisCount];  // biquad_chain_enabled(filter[a])
     Pid2DofCoefficients<Scalar> pid[kAxisCount];
     BiquadCoefficients<Scalar> filter[kAxisCount][kMaxBiquadStages];
@@ -444,9 +445,11 @@ class Controller {
   // of the unrolled per-axis code (docs/PERFORMANCE.md, "Session of
   // 2026-11-28").
   const Applied& applied() const { return *numeric::OpaquePointer(&applied_[active_]); }
-  // Axis a's loop, whichever type `ap` selected (AxisLoop dispatches).
-  AxisLoop<Scalar> loop(const Applied& ap, int a) {
-    return AxisLoop<Scalar>(ap.type[a], &ap.pid[a], &pid_state_[a], &ap.imr[a], &imr_state_[a]);
+  // Axis a's loop, whichever type `ap` selected (AxisLoop dispatches);
+  // kPidOnly only where ap.all_pid.
+  template <bool kPidOnly = false>
+  AxisLoop<Scalar, kPidOnly> loop(const Applied& ap, int a) {
+    return AxisLoop<Scalar, kPidOnly>(ap.type[a], &ap.pid[a], &pid_state_[a], &ap.imr[a], &imr_state_[a]);
   }
 
   // The locals of one step(), handed from stage to stage of the data path.
@@ -504,7 +507,21 @@ class Controller {
   void advance_references(Tick& t);
   void excite(Tick& t);
   void run_axis_loops(Tick& t);
+  // f(std::true_type) where every axis is a PID (Applied::all_pid: the
+  // loops' PID-only form), else f(std::false_type).
+  template <typename F>
+  void in_loop_form(F&& f) {
+    if (applied().all_pid) {
+      f(std::true_type{});
+    } else {
+      f(std::false_type{});
+    }
+  }
+  template <bool kPidOnly>
+  void run_axis_loops_as(Tick& t);
   void allocate_forces(Tick& t);
+  template <bool kPidOnly>
+  void apply_loop_limits_as(Tick& t);
   io::ActuatorCommand coil_currents_to_dac(const Tick& t);
   void publish_status(const Tick& t, bool amplifiers_enabled);
 
