@@ -261,7 +261,14 @@ const SupervisorStatus& Supervisor::step(const SupervisorInputs& in) {
   const bool any = (in.stage_profile_error | c.beam_lost | c.jump | in.beam_glitch | c.lds_bad | c.limits |
                     c.following) != 0 ||
                    c.monitor_rail || c.mismatch || c.peak_measured || c.peak_commanded || c.rms || c.stale || c.frozen || c.adc_fault || c.overrun || c.saturation;
-  const Trip t = any ? attribute(in, c) : Trip{};
+  // attribute() reads a copy, made only on a tick where a check trips: c's
+  // own address is never taken, so GCC keeps its fields in registers (as a
+  // reference argument it was stored field by field on every tick).
+  Trip t{};
+  if (any) {
+    const Checks tripped = c;
+    t = attribute(in, tripped);
+  }
   const bool actuator_failed = c.mismatch || c.peak_measured;  // it cannot land the stage
   status_.in_plane_sensors_valid = c.beam_lost == 0 && c.jump == 0 && !c.stale && !c.frozen;
   status_.z_sensors_valid = c.lds_bad == 0 && !c.adc_fault;
