@@ -1,6 +1,5 @@
 #include "maglev/plant/as_built.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -73,18 +72,9 @@ void ApplyComponentNoise(PlantConfig* c) {
       component_current_noise_density_A_per_rtHz(n, c->amplifier.gain_A_per_V);
   c->amplifier.current_noise_scale = 1.0;
   // The stage's own sensors' figures, sensor by sensor, where its profile
-  // gives them; noise_m (what metrics.json reports per kind) is the largest.
-  auto apply = [](const double* given, double part, int count, double* sensor, double* kind) {
-    *kind = 0.0;
-    for (int k = 0; k < count; ++k) {
-      sensor[k] = given[k] > 0.0 ? given[k] : part;
-      *kind = std::max(*kind, sensor[k]);
-    }
-  };
-  apply(c->interferometer.component_noise_m, n.interferometer_m, io::kInterferometerAxes,
-        c->interferometer.sensor_noise_m, &c->interferometer.noise_m);
-  apply(c->displacement.component_noise_m, n.displacement_m, io::kDisplacementSensors, c->displacement.sensor_noise_m,
-        &c->displacement.noise_m);
+  // gives them.
+  c->interferometer.use_component_figures(n.interferometer_m);
+  c->displacement.use_component_figures(n.displacement_m);
   c->sensor_noise_enabled = true;
 }
 

@@ -244,14 +244,9 @@ MAGLEV_CONFIG_CODE ForceAllocationError ComputeForceAllocationTables(const Force
   return ForceAllocationError::kOk;
 }
 
-void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
-                  std::uint32_t first_coil_phase_turn[kForcers]) {
-  detail_fa::ForcerPhasesInline(x_pm, y_pm, t, first_coil_phase_turn);
-}
-
 MAGLEV_CONFIG_CODE void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
                        std::uint32_t coil_phase_turn[io::kCoils]) {
-  std::uint32_t first[kForcers];
+  std::uint32_t first[kForcers] = {};  // every one written (GCC cannot see it through same_as)
   ForcerPhases(x_pm, y_pm, t, first);
   for (int k = 0; k < kForcers; ++k) {
     coil_phase_turn[2 * k] = first[k];

@@ -173,6 +173,16 @@ struct SensorNoise {
     noise_m = v;
     for (double& n : sensor_noise_m) n = 0.0;
   }
+  // The component noise models' figures: each sensor's own where the profile
+  // gives it, else the seed's part's (part_m); noise_m, what metrics.json
+  // reports for the kind, is the largest of them.
+  void use_component_figures(double part_m) {
+    noise_m = 0.0;
+    for (std::size_t k = 0; k < kSensors; ++k) {
+      sensor_noise_m[k] = component_noise_m[k] > 0.0 ? component_noise_m[k] : part_m;
+      noise_m = sensor_noise_m[k] > noise_m ? sensor_noise_m[k] : noise_m;
+    }
+  }
 };
 
 // noise_m: (ours) 0.5 nm rms per sample.

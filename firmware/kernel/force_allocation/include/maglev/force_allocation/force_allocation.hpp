@@ -152,8 +152,9 @@ void CommutationPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTa
 // lies within that distance of an integer, one LSB (1.5 nrad) off it. IEEE
 // double throughout: host and M7 give the same bits. (The exact integer form
 // it replaced took three int64 floor divisions per coordinate.)
-void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& tables,
-                  std::uint32_t first_coil_phase_turn[kForcers]);
+// (Defined inline in internal/force_allocation_impl.hpp.)
+inline void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& tables,
+                         std::uint32_t first_coil_phase_turn[kForcers]);
 
 template <typename Scalar>
 struct ForceAllocationState {

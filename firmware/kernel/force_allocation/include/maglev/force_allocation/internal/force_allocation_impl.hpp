@@ -18,37 +18,6 @@ namespace detail_fa {
 ForceAllocationError FillCommon(const ForceAllocationConfig& c, const ForceAllocationTablesDouble& t,
                                 CommutationTables* ct);
 
-// ForcerPhases' body, inlined into the tick (AllocateCurrents): called
-// through the out-of-line function, the phases went through memory and the
-// call saved and restored registers (~15 M7 instructions a tick).
-[[gnu::always_inline]] inline void ForcerPhasesInline(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
-                                                      std::uint32_t first_coil_phase_turn[kForcers]) {
-  // Turns of each coordinate, NOT reduced: for a direction cosine h that is
-  // not an integer, h * (x mod L) != h * x mod L.
-  const double tx = numeric::Int64ToDouble(x_pm + t.base_x_pm) * t.inv_pitch_pm;
-  const double ty = numeric::Int64ToDouble(y_pm + t.base_y_pm) * t.inv_pitch_pm;
-#pragma GCC unroll 4
-  for (int k = 0; k < kForcers; ++k) {
-    // A forcer with an earlier one's thrust direction has that one's turns,
-    // bit for bit, and a coil offset whole quarter turns from its
-    // (CommutationTables::same_as): its phase is that one's plus those
-    // quarter turns, exactly what the lines below would give (one add
-    // instead of ~12 M7 instructions; two of the cross layout's four forcers).
-    const int j = t.same_as[k];
-    if (j >= 0) {
-      first_coil_phase_turn[k] = first_coil_phase_turn[j] + (std::uint32_t{t.quarter_turns[k]} << 30);
-      continue;
-    }
-    const double turns = t.h_dir[k][0] * tx + t.h_dir[k][1] * ty;
-    // Exact: turns and floor(turns) share turns' binade or the result is
-    // below one ulp of it, so the difference is representable; < 1, so the
-    // scaled fraction is < 2^32 and its conversion truncates (= floor).
-    const double frac = turns - std::floor(turns);
-    const auto psi = static_cast<std::uint32_t>(frac * 4294967296.0);
-    first_coil_phase_turn[k] = psi + t.coil_offset_turn[2 * k];
-  }
-}
-
 template <typename Scalar>
 constexpr Scalar AbsScalar(Scalar v) {
   if constexpr (!numeric::ScalarTraits<Scalar>::kIsFixed) {
@@ -155,6 +124,37 @@ MAGLEV_CONFIG_CODE ForceAllocationError ApplyForceAllocationConfig(const ForceAl
   return ForceAllocationError::kOk;
 }
 
+// Inline, and inlined into the tick (AllocateCurrents): out of line, the
+// phases went through memory and the call saved and restored registers
+// (~15 M7 instructions a tick).
+[[gnu::always_inline]] inline void ForcerPhases(std::int64_t x_pm, std::int64_t y_pm, const CommutationTables& t,
+                                                std::uint32_t first_coil_phase_turn[kForcers]) {
+  // Turns of each coordinate, NOT reduced: for a direction cosine h that is
+  // not an integer, h * (x mod L) != h * x mod L.
+  const double tx = numeric::Int64ToDouble(x_pm + t.base_x_pm) * t.inv_pitch_pm;
+  const double ty = numeric::Int64ToDouble(y_pm + t.base_y_pm) * t.inv_pitch_pm;
+#pragma GCC unroll 4
+  for (int k = 0; k < kForcers; ++k) {
+    // A forcer with an earlier one's thrust direction has that one's turns,
+    // bit for bit, and a coil offset whole quarter turns from its
+    // (CommutationTables::same_as): its phase is that one's plus those
+    // quarter turns, exactly what the lines below would give (one add
+    // instead of ~12 M7 instructions; two of the cross layout's four forcers).
+    const int j = t.same_as[k];
+    if (j >= 0) {
+      first_coil_phase_turn[k] = first_coil_phase_turn[j] + (std::uint32_t{t.quarter_turns[k]} << 30);
+      continue;
+    }
+    const double turns = t.h_dir[k][0] * tx + t.h_dir[k][1] * ty;
+    // Exact: turns and floor(turns) share turns' binade or the result is
+    // below one ulp of it, so the difference is representable; < 1, so the
+    // scaled fraction is < 2^32 and its conversion truncates (= floor).
+    const double frac = turns - std::floor(turns);
+    const auto psi = static_cast<std::uint32_t>(frac * 4294967296.0);
+    first_coil_phase_turn[k] = psi + t.coil_offset_turn[2 * k];
+  }
+}
+
 template <typename Scalar>
 void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::int64_t y_pm,
                       const ForceAllocationState<Scalar>& state, AllocationOutput<Scalar>* out) {
@@ -187,7 +187,7 @@ void AllocateCurrents(const Scalar effort_A[kEfforts], std::int64_t x_pm, std::i
   // (CommutationTables::second_coil_leads), sin(p +- 1/4) = +-cos p,
   // cos(p +- 1/4) = -+sin p, exactly the values the table gives there.
   std::uint32_t phase[kForcers] = {};  // every one written below (GCC cannot see it through same_as)
-  detail_fa::ForcerPhasesInline(x_pm, y_pm, state.commutation, phase);
+  ForcerPhases(x_pm, y_pm, state.commutation, phase);
   // Per coil (sin psi_j, cos psi_j): one table lookup per forcer.
   // A forcer with the phase of an earlier one plus whole quarter turns
   // (CommutationTables::same_as) takes its table values rotated, exactly.
