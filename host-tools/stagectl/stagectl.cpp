@@ -19,6 +19,7 @@
 
 #include "maglev/io/axis.hpp"
 #include "maglev/can_link/host_commands.hpp"
+#include "maglev/coupling_calibration/coupling_calibration.hpp"
 #include "maglev/controller/controller.hpp"
 #include "maglev/register_schema/register_map.hpp"
 #include "maglev/supervisor/supervisor.hpp"
@@ -41,8 +42,9 @@ connection:
   --tcp HOST:PORT       Modbus TCP
   --unit N              unit (slave) id, default 1
   --engineer            write the engineer key first (needed for engineer registers)
-  --wait SECONDS        after home/levitate/land/move: wait until the stage gets there,
-                        printing its progress (state changes, distance to go) on stderr
+  --wait SECONDS        after home/levitate/land/move/calibrate: wait until the stage gets
+                        there (or the calibration ends), printing its progress (state
+                        changes, distance to go, experiment) on stderr
                         (config import/export print theirs too)
   --json                get, dump, status, registers, watch: JSON on stdout (watch: one
                         object per line), for scripts
@@ -56,6 +58,10 @@ commands:
   dump                     print every register
   status                   state, fault, pose, persistence flags
   home | levitate | land | stop | clear-fault
+  calibrate                identify and correct the 6x6 effort coupling (Ready; ~30 s). With
+                           --wait: its 12 experiments' progress, then the result and the
+                           coupling before / after; exit 7 when the kernel kept the old
+                           correction (refused, abandoned or failed check: the reason)
   move AXIS VALUE          move AXIS (x y z theta_x theta_y theta_z) to VALUE (absolute)
   move-by AXIS DELTA       move AXIS by DELTA from its measured position
   step AXIS DELTA          reference step (kernel limit: 100 um / 10-20 urad)
@@ -400,6 +406,55 @@ int run_command(Client& c, HostCommandCode code, std::uint16_t axis, float value
   }
 }
 
+// calibrate: cmd.code 17 (the kernel's coupling calibration, docs/KERNEL.md
+// "Coupling calibration"). With --wait: progress from status.calibration_step,
+// then the kernel's result. The result register keeps the last run's value
+// until the kernel takes the command on its next tick, so an end is read only
+// once this run was seen running, or after 0.2 s (a refusal never runs).
+int do_calibrate(Client& c, const Options& o) {
+  using maglev::kernel::CouplingCalibrationResult;
+  const std::uint16_t r = c.command(HostCommandCode::kCalibrateCoupling, 0, 0.0f);
+  if (r != 0) {
+    die(kCommandRejected, std::string("command rejected: ") +
+                              (r <= 255 ? maglev::kernel::to_string(static_cast<maglev::kernel::CommandResult>(r))
+                                        : "code " + std::to_string(r)));
+  }
+  if (o.wait_s <= 0.0) {
+    std::cout << "calibration started (status.calibration, status.calibration_step; stagectl --wait S calibrate waits)\n";
+    return kOk;
+  }
+  const auto running = static_cast<double>(CouplingCalibrationResult::kRunning);
+  const double experiments = def(RegId::status_calibration_step).max;  // 12: identification, then verification
+  Progress progress("calibrate");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.wait_s);
+  bool seen_running = false;
+  double last_step = -1.0, result = 0.0;
+  for (;;) {
+    if (std::chrono::steady_clock::now() >= deadline) die(kTimeout, "timed out waiting for the calibration");
+    result = c.read(def(RegId::status_calibration));
+    seen_running = seen_running || result == running;
+    if (result != running && (seen_running || progress.elapsed_s() >= 0.2)) break;
+    const double step = c.read(def(RegId::status_calibration_step));
+    if (result == running && step != last_step) {
+      progress.update("experiment " + fmt(step) + "/" + fmt(experiments) +
+                      (step < experiments / 2 ? " (identifying)" : " (verifying the correction)"));
+      last_step = step;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  const auto code = static_cast<CouplingCalibrationResult>(static_cast<int>(result));
+  const double before = c.read(def(RegId::status_coupling_before)), after = c.read(def(RegId::status_coupling_after));
+  if (code != CouplingCalibrationResult::kPassed) {
+    die(kCommandRejected, std::string("calibration ") + maglev::kernel::to_string(code) + " (status.calibration = " +
+                              fmt(result) + ", docs/KERNEL.md): the previous correction stays" +
+                              (before > 0.0 ? "; coupling found " + fmt(before) + ", after " + fmt(after) : ""));
+  }
+  std::cout << "calibration " << maglev::kernel::to_string(code) << ": coupling " << fmt(before) << " -> " << fmt(after)
+            << " (status.coupling_before / _after); the correction acts (coupling.enabled = "
+            << fmt(c.read(def(RegId::coupling_enabled))) << "); stagectl --engineer save keeps it\n";
+  return kOk;
+}
+
 int do_status(Client& c) {
   const auto state = static_cast<std::uint16_t>(c.read(def(RegId::status_state)));
   std::cout << "state      = " << state_name(state) << " (" << state << ")\n";
@@ -724,6 +779,10 @@ int main(int argc, char** argv) {
   if (cmd == "land") return run_command(c, HostCommandCode::kLand, 0, 0.0f, o);
   if (cmd == "stop") return run_command(c, HostCommandCode::kStop, 0, 0.0f, o);
   if (cmd == "clear-fault") return run_command(c, HostCommandCode::kClearFault, 0, 0.0f, o);
+  if (cmd == "calibrate") {
+    need(0);
+    return do_calibrate(c, o);
+  }
   if (cmd == "move" || cmd == "move-by" || cmd == "step") {
     need(2);
     const std::uint16_t axis = axis_of(o.args[1]);

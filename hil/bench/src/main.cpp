@@ -74,10 +74,10 @@ void usage() {
       "  maglev-hil run NAME|FILE --out DIR [--can virtual|vcan0] [--kernel float32|q7.24]\n"
       "                 [--mode lockstep|realtime] [--seed N] [--no-plots] [--quiet] [--scenarios DIR]\n"
       "                 [--can-log FILE]   the run's CAN traffic as a candump log (simulated time)\n"
-      "                 [--plant default|ideal|nominal|as-built] [--error-seed N]   the plant model (docs/PLANT.md)\n"
-      "                 [--floor CLASS]    the floor under the base: none, vc-e .. vc-a, operating-theatre,\n"
-      "                                    residential, office, workshop (docs/PLANT.md section 12)\n"
-      "                 [--floor-isolator-hz HZ]  the base on a passive isolator (0: rigid; 0.3-20 Hz)\n"
+      ,
+      stderr);
+  std::fputs(maglev::bench::kPlantOptionsUsage, stderr);
+  std::fputs(
       "                 [--seeds N]        as-built error seeds 1..N: per paper figure median, spread, ratio\n"
       "                 [--servo-rate HZ]  2500 (default), 5000, 10000 or 20000: the controller's servo rate\n"
       "                                    (re-discretized loops; the plant steps at it; in process only over\n"
@@ -142,28 +142,15 @@ Args parse_args(int argc, char** argv) {
       }
     } else if (s == "--profile") {
       if (value(&v)) a.run.profile = v;
-    } else if (s == "--seed" || s == "--error-seed") {
+    } else if (s == "--seed") {
       if (value(&v)) {
         char* end = nullptr;
         const unsigned long long n = std::strtoull(v.c_str(), &end, 10);
         if (end == v.c_str() || *end != '\0') a.error = s + ": not an integer: '" + v + "'";
-        (s == "--seed" ? a.run.seed : a.run.error_seed) = n;
+        a.run.seed = n;
       }
-    } else if (s == "--plant") {
-      if (value(&v)) {
-        maglev::hil::PlantModel m{};
-        if (!maglev::hil::parse_plant_model(v, &m)) a.error = "--plant: expected default, ideal, nominal or as-built, got '" + v + "'";
-        a.run.plant = m;
-      }
-    } else if (s == "--floor") {
-      if (value(&v)) a.run.floor = v;  // checked with the scenario (overrides.cpp)
-    } else if (s == "--floor-isolator-hz") {
-      if (value(&v)) {
-        char* end = nullptr;
-        const double hz = std::strtod(v.c_str(), &end);
-        if (end == v.c_str() || *end != '\0') a.error = s + ": not a number: '" + v + "'";
-        a.run.floor_isolator_hz = hz;  // its range is checked with the scenario (overrides.cpp)
-      }
+    } else if (s == "--plant" || s == "--error-seed" || s == "--floor" || s == "--floor-isolator-hz") {
+      if (value(&v)) (void)maglev::bench::parse_plant_option(s, v, &a.run.plant_options, &a.error);
     } else if (s == "--servo-rate") {
       if (value(&v)) {
         char* end = nullptr;
@@ -348,7 +335,7 @@ int run_seeds(const maglev::scenario::Scenario& sc, const Args& a) {
   int rc = 0;
   for (int k = 1; k <= a.seeds; ++k) {
     Args ak = a;
-    ak.run.error_seed = static_cast<std::uint64_t>(k);
+    ak.run.plant_options.error_seed = static_cast<std::uint64_t>(k);
     maglev::bench::RunResult r;
     rc |= run_one(sc, ak, (fs::path(a.out) / ("error_seed_" + std::to_string(k))).string(), &r);
     if (r.metrics.count("plant_model") == 0 ||

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iterator>
 
 #include "maglev/bench/axes.hpp"
@@ -57,6 +58,62 @@ void apply_paper_controller(kernel::KernelConfig* c) {
   // Nor did the paper's stage repair its displacement sensors' target steps
   // (ours, SensorsToPoseConfig::lds_target_*): its loops saw them.
   c->measurement.lds_target_repair = 0;
+}
+
+const char* const kPlantOptionsUsage =
+    "                 [--plant default|ideal|nominal|as-built] [--error-seed N]   the plant model (docs/PLANT.md)\n"
+    "                 [--floor CLASS]    the floor under the base: none, vc-e .. vc-a, operating-theatre,\n"
+    "                                    residential, office, workshop (docs/PLANT.md section 12)\n"
+    "                 [--floor-isolator-hz HZ]  the base on a passive isolator (0: rigid; 0.3-20 Hz)\n";
+
+PlantOptionParse parse_plant_option(const std::string& option, const std::string& value, PlantOptions* p,
+                                    std::string* err) {
+  const auto bad = [&](const std::string& why) {
+    *err = option + ": " + why;
+    return PlantOptionParse::kBad;
+  };
+  if (option == "--plant") {
+    hil::PlantModel m{};
+    if (!hil::parse_plant_model(value, &m)) return bad("expected default, ideal, nominal or as-built, got '" + value + "'");
+    p->model = m;
+  } else if (option == "--error-seed") {
+    // The [plant] error_seed key's range: a non-negative integer up to 9e15.
+    char* end = nullptr;
+    const unsigned long long n = std::strtoull(value.c_str(), &end, 10);
+    if (value.empty() || value[0] == '-' || end == value.c_str() || *end != '\0' || n > 9000000000000000ull) {
+      return bad("a non-negative integer, got '" + value + "'");
+    }
+    p->error_seed = n;
+  } else if (option == "--floor") {
+    p->floor = value;  // its class is checked with the scenario (apply_overrides)
+  } else if (option == "--floor-isolator-hz") {
+    char* end = nullptr;
+    const double hz = std::strtod(value.c_str(), &end);
+    if (end == value.c_str() || *end != '\0') return bad("not a number: '" + value + "'");
+    p->floor_isolator_hz = hz;  // its range is checked with the scenario (apply_overrides)
+  } else {
+    return PlantOptionParse::kNotPlantOption;
+  }
+  return PlantOptionParse::kTaken;
+}
+
+bool plant_for_stage(const hil::PlantConfig& base, const kernel::KernelConfig& controller,
+                     const scenario::Scenario* sc, const PlantOptions& options, StagePlant* out,
+                     std::vector<ScenarioError>* errs) {
+  Overrides o;
+  o.plant = base;
+  o.controller = controller;
+  o.command_line = options;
+  const scenario::Scenario none{"<no scenario>", {}, {}, {}, {}, {}, {}, {}};
+  const std::size_t before = errs->size();
+  apply_overrides(sc != nullptr ? *sc : none, &o, errs);
+  if (errs->size() != before) return false;
+  out->plant = o.plant;
+  out->model = o.plant_model;
+  out->error_set = o.error_set;
+  out->drawn_errors = o.drawn_errors;
+  out->seed = o.seed;
+  return true;
 }
 
 std::string offered_servo_rates() {
@@ -120,9 +177,13 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       plant_fail("model", "expected default, ideal, nominal or as-built, got '" + it->second + "'");
     }
   }
-  if (o->plant_model_override) o->plant_model = *o->plant_model_override;
+  if (o->command_line.model) o->plant_model = *o->command_line.model;
   switch (o->plant_model) {
-    case hil::PlantModel::kIdeal: o->plant = hil::PlantConfig::Ideal(); break;
+    // The stage's own plant (its profile's), made ideal: until 2026-11-29
+    // this took the default stage's ideal plant whatever the profile, and
+    // `--profile nk2020-square --plant ideal` faulted (the square kernel on
+    // the cross plant).
+    case hil::PlantModel::kIdeal: o->plant = hil::PlantConfig::IdealOf(o->plant); break;
     case hil::PlantModel::kNominal:
     case hil::PlantModel::kAsBuilt: o->plant = hil::NominalPlant(o->plant); break;
     default: break;
@@ -179,7 +240,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
                      ", above its physical bound " + std::to_string(hil::kErrorTerms[i].max));
     }
   }
-  if (error_keys && o->plant_model != hil::PlantModel::kAsBuilt && !o->plant_model_override) {
+  if (error_keys && o->plant_model != hil::PlantModel::kAsBuilt && !o->command_line.model) {
     for (const auto& [k, v] : sc.plant) {
       if (k == "error_seed" || k == "error_scale" || hil::find_error_term(k) >= 0) {
         plant_fail(k, "an error-set key needs model = as-built");
@@ -187,7 +248,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       }
     }
   }
-  if (o->error_seed_override) o->error_set.error_seed = *o->error_seed_override;
+  if (o->command_line.error_seed) o->error_set.error_seed = *o->command_line.error_seed;
   // The floor under the base (docs/PLANT.md section 12): a named class or a
   // band velocity of the lab's own, and an optional isolator. Any model.
   {
@@ -203,21 +264,21 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     };
     std::optional<std::string> name;
     if (const auto it = sc.plant.find("floor"); it != sc.plant.end()) name = it->second;
-    if (o->floor_override) {
+    if (o->command_line.floor) {
       // The command line wins, visibly: a run that replaces the scenario's
       // floor says so (metrics.json records the level used).
       for (const char* key : {"floor", "floor_band_velocity_m_per_s"}) {
         if (const auto it = sc.plant.find(key); it != sc.plant.end()) {
           std::fprintf(stderr, "note: --floor %s replaces the scenario's [plant] %s = %s\n",
-                       o->floor_override->c_str(), key, it->second.c_str());
+                       o->command_line.floor->c_str(), key, it->second.c_str());
         }
       }
-      name = *o->floor_override;
+      name = *o->command_line.floor;
     }
     if (name) {
       const int c = hil::find_floor_class(*name);
       if (c < 0) {
-        if (o->floor_override) fail("--floor: expected " + std::string(hil::floor_class_names()) + ", got '" + *name + "'");
+        if (o->command_line.floor) fail("--floor: expected " + std::string(hil::floor_class_names()) + ", got '" + *name + "'");
         else plant_fail("floor", "expected " + std::string(hil::floor_class_names()) + ", got '" + *name + "'");
       } else {
         f.band_velocity_m_per_s = hil::kFloorClasses[c].band_velocity_m_per_s;
@@ -230,7 +291,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       double band = f.band_velocity_m_per_s;
       floor_num("floor_band_velocity_m_per_s", 0.0, FC::kMaxBandVelocity_m_per_s,
                 "[0, 2e-3] m/s (0: none; 2e-3 is 2.5x the workshop curve)", &band);
-      if (!o->floor_override) f.band_velocity_m_per_s = band;
+      if (!o->command_line.floor) f.band_velocity_m_per_s = band;
     }
     // The isolator: the scenario's key, then --floor-isolator-hz; one range.
     if (const auto it = sc.plant.find("floor_isolator_hz"); it != sc.plant.end()) {
@@ -239,8 +300,8 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       else if (!FC::isolator_hz_ok(*x)) plant_fail("floor_isolator_hz", std::string(FC::kIsolatorRange) + ", got " + it->second);
       else f.isolator_hz = *x;
     }
-    if (o->floor_isolator_override) {
-      const double hz = *o->floor_isolator_override;
+    if (o->command_line.floor_isolator_hz) {
+      const double hz = *o->command_line.floor_isolator_hz;
       if (const auto it = sc.plant.find("floor_isolator_hz"); it != sc.plant.end()) {
         std::fprintf(stderr, "note: --floor-isolator-hz %g replaces the scenario's [plant] floor_isolator_hz = %s\n", hz,
                      it->second.c_str());

@@ -16,10 +16,7 @@ bool resolve_overrides(const scenario::Scenario& sc, const RunOptions& opt, Over
   // (and checked) at it, the plant steps at it. The command line wins.
   const std::optional<double> rate = opt.servo_rate_Hz ? opt.servo_rate_Hz : servo_rate_of(sc);
   if (errs.empty()) apply_profile(opt.profile ? *opt.profile : profile_of(sc), ov, &errs, rate);
-  ov->plant_model_override = opt.plant;
-  ov->error_seed_override = opt.error_seed;
-  ov->floor_override = opt.floor;
-  ov->floor_isolator_override = opt.floor_isolator_hz;
+  ov->command_line = opt.plant_options;
   if (errs.empty()) apply_overrides(sc, ov, &errs);
   if (!errs.empty()) {
     if (errors != nullptr) *errors = errs;

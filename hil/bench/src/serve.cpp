@@ -1,5 +1,6 @@
 // maglev-hil serve --modbus-tcp HOST:PORT [--kernel float32|q7.24] [--flash FILE]
 //                  [--scenario NAME|FILE] [--seed N] [--duration S] [--scenarios DIR]
+//                  [--plant MODEL] [--error-seed N] [--floor CLASS] [--floor-isolator-hz HZ]
 //
 // The simulated stage running in REAL TIME, operated over Modbus TCP like the
 // real controller. One thread, one loop, per 400 us servo period:
@@ -40,11 +41,13 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "maglev/app/can_io.hpp"
 #include "maglev/lockstep/actuator_watchdog.hpp"
 #include "maglev/app/servo_loop.hpp"
+#include "maglev/bench/overrides.hpp"
 #include "maglev/bench/units.hpp"
 #include "maglev/can_link/catalog.hpp"
 #include "maglev/can_link/codec.hpp"
@@ -92,16 +95,23 @@ struct ServeOptions {
   bool seed_given = false;
   double duration_s = 0.0;  // 0: until SIGINT/SIGTERM
   int rt_priority = 0;      // >0: SCHED_FIFO at this priority + mlockall (a real bench PC)
+  PlantOptions plant;       // --plant, --error-seed, --floor, --floor-isolator-hz (as `run`)
 };
 
 void usage() {
   std::fputs(
       "usage: maglev-hil serve --modbus-tcp HOST:PORT [--kernel float32|q7.24] [--flash FILE]\n"
       "                        [--scenario NAME|FILE] [--seed N] [--duration S] [--scenarios DIR]\n"
-      "                        [--rt-priority N]\n"
-      "  runs the simulated stage in real time (2.5 kHz) and serves the register map over\n"
-      "  Modbus TCP (docs/REGISTERS.md) until SIGINT/SIGTERM or --duration; PORT 0 = any free port.\n"
-      "  --scenario: the scenario's [plant] overrides and seed (its timeline is not run).\n"
+      "                        [--rt-priority N]\n",
+      stderr);
+  std::fputs(kPlantOptionsUsage, stderr);
+  std::fputs(
+      "  runs the simulated stage in real time (at the flash's servo.rate) and serves the register map\n"
+      "  over Modbus TCP (docs/REGISTERS.md) until SIGINT/SIGTERM or --duration; PORT 0 = any free port.\n"
+      "  The plant is the flash's stage (stage.profile) with the scenario's [plant] keys and the plant\n"
+      "  options on top, read as `maglev-hil run` reads them (model, noise, error set, floor).\n"
+      "  --scenario: the scenario's [plant] keys and seed (its timeline and [controller] keys are not\n"
+      "  used: the controller's configuration is the flash's).\n"
       "  --rt-priority N: SCHED_FIFO priority N (1..99) and mlockall, fewer deadline misses.\n",
       stderr);
 }
@@ -126,63 +136,8 @@ void sleep_until_ns(std::int64_t t) {
   (void)clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
 }
 
-// [plant] overrides of a scenario (the keys hil/bench's runner accepts).
-bool plant_overrides(const scenario::Scenario& sc, hil::PlantConfig* p, std::uint64_t* seed, std::string* err) {
-  auto num = [&](const std::string& k, const std::string& v, Dim d, double* dst) {
-    std::string e;
-    const auto q = parse_quantity(v, d, &e);
-    if (!q) {
-      *err = sc.source + ": [plant] " + k + ": " + e;
-      return false;
-    }
-    *dst = *q;
-    return true;
-  };
-  if (const auto it = sc.plant.find("model"); it != sc.plant.end()) {
-    if (it->second == "ideal") *p = hil::PlantConfig::Ideal();
-    else if (it->second != "default") return *err = sc.source + ": [plant] model: expected default or ideal", false;
-  }
-  for (const auto& [k, v] : sc.plant) {
-    bool ok = true;
-    if (k == "model") continue;
-    if (k == "payload_kg") ok = num(k, v, Dim::kMass, &p->body.payload_kg);
-    else if (k == "current_noise_scale") ok = num(k, v, Dim::kNumber, &p->amplifier.current_noise_scale);
-    else if (k == "interferometer_noise_m" || k == "displacement_noise_m") {  // one figure for the kind
-      const bool beams = k == "interferometer_noise_m";
-      double n = beams ? p->interferometer.noise_m : p->displacement.noise_m;
-      ok = num(k, v, Dim::kLength, &n);
-      if (ok && beams) p->interferometer.set_noise_m(n);
-      if (ok && !beams) p->displacement.set_noise_m(n);
-    }
-    else if (k == "sensor_noise") p->sensor_noise_enabled = v == "on" || v == "true" || v == "1" || v == "yes";
-    else if (k == "initial_x_m") ok = num(k, v, Dim::kLength, &p->initial.position_m[0]);
-    else if (k == "initial_y_m") ok = num(k, v, Dim::kLength, &p->initial.position_m[1]);
-    else if (k == "substeps_per_tick") {
-      double n = 0;
-      ok = num(k, v, Dim::kNumber, &n) && n >= 1 && n <= 64;
-      if (ok) p->integration.substeps_per_tick = static_cast<int>(n);
-      else if (err->empty()) *err = sc.source + ": [plant] substeps_per_tick must be an integer 1..64";
-    } else if (k == "integrator") {
-      ok = v == "fast" || v == "classic";
-      if (ok) p->integration.method = v == "fast" ? hil::IntegrationConfig::Method::kFast : hil::IntegrationConfig::Method::kClassic;
-      else *err = sc.source + ": [plant] integrator: expected fast or classic";
-    } else if (k == "noise_generator") {
-      ok = v == "ziggurat" || v == "polar";
-      if (ok) p->noise_generator = v == "ziggurat" ? hil::NormalMethod::kZiggurat : hil::NormalMethod::kPolar;
-      else *err = sc.source + ": [plant] noise_generator: expected ziggurat or polar";
-    } else {
-      *err = sc.source + ": [plant] unknown key '" + k + "'";
-      return false;
-    }
-    if (!ok) return false;
-  }
-  if (const auto it = sc.scenario.find("seed"); it != sc.scenario.end()) {
-    *seed = static_cast<std::uint64_t>(std::strtoull(it->second.c_str(), nullptr, 10));
-  }
-  return true;
-}
-
 bool parse(int argc, char** argv, ServeOptions* o) {
+  std::string err;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (i + 1 >= argc) {
@@ -228,6 +183,11 @@ bool parse(int argc, char** argv, ServeOptions* o) {
         return false;
       }
       o->duration_s = d;
+    } else if (const PlantOptionParse p = parse_plant_option(a, v, &o->plant, &err); p != PlantOptionParse::kNotPlantOption) {
+      if (p == PlantOptionParse::kBad) {
+        std::fprintf(stderr, "maglev-hil serve: %s\n", err.c_str());
+        return false;
+      }
     } else if (a == "--rt-priority") {
       o->rt_priority = std::atoi(v.c_str());
     } else {
@@ -257,7 +217,7 @@ struct ServeCounters {
 };
 
 template <typename Scalar>
-int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint64_t seed) {
+int serve(const ServeOptions& o, const scenario::Scenario* sc) {
   using Kernel = kernel::Controller<Scalar>;
   const auto bus = std::make_shared<can::VirtualBus>("maglev-hil-serve");
   auto plant_port = bus->open_endpoint();
@@ -275,23 +235,43 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
   // board's stage is the one wired to it. A selection the firmware refused
   // (status.profile_error) leaves the default stage's plant: the kernel
   // holds it landed with fault 18 anyway.
-  // The plant of database stage `index` (index 0: the base plant, the
-  // default stage's), at the servo rate; false: *why says why.
-  const auto plant_of = [&plant_config](std::uint16_t index, double rate, hil::PlantConfig* out, std::string* why,
-                                        const char** name) {
+  // The plant of database stage `index` (index 0: the default stage's), as
+  // `run` builds it: the stage's plant, then the scenario's [plant] keys and
+  // the plant options (plant_for_stage: model, noise, error set, floor), at
+  // the servo rate; false: *why says why.
+  const auto plant_of = [&o, sc, &controller](std::uint16_t index, double rate, StagePlant* out, std::string* why,
+                                              const char** name) {
     static stage_profile::StageProfile profile;  // ~4 kB
-    *out = plant_config;
+    hil::PlantConfig base = hil::PlantConfig::Default();
     *name = "the default stage";
     if (index != 0) {
       if (stage_profile::LoadStageProfile(index, &profile) != stage_profile::ProfileError::kOk) {
         *why = "not in the profile database";
         return false;
       }
-      if (!hil::PlantConfigForProfile(profile, plant_config, out, why)) return false;
+      if (!hil::PlantConfigForProfile(profile, hil::PlantConfig::Default(), &base, why)) return false;
       *name = profile.name;
     }
-    hil::ApplyServoRate(rate, out);
+    std::vector<ScenarioError> errs;
+    if (!plant_for_stage(base, controller->config(), sc, o.plant, out, &errs)) {
+      why->clear();
+      for (const ScenarioError& e : errs) *why += (why->empty() ? "" : "\n") + e.message;
+      return false;
+    }
+    hil::ApplyServoRate(rate, &out->plant);
     return true;
+  };
+  // Which plant, and (as-built) every error drawn: the run's metrics.json
+  // plant_error_* on one line, so that a session can be reproduced.
+  const auto report_plant = [](const StagePlant& p, std::uint64_t noise_seed) {
+    std::printf("maglev-hil serve: plant %s, noise seed %llu", hil::to_string(p.model),
+                static_cast<unsigned long long>(noise_seed));
+    if (p.model == hil::PlantModel::kAsBuilt) {
+      std::printf(", error seed %llu:", static_cast<unsigned long long>(p.error_set.error_seed));
+      for (const auto& [name, value] : p.drawn_errors) std::printf(" %s=%.6g", name.c_str(), value);
+    }
+    std::printf("\n");
+    std::fflush(stdout);
   };
   const auto selected_stage = [&modbus, &controller]() -> int {
     // The stage the kernel runs: the register's value once the binding took
@@ -305,21 +285,23 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
   // restart, because its plant and pacing were built for the boot rate.
   const double rate_Hz = static_cast<double>(controller->config().servo_rate_Hz);
   int plant_stage = selected_stage();
-  hil::PlantConfig stage_plant{};
+  StagePlant stage_plant;
   {
     std::string why;
     const char* name = "";
     if (!plant_of(static_cast<std::uint16_t>(plant_stage), rate_Hz, &stage_plant, &why, &name)) {
       std::fprintf(stderr, "maglev-hil serve: the bench cannot build the plant of stage.profile %d: %s\n", plant_stage,
                    why.c_str());
-      return 1;
+      return 2;
     }
     if (plant_stage != 0) {
       std::printf("maglev-hil serve: stage.profile %d (%s) from the flash: plant and kernel built from it\n",
                   plant_stage, name);
     }
   }
-  auto plant = std::make_unique<hil::Plant>(stage_plant, seed);
+  // The noise seed: --seed, else the scenario's, else 1.
+  const std::uint64_t seed = o.seed_given ? o.seed : stage_plant.seed;
+  auto plant = std::make_unique<hil::Plant>(stage_plant.plant, seed);
   app::CanSensorConfig sensor_config{};
   sensor_config.period_us = static_cast<std::uint32_t>(std::lround(1e6 / rate_Hz));
   app::CanSensorSource sensors(*ctrl_port, sensor_config);
@@ -340,7 +322,9 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
 
   std::printf("maglev-hil serve: Modbus TCP listening on %s:%d (unit 1), kernel %s, flash %s, %.0f Hz real time\n",
               o.host.c_str(), modbus->port(), hil::to_string(o.kernel), o.flash.c_str(), rate_Hz);
-  std::fflush(stdout);
+  // After the listening line, which clients wait for as the first line of a
+  // default stage's serve (tests/faults/hostile_levitated.py).
+  report_plant(stage_plant, seed);
 
   const double dt = 1.0 / rate_Hz;
   const auto ticks_per_second = static_cast<std::uint64_t>(std::llround(rate_Hz));
@@ -424,7 +408,7 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
     if (const int now_stage = requests > 0 ? selected_stage() : plant_stage; now_stage != plant_stage) {
       std::string why;
       const char* name = "";
-      hil::PlantConfig next{};
+      StagePlant next;
       if (!plant_of(static_cast<std::uint16_t>(now_stage), rate_Hz, &next, &why, &name)) {
         std::fprintf(stderr, "maglev-hil serve: stage.profile is now %d, whose plant the bench cannot build (%s): stopping\n",
                      now_stage, why.c_str());
@@ -435,7 +419,7 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
       // 1 mm a session had moved, and the supervisor latched CounterJump);
       // height and tilt are the new stage's rest.
       const hil::BodyState was = plant->body_state();
-      plant = std::make_unique<hil::Plant>(next, seed);
+      plant = std::make_unique<hil::Plant>(next.plant, seed);
       hil::BodyState rest = plant->body_state();
       const Eigen::Quaterniond& q = was.attitude;
       const double yaw = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
@@ -447,6 +431,7 @@ int serve(const ServeOptions& o, const hil::PlantConfig& plant_config, std::uint
       plant_stage = now_stage;
       std::printf("maglev-hil serve: stage.profile %d (%s) selected: the bench's plant rebuilt from it, at rest\n",
                   now_stage, name);
+      report_plant(next, seed);
       std::fflush(stdout);
       deadline = now_ns() + period_ns;  // the rebuild is not a missed tick
     }
@@ -504,8 +489,7 @@ int serve_main(int argc, char** argv) {
     usage();
     return 2;
   }
-  hil::PlantConfig plant_config;
-  std::uint64_t seed = 1;
+  std::optional<scenario::Scenario> sc;
   if (!o.scenario.empty()) {
     std::string path = o.scenario;
     if (!(fs::exists(path) && fs::is_regular_file(path))) path = (fs::path(o.scenarios) / (o.scenario + ".scenario")).string();
@@ -514,13 +498,14 @@ int serve_main(int argc, char** argv) {
       for (const auto& e : r.errors) std::fprintf(stderr, "%s\n", e.to_string().c_str());
       return 2;
     }
-    std::string err;
-    if (!plant_overrides(*r.scenario, &plant_config, &seed, &err)) {
-      std::fprintf(stderr, "%s\n", err.c_str());
-      return 2;
+    sc = std::move(*r.scenario);
+    if (!sc->controller.empty() || !sc->timeline.empty()) {
+      std::fprintf(stderr,
+                   "maglev-hil serve: note: %s: only its [plant] keys and seed are used (the controller's "
+                   "configuration is the flash's; nothing of its timeline runs)\n",
+                   sc->source.c_str());
     }
   }
-  if (o.seed_given) seed = o.seed;
 
   struct sigaction sa{};
   sa.sa_handler = on_signal;
@@ -543,8 +528,8 @@ int serve_main(int argc, char** argv) {
     }
   }
 
-  return o.kernel == hil::KernelKind::kQ7_24 ? serve<numeric::Q7_24>(o, plant_config, seed)
-                                             : serve<float>(o, plant_config, seed);
+  const scenario::Scenario* scenario = sc ? &*sc : nullptr;
+  return o.kernel == hil::KernelKind::kQ7_24 ? serve<numeric::Q7_24>(o, scenario) : serve<float>(o, scenario);
 }
 
 }  // namespace maglev::bench

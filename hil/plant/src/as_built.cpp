@@ -79,15 +79,8 @@ void ApplyComponentNoise(PlantConfig* c) {
 }
 
 PlantConfig NominalPlant(const PlantConfig& base) {
-  PlantConfig c = base;
   // No hand-set imperfections: the stage as drawn.
-  c.forcer_errors = ForcerErrors{};
-  for (int j = 0; j < kCoils; ++j) {
-    c.amplifier.gain_error[j] = 0.0;
-    c.amplifier.offset_A[j] = 0.0;
-    c.amplifier.bandwidth_error[j] = 0.0;
-  }
-  c.as_built = AsBuiltConfig{};
+  PlantConfig c = PlantConfig::AsDrawn(base);
   ApplyComponentNoise(&c);
   return c;
 }

@@ -45,8 +45,23 @@ FieldConfig FieldOf(const PlantConfig& c) {
 
 }  // namespace
 
-PlantConfig PlantConfig::Ideal() {
-  PlantConfig c;
+PlantConfig PlantConfig::Ideal() { return IdealOf(PlantConfig{}); }
+
+PlantConfig PlantConfig::AsDrawn(const PlantConfig& stage) {
+  PlantConfig c = stage;
+  c.forcer_errors = ForcerErrors{};
+  for (int j = 0; j < kCoils; ++j) {
+    c.amplifier.gain_error[j] = 0.0;
+    c.amplifier.offset_A[j] = 0.0;
+    c.amplifier.bandwidth_error[j] = 0.0;
+  }
+  c.as_built = AsBuiltConfig{};
+  return c;
+}
+
+PlantConfig PlantConfig::IdealOf(const PlantConfig& stage) {
+  PlantConfig c = AsDrawn(stage);
+  // No noise.
   c.amplifier.current_noise_scale = 0.0;
   c.amplifier.monitor_noise_A = 0.0;
   c.amplifier.monitor_reproduces_table1 = false;

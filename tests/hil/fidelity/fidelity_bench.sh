@@ -31,6 +31,12 @@ run nominal --plant nominal
   { cat "$OUT/level/commands.txt"; fail "as built, CoM band 2-5 mm: theta_x steps not accepted"; }
 "$HIL" run "$DIR/../bench/short.scenario" --plant ideal --out "$OUT/ideal" --no-plots --quiet > "$OUT/ideal.log" 2>&1 ||
   { cat "$OUT/ideal.log"; fail "run ideal"; }
+# `ideal` is of the stage the run names (it was always the default stage's:
+# the square kernel on the cross plant faulted, fault 6).
+"$HIL" run startup --profile nk2020-square --plant ideal --out "$OUT/square_ideal" --no-plots --quiet \
+  > "$OUT/square_ideal.log" 2>&1 || { cat "$OUT/square_ideal.log"; fail "run square ideal"; }
+grep -q "final state Ready, fault 0" "$OUT/square_ideal.log" ||
+  { cat "$OUT/square_ideal.log"; fail "--profile nk2020-square --plant ideal: not Ready"; }
 "$PY" - "$OUT" <<'PYEOF' || exit 1
 import json, sys
 out = sys.argv[1]

@@ -177,3 +177,46 @@ TEST(AsBuilt, ComponentNoiseIsFromTheFiguresNotTheFit) {
   for (int j = 0; j < 8; ++j) DOUBLES_EQUAL(0.0, c.amplifier.gain_error[j], 0.0);
   CHECK(!c.as_built.active);
 }
+
+// `ideal` on any stage (2026-11-29): the stage's own plant -- its geometry
+// and sensors kept -- without imperfections or noise; Ideal() is the same
+// for the default PlantConfig. Before, `ideal` was always the default stage's.
+TEST(AsBuilt, IdealOfAStageKeepsItsGeometryAndDropsErrorsAndNoise) {
+  PlantConfig stage = NominalPlant(PlantConfig::Default());
+  stage.body.layout = hil::BodyConfig::Layout::kSquare;
+  stage.body.mass_kg = 1.25;
+  stage.interferometer.y_beam_x_m[0] = -0.04;
+  stage.displacement.sensor_x_m[2] = 0.07;
+  // The as-built block as a drawn set leaves it (the part of a draw that
+  // moves geometry, e.g. a beam's Abbe offset, is the stage's own place:
+  // IdealOf is for a profile's plant, before any draw).
+  stage.as_built.active = true;
+  stage.as_built.magnet_pitch_error = 3e-4;
+  const PlantConfig ideal = PlantConfig::IdealOf(stage);
+  CHECK_TRUE(ideal.body.layout == hil::BodyConfig::Layout::kSquare);
+  DOUBLES_EQUAL(1.25, ideal.body.mass_kg, 0.0);
+  DOUBLES_EQUAL(-0.04, ideal.interferometer.y_beam_x_m[0], 0.0);
+  DOUBLES_EQUAL(0.07, ideal.displacement.sensor_x_m[2], 0.0);
+  CHECK_FALSE(ideal.as_built.active);
+  CHECK_FALSE(ideal.sensor_noise_enabled);
+  DOUBLES_EQUAL(0.0, ideal.amplifier.current_noise_scale, 0.0);
+  DOUBLES_EQUAL(0.0, ideal.amplifier.monitor_noise_A, 0.0);
+  for (int j = 0; j < 8; ++j) {
+    DOUBLES_EQUAL(0.0, ideal.amplifier.gain_error[j], 0.0);
+    DOUBLES_EQUAL(0.0, ideal.amplifier.offset_A[j], 0.0);
+    DOUBLES_EQUAL(0.0, ideal.amplifier.bandwidth_error[j], 0.0);
+  }
+  for (int f = 0; f < 4; ++f) {
+    DOUBLES_EQUAL(0.0, ideal.forcer_errors.misalignment_rad[f], 0.0);
+    DOUBLES_EQUAL(0.0, ideal.forcer_errors.epsilon_tangential[f], 0.0);
+  }
+  // Ideal() = IdealOf of the default-constructed plant = IdealOf(Default()):
+  // Default() differs from PlantConfig{} only by the errors IdealOf drops.
+  const PlantConfig a = PlantConfig::Ideal(), b = PlantConfig::IdealOf(PlantConfig::Default());
+  for (int j = 0; j < 8; ++j) DOUBLES_EQUAL(a.amplifier.gain_error[j], b.amplifier.gain_error[j], 0.0);
+  for (int f = 0; f < 4; ++f) DOUBLES_EQUAL(a.forcer_errors.misalignment_rad[f], b.forcer_errors.misalignment_rad[f], 0.0);
+  // And the plant behaves alike: the same wrench for the same currents.
+  const Plant pa(a, 1), pb(b, 1);
+  const Eigen::Matrix<double, 6, 8> da = Allocation(pa) - Allocation(pb);
+  DOUBLES_EQUAL(0.0, da.cwiseAbs().maxCoeff(), 0.0);
+}

@@ -25,6 +25,27 @@ inline constexpr const char* kDefaultProfile = "nk2017-cross";
 // Where `--profile NAME` looks (hil/profiles of the source tree).
 std::string profile_dir();
 
+// The command line's plant options, which win over the scenario's [plant]
+// keys: `run` and `serve` read them with one parser (parse_plant_option).
+struct PlantOptions {
+  std::optional<hil::PlantModel> model;       // --plant: the scenario's [plant] model
+  std::optional<std::uint64_t> error_seed;    // --error-seed: [plant] error_seed (as-built)
+  std::optional<std::string> floor;           // --floor CLASS: [plant] floor (docs/PLANT.md section 12)
+  std::optional<double> floor_isolator_hz;    // --floor-isolator-hz HZ: [plant] floor_isolator_hz
+};
+// Their usage lines (one per option, for both commands' --help).
+extern const char* const kPlantOptionsUsage;
+enum class PlantOptionParse : std::uint8_t {
+  kNotPlantOption = 0,  // `option` is none of them
+  kTaken = 1,           // read into *p
+  kBad = 2,             // one of them with a bad value: *err says why
+};
+// Reads `option value` into *p if the option is one of PlantOptions'. The
+// floor's class and the isolator's range are checked with the scenario
+// (apply_overrides), where the scenario's own keys are.
+PlantOptionParse parse_plant_option(const std::string& option, const std::string& value, PlantOptions* p,
+                                    std::string* err);
+
 struct Overrides {
   std::string profile_name = kDefaultProfile;
   stage_profile::StageProfile profile{};
@@ -40,10 +61,7 @@ struct Overrides {
   // `noise = fitted`, and no density of the scenario's own. A rest-noise
   // figure then matches the paper by construction; the report says so.
   bool noise_fitted = false;
-  std::optional<hil::PlantModel> plant_model_override;
-  std::optional<std::uint64_t> error_seed_override;
-  std::optional<std::string> floor_override;  // --floor CLASS: overrides [plant] floor
-  std::optional<double> floor_isolator_override;  // --floor-isolator-hz HZ: overrides [plant] floor_isolator_hz
+  PlantOptions command_line;  // --plant, --error-seed, --floor, --floor-isolator-hz
   hil::ErrorSet error_set;
   hil::DrawnErrors drawn_errors;  // as-built: what was drawn (metrics.json plant_error_*)
 };
@@ -72,6 +90,23 @@ void apply_paper_controller(kernel::KernelConfig* c);
 
 // Applies the scenario's keys to *o; false: *errs says why (field by field).
 bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<ScenarioError>* errs);
+
+// The plant a stage runs on in `serve` as in `run`: the stage's own plant
+// (*base, from its profile), then the scenario's [plant] keys (sc may be
+// null: none) and the command line's plant options, read by
+// apply_overrides. `controller` is the kernel configuration the stage runs
+// (its travel bounds initial_x_m / initial_y_m, its rate the plant's step).
+// false: *errs says why, key by key.
+struct StagePlant {
+  hil::PlantConfig plant;
+  hil::PlantModel model = hil::PlantModel::kDefault;
+  hil::ErrorSet error_set;
+  hil::DrawnErrors drawn_errors;
+  std::uint64_t seed = 1;  // the scenario's [scenario] seed, else 1
+};
+bool plant_for_stage(const hil::PlantConfig& base, const kernel::KernelConfig& controller,
+                     const scenario::Scenario* sc, const PlantOptions& options, StagePlant* out,
+                     std::vector<ScenarioError>* errs);
 
 // Validates the timeline/metrics/overrides of a parsed scenario (verbs,
 // argument counts, units, ranges). Empty = fine.

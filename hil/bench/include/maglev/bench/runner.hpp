@@ -37,10 +37,7 @@ struct RunOptions {
   Mode mode = Mode::kLockstep;
   std::optional<std::uint64_t> seed;      // overrides the scenario's `seed`
   std::optional<std::string> profile;     // overrides the scenario's `profile` (NAME or FILE)
-  std::optional<hil::PlantModel> plant;   // --plant: overrides the scenario's [plant] model
-  std::optional<std::uint64_t> error_seed;  // --error-seed: overrides [plant] error_seed (as-built)
-  std::optional<std::string> floor;       // --floor CLASS: overrides [plant] floor (docs/PLANT.md section 12)
-  std::optional<double> floor_isolator_hz;  // --floor-isolator-hz HZ: overrides [plant] floor_isolator_hz
+  PlantOptions plant_options;             // --plant, --error-seed, --floor, --floor-isolator-hz
   // --servo-rate HZ: overrides the scenario's [controller] servo_rate_Hz and the
   // profile's rate (2500, 5000, 10000 or 20000; issue 16).
   std::optional<double> servo_rate_Hz;

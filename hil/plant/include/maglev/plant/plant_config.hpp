@@ -330,6 +330,15 @@ struct PlantConfig {
   static PlantConfig Default();
   // Paper-ideal: no noise, no amplifier/forcer errors (tests, linearization).
   static PlantConfig Ideal();
+  // A stage's plant as drawn: without Default()'s hand-set forcer and
+  // amplifier errors and without the as-built block; its noise as it was.
+  // For a profile's plant before any error set is drawn (DrawAsBuilt also
+  // moves geometry -- sensor places, Abbe offsets -- which this keeps).
+  static PlantConfig AsDrawn(const PlantConfig& stage);
+  // Ideal() for a stage's own plant (its profile's geometry and sensors):
+  // `[plant] model = ideal` / `--plant ideal` on any stage. Ideal() is
+  // IdealOf(PlantConfig{}).
+  static PlantConfig IdealOf(const PlantConfig& stage);
 };
 
 }  // namespace maglev::hil
