@@ -299,6 +299,19 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
                   plant_stage, name);
     }
   }
+  // A plant whose sensors read without noise repeats every bit of a sample
+  // once the loops settle, and the kernel's frozen-sample check (a real
+  // stage's sensors never do that) lands it: levitating `--plant ideal`
+  // faulted at once (FrozenSample, 20). `run` turns the check off for such a
+  // plant; here the kernel's configuration is the flash's, which keeps it.
+  if (!stage_plant.plant.sensor_noise_enabled) {
+    std::fprintf(stderr,
+                 "maglev-hil serve: the plant's sensors read without noise (model ideal, or sensor_noise = off): the "
+                 "kernel's frozen-sample check (fault 20, FrozenSample) would land the stage once it settles, and "
+                 "the flash's configuration keeps it on; use `maglev-hil run` (which turns it off for such a plant) "
+                 "or serve --plant nominal\n");
+    return 2;
+  }
   // The noise seed: --seed, else the scenario's, else 1.
   const std::uint64_t seed = o.seed_given ? o.seed : stage_plant.seed;
   auto plant = std::make_unique<hil::Plant>(stage_plant.plant, seed);

@@ -40,6 +40,13 @@ rc=$?
 check "a bad [plant] key is refused with exit 2 (got $rc)" [ "$rc" -eq 2 ]
 check "... as file:line: key: reason" grep -q "bad.scenario:6: coil_yaw_rad: .*above its physical bound" "$WORK/bad.log"
 
+# A plant without sensor noise is refused: the flash's frozen-sample check
+# would land it (levitating `--plant ideal` faulted at once, FrozenSample).
+"$HIL" serve --modbus-tcp "127.0.0.1:$PORT" --flash "$WORK/ideal.bin" --plant ideal --duration 1 >"$WORK/ideal.log" 2>&1
+rc=$?
+check "serve --plant ideal is refused with exit 2 (got $rc)" [ "$rc" -eq 2 ]
+check "... saying why" grep -q "frozen-sample check" "$WORK/ideal.log"
+
 # 2. The same plant as `run`: every drawn error equal to metrics.json's.
 start "$WORK/serve1.log" --plant as-built --error-seed 3
 "$HIL" run startup --plant as-built --error-seed 3 --out "$WORK/run" --no-plots --quiet >/dev/null 2>&1
