@@ -250,3 +250,45 @@ TEST(References, StepAndRejectedMoves) {
   CHECK(m.plan_scurve(0, 10 * kMm, 0.2, 0.6, 500.0, kFs, lim) == ReferenceError::kJerkLimit);
   CHECK(m.plan_trapezoid(-29 * kMm, 0, 0.2, 0.6, kFs, lim) == ReferenceError::kOutsideTravel);
 }
+
+// kHold's stop never ends beyond where the profile it stops could have
+// stopped: a move to the travel's end at the axis' max acceleration
+// (trapezoid and S-curve), held on any tick of its deceleration, stays at or
+// before its target (and so inside travel), and within the axis' max
+// acceleration. The stop used to take whole ticks at a deceleration rounded
+// down to fit them, which covers up to half a tick of motion more: 8.7 um
+// beyond travel for the trapezoid here.
+TEST(References, AStopNeverEndsBeyondTheTargetOfTheMoveItStops) {
+  const AxisReferenceLimits l = stage_limits_x();
+  for (int shape = 0; shape < 2; ++shape) {
+    MoveReference m;
+    const ReferenceError e =
+        shape == 0 ? m.plan_trapezoid(0, l.travel_max_pico, l.max_velocity, l.max_acceleration, kFs, l)
+                   : m.plan_scurve(0, l.travel_max_pico, l.max_velocity, l.max_acceleration, l.max_jerk, kFs, l);
+    CHECK(e == ReferenceError::kOk);
+    std::int64_t worst_pm = INT64_MIN;
+    double worst_a = 0.0;
+    int held = 0;
+    for (std::int64_t k = 1; k < m.total_ticks(); ++k) {
+      const AxisReference r = m.sample(k);
+      if (!(r.acceleration < 0.0f)) continue;  // held while decelerating
+      StopReference s;
+      CHECK(s.plan(r.position_pico, static_cast<double>(r.velocity), kFs, l) == ReferenceError::kOk);
+      std::int64_t prev = r.position_pico, prev2 = m.sample(k - 1).position_pico;
+      for (std::int64_t t = 1; t <= s.total_ticks() + 2; ++t) {
+        const std::int64_t p = s.sample(t).position_pico;
+        worst_pm = p > worst_pm ? p : worst_pm;
+        if (t >= 2) worst_a = std::fmax(worst_a, std::fabs(static_cast<double>(p - 2 * prev + prev2)) * 1e-12 / (kT * kT));
+        prev2 = prev;
+        prev = p;
+      }
+      ++held;
+    }
+    CHECK(held > 100);
+    std::printf("\n  %s: stop from %d decelerating ticks: furthest %.3f um past the target, max |a| %.4f m/s^2\n",
+                shape == 0 ? "trapezoid" : "S-curve", held, static_cast<double>(worst_pm - l.travel_max_pico) * 1e-6,
+                worst_a);
+    CHECK(worst_pm <= l.travel_max_pico);
+    CHECK(worst_a <= l.max_acceleration * 1.0001);
+  }
+}

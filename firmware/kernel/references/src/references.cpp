@@ -366,16 +366,28 @@ MAGLEV_CONFIG_CODE ReferenceError StopReference::plan(std::int64_t start_pico, d
                                                       double servo_rate_Hz, const AxisReferenceLimits& limits) {
   if (!finite_all({velocity, servo_rate_Hz})) return ReferenceError::kNonFinite;
   if (!limits_valid(limits) || servo_rate_Hz <= 0.0) return ReferenceError::kBadParameter;
-  // Whole ticks at no more than max_acceleration; a reference at rest stops
-  // in one tick where it is.
+  // The continuous stop at max_acceleration, sampled at the ticks, held at
+  // its end from the first tick at or after it: it ends where a constant
+  // max_acceleration from (p0, v0) ends, v0^2 / (2 a) on, the shortest stop
+  // within the limit -- never beyond where the running profile could itself
+  // have stopped (its target, inside travel; a sinusoid's or a circle's
+  // bounds: their accelerations are within the limit too). Whole ticks at a
+  // deceleration rounded down to fit them, as before 2026-11-29, covered up
+  // to half a tick of motion more: a hold on a move to the travel's end took
+  // the reference 8.7 um beyond it (test References.
+  // AStopNeverEndsBeyondTheTargetOfTheMoveItStops). A reference at rest
+  // stops in one tick where it is.
   const double t_stop = std::fabs(velocity) / limits.max_acceleration;
   const double n = std::ceil(t_stop * servo_rate_Hz - 1e-9);
   if (n > static_cast<double>(kMaxProfileTicks)) return ReferenceError::kTooLong;
   start_ = start_pico;
   v0_ = velocity;
   period_s_ = 1.0 / servo_rate_Hz;
+  t_stop_s_ = t_stop;
   total_ticks_ = n < 1.0 ? 1 : static_cast<std::int64_t>(n);
-  decel_ = velocity / (static_cast<double>(total_ticks_) * period_s_);  // signed, |.| <= max_acceleration
+  decel_ = velocity > 0.0 ? limits.max_acceleration : (velocity < 0.0 ? -limits.max_acceleration : 0.0);
+  travel_min_pico_ = limits.travel_min_pico;
+  travel_max_pico_ = limits.travel_max_pico;
   return ReferenceError::kOk;
 }
 
@@ -383,8 +395,12 @@ AxisReference StopReference::sample(std::int64_t tick) const {
   AxisReference r;
   if (tick < 0) tick = 0;
   const bool finished = tick >= total_ticks_;
-  const double t = numeric::Int64ToDouble(finished ? total_ticks_ : tick) * period_s_;
-  r.position_pico = start_ + numeric::si_to_pico(v0_ * t - 0.5 * decel_ * t * t);
+  const double t = finished ? t_stop_s_ : numeric::Int64ToDouble(tick) * period_s_;
+  std::int64_t p = start_ + numeric::si_to_pico(v0_ * t - 0.5 * decel_ * t * t);
+  // Never beyond travel, whatever: the stop's end is inside it by the
+  // argument above up to the float velocity's rounding (nm).
+  p = p > travel_max_pico_ ? travel_max_pico_ : (p < travel_min_pico_ ? travel_min_pico_ : p);
+  r.position_pico = p;
   if (!finished) {
     r.velocity = static_cast<float>(v0_ - decel_ * t);
     r.acceleration = static_cast<float>(-decel_);

@@ -157,9 +157,9 @@ class SinusoidReference {
 };
 
 // --- Stop (kHold) -------------------------------------------------------------
-// A moving reference brought to rest at constant deceleration, at most the
-// axis' max_acceleration, from its present position and velocity:
-// p(t) = p0 + v0 t - a t^2 / 2 (a = v0 / T, T whole ticks), then held at rest.
+// A moving reference brought to rest at the axis' max_acceleration a, from
+// its present position and velocity: p(t) = p0 + v0 t - a t^2 / 2 up to
+// T = |v0| / a, sampled at the ticks, then held at p(T); never beyond travel.
 // The acceleration steps from the running profile's to -a, as a trapezoid's
 // does at its corners (an S-curve's jerk limit is not kept by a stop).
 class StopReference {
@@ -172,8 +172,9 @@ class StopReference {
 
  private:
   std::int64_t start_ = 0;
-  double v0_ = 0.0, decel_ = 0.0, period_s_ = 0.0;
+  double v0_ = 0.0, decel_ = 0.0, period_s_ = 0.0, t_stop_s_ = 0.0;
   std::int64_t total_ticks_ = 0;
+  std::int64_t travel_min_pico_ = 0, travel_max_pico_ = 0;
 };
 
 }  // namespace maglev::kernel
