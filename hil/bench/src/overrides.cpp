@@ -248,7 +248,16 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       }
     }
   }
-  if (o->command_line.error_seed) o->error_set.error_seed = *o->command_line.error_seed;
+  if (o->command_line.error_seed) {
+    // An error seed draws the as-built model's errors: on any other model it
+    // would change nothing, and the run would not be the stage asked for.
+    if (o->plant_model != hil::PlantModel::kAsBuilt) {
+      fail("--error-seed " + std::to_string(*o->command_line.error_seed) + ": the plant model is " +
+           hil::to_string(o->plant_model) +
+           ", and an error seed draws the as-built model's errors (--plant as-built, or [plant] model = as-built)");
+    }
+    o->error_set.error_seed = *o->command_line.error_seed;
+  }
   // The floor under the base (docs/PLANT.md section 12): a named class or a
   // band velocity of the lab's own, and an optional isolator. Any model.
   {

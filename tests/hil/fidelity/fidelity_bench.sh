@@ -12,6 +12,8 @@ expect bad_model.scenario "bad_model.scenario:7: model: expected default, ideal,
 expect bad_model.scenario "bad_model.scenario:8: noise: expected component or fitted, got 'quiet'"
 expect bad_nominal.scenario "bad_nominal.scenario:8: bstar_error: an error-set key needs model = as-built"
 refused_option fidelity_move.scenario "$OUT/x" "--plant: expected default, ideal, nominal or as-built, got 'bogus'" --plant bogus
+# An error seed on a plant that draws no errors changed nothing, silently.
+refused_option fidelity_move.scenario "$OUT/x" "--error-seed 3: the plant model is nominal" --plant nominal --error-seed 3
 echo "refusals: ok"
 run() {  # run NAME ARGS...: a run into OUT/NAME
   name=$1; shift
