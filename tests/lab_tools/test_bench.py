@@ -2,7 +2,7 @@
 
 Classes run in name order: Test1Landed (bad input, commands refused while
 landed), Test2Levitated (levitate with progress, busy writes, move, step
-response, FRF, land).
+response, FRF, a calibration interrupted, land).
 """
 import os
 import time
@@ -94,6 +94,14 @@ class Test1Landed(unittest.TestCase):
         self.assertEqual(cm.exception.result, maglev.CommandResult.REFUSED_NOT_READY)
         with self.assertRaises(maglev.ValueOutOfRange):
             self.stage.command("step", "w", 1e-6)
+
+    def test_calibration_refused_while_landed(self):
+        s = self.stage
+        with self.assertRaises(maglev.CommandRejected) as cm:
+            s.calibrate_coupling()
+        self.assertEqual(cm.exception.result, maglev.CommandResult.REFUSED_NOT_READY)
+        self.assertEqual(maglev.CouplingCalibrationResult(int(s.read("status.calibration"))),
+                         maglev.CouplingCalibrationResult.REFUSED_NOT_READY)
 
     def test_home_waits_with_progress(self):
         seen = []
@@ -205,6 +213,24 @@ class Test2Levitated(unittest.TestCase):
         self.assertAlmostEqual(f_c, 50.47, delta=1.5)
         self.assertAlmostEqual(180.0 + phase, 28.2, delta=2.0)
         self.assertEqual(self.stage.read("wave.state") in (0, 2), True)  # stopped again
+
+    def test_h_calibration_interrupted_by_hold_keeps_nothing(self):
+        # The full ~28 s run is tests/hil/fidelity/serve_calibration.sh (stagectl, as-built);
+        # here the package's side of one that another command interrupts.
+        s = self.stage
+        R = maglev.CouplingCalibrationResult
+        self.assertIsNone(s.calibrate_coupling(wait=False))
+        t0 = time.monotonic()
+        while R(int(s.read("status.calibration"))) != R.RUNNING:
+            self.assertLess(time.monotonic() - t0, 2.0, "the calibration never ran")
+            time.sleep(0.01)
+        s.hold()
+        while R(int(s.read("status.calibration"))) == R.RUNNING:
+            self.assertLess(time.monotonic() - t0, 4.0, "hold did not end the calibration")
+            time.sleep(0.01)
+        self.assertEqual(R(int(s.read("status.calibration"))), R.ABANDONED_INTERRUPTED)
+        self.assertEqual(s.read("coupling.enabled"), 0)
+        self.assertEqual(s.state(), maglev.SequencerState.READY)
 
     def test_z_land(self):
         self.stage.land(timeout_s=30)

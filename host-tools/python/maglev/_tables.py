@@ -802,4 +802,21 @@ PROFILE_ERRORS = (
     (19, "kRegisterRange", "a value outside the register map's range"),
     (20, "kCount", "?"),
 )
+
+# coupling_calibration.hpp MAGLEV_COUPLING_CALIBRATION_RESULTS (status.calibration)
+COUPLING_CALIBRATION_RESULTS = (
+    (0, "kNone", "None"),
+    (1, "kRunning", "Running"),
+    (2, "kPassed", "Passed"),
+    (3, "kRefusedNotReady", "RefusedNotReady"),
+    (4, "kRefusedBusy", "RefusedBusy"),
+    (5, "kAbandonedFault", "AbandonedFault"),
+    (6, "kAbandonedInterrupted", "AbandonedInterrupted"),
+    (7, "kFailedSingular", "FailedSingular"),
+    (8, "kFailedNotFinite", "FailedNotFinite"),
+    (9, "kFailedInconsistent", "FailedInconsistent"),
+    (10, "kFailedCorrectionTooLarge", "FailedCorrectionTooLarge"),
+    (11, "kFailedIllConditioned", "FailedIllConditioned"),
+    (12, "kFailedVerification", "FailedVerification"),
+)
 # END GENERATED FIRMWARE TABLES

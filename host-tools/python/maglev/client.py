@@ -8,14 +8,14 @@ cmd.result back, the same path stagectl uses.
 import contextlib
 import math
 import time
-from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, Iterable, List, NamedTuple, Optional, Sequence, Tuple
 
 import numpy as np
 
 from . import errors
 from .recording import FrfResult, Recording, sine_fit
 from .registers import (AXES, ENGINEER_KEY, HOST_COMMANDS, LAB_SIGNALS, POSE_REGISTERS, ROTATIONAL_AXES, REGISTERS,
-                        CommandResult, FaultCode, Register, SequencerState, register)
+                        CommandResult, CouplingCalibrationResult, FaultCode, Register, SequencerState, register)
 
 # The most registers one 0x03 request may read (Modbus application protocol).
 _MAX_READ_WORDS = 125
@@ -56,6 +56,15 @@ def _axis_index(axis) -> int:
         return AXES.index(axis)
     except ValueError:
         raise errors.ValueOutOfRange(f"unknown axis {axis!r} (one of {', '.join(AXES)})") from None
+
+
+class CalibrationResult(NamedTuple):
+    """How the kernel's coupling calibration ended (status.calibration, .coupling_before /
+    _after: the largest scaled off-diagonal coupling identified before the correction and
+    measured again with it applied)."""
+    result: CouplingCalibrationResult
+    coupling_before: float
+    coupling_after: float
 
 
 class Stage:
@@ -304,6 +313,42 @@ class Stage:
         """Move by ``distance`` from the measured position (a move_to: Modbus carries one value)."""
         name = AXES[_axis_index(axis)]
         self.move_to(axis, self.read(POSE_REGISTERS[name]) + distance, wait, timeout_s)
+
+    def calibrate_coupling(self, wait: bool = True, timeout_s: float = 90.0,
+                           progress: Optional[Callable[[int, float], None]] = None) -> Optional[CalibrationResult]:
+        """The kernel's coupling calibration (cmd.code 17; Ready only, ~28 s; docs/KERNEL.md
+        "Coupling calibration"). CommandRejected when refused (not Ready, busy). With ``wait``,
+        until it ends: ``progress(experiment, elapsed_s)`` at each of its 12 experiments; returns
+        the CalibrationResult when it passed (the correction acts; save() keeps it), raises
+        CalibrationFailed when the kernel kept the old correction, WaitTimeout after ``timeout_s``.
+        status.calibration keeps the last run's result until the kernel takes the command on its
+        next tick: an end is read once this run was seen running, or after 0.2 s."""
+        self.command("calibrate_coupling")
+        if not wait:
+            return None
+        t0 = time.monotonic()
+        seen_running = False
+        last_step = None
+        while True:
+            v = self.read_many(("status.calibration", "status.calibration_step"))
+            result = CouplingCalibrationResult(int(v["status.calibration"]))
+            elapsed = time.monotonic() - t0
+            if result == CouplingCalibrationResult.RUNNING:
+                seen_running = True
+                step = int(v["status.calibration_step"])
+                if progress is not None and step != last_step:
+                    progress(step, elapsed)
+                last_step = step
+            elif seen_running or elapsed >= 0.2:
+                break
+            if elapsed > timeout_s:
+                raise errors.WaitTimeout(f"coupling calibration still running after {timeout_s:g} s")
+            time.sleep(0.05)
+        c = self.read_many(("status.coupling_before", "status.coupling_after"))
+        out = CalibrationResult(result, c["status.coupling_before"], c["status.coupling_after"])
+        if result != CouplingCalibrationResult.PASSED:
+            raise errors.CalibrationFailed(out)
+        return out
 
     # ---- host-side data acquisition -------------------------------------------
     def poll(self, names: Iterable[str] = STATUS_NAMES, duration_s: float = 1.0, rate_Hz: float = 500.0,

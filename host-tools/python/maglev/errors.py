@@ -122,3 +122,16 @@ class StageFaulted(MaglevError):
 
 class WaitTimeout(MaglevError, TimeoutError):
     """The stage did not get there in time."""
+
+
+class CalibrationFailed(MaglevError):
+    """The kernel's coupling calibration ended without storing a correction: refused once
+    running, abandoned (a fault, another command) or a failed check; the previous correction
+    stays. ``.result`` is the CalibrationResult (its ``.result`` a maglev.CouplingCalibrationResult,
+    with the couplings found)."""
+
+    def __init__(self, result):
+        self.result = result
+        super().__init__(f"coupling calibration {result.result.name} (docs/KERNEL.md): "
+                         f"the previous correction stays (coupling found {result.coupling_before:g}, "
+                         f"after {result.coupling_after:g})")

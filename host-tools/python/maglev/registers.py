@@ -138,6 +138,7 @@ FaultCode = _enum("FaultCode", _tables.FAULT_CODES)
 CommandResult = _enum("CommandResult", _tables.COMMAND_RESULTS)
 ConfigError = _enum("ConfigError", _tables.CONFIG_ERRORS)
 ProfileError = _enum("ProfileError", _tables.PROFILE_ERRORS)
+CouplingCalibrationResult = _enum("CouplingCalibrationResult", _tables.COUPLING_CALIBRATION_RESULTS)
 
 
 def register(name: str) -> Register:

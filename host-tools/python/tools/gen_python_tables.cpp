@@ -13,6 +13,7 @@
 
 #include "maglev/can_link/host_commands.hpp"
 #include "maglev/controller/controller.hpp"
+#include "maglev/coupling_calibration/coupling_calibration.hpp"
 #include "maglev/io/axis.hpp"
 #include "maglev/lab_tools/signals.hpp"
 #include "maglev/register_schema/register_map.hpp"
@@ -154,6 +155,8 @@ std::string module() {
   MAGLEV_PY_ENUM("CONFIG_ERRORS", MAGLEV_CONFIG_ERRORS, "controller.hpp MAGLEV_CONFIG_ERRORS (status.config_error)")
   MAGLEV_PY_ENUM("PROFILE_ERRORS", MAGLEV_PROFILE_ERRORS,
                  "stage_profile.hpp MAGLEV_PROFILE_ERRORS (status.profile_error)")
+  MAGLEV_PY_ENUM("COUPLING_CALIBRATION_RESULTS", MAGLEV_COUPLING_CALIBRATION_RESULTS,
+                 "coupling_calibration.hpp MAGLEV_COUPLING_CALIBRATION_RESULTS (status.calibration)")
   o << kEnd;
   return o.str();
 }
