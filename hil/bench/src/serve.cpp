@@ -3,7 +3,7 @@
 //                  [--plant MODEL] [--error-seed N] [--floor CLASS] [--floor-isolator-hz HZ]
 //
 // The simulated stage running in REAL TIME, operated over Modbus TCP like the
-// real controller. One thread, one loop, per 400 us servo period:
+// real controller. One thread, one loop, per servo period (the flash's servo.rate: 400 us at 2.5 kHz):
 //
 //   plant endpoint   Plant::sample() -> sensor frame N (+ current_monitor every
 //                    5th tick, heartbeat_plant every 250th) on the virtual CAN bus
@@ -16,7 +16,7 @@
 //                    (the same objects the board's RTU server drives) -- BETWEEN
 //                    ticks, so no lock is needed and a request sees a whole tick
 //   sleep            clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME) to the next
-//                    absolute deadline t0 + (N+1) * 400 us
+//                    absolute deadline t0 + (N+1) * period
 //
 // A tick whose work (servo + plant + Modbus) ends after its deadline counts as
 // a deadline miss; the loop then runs the next tick at once (catching up, so
