@@ -239,8 +239,8 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
   // `run` builds it: the stage's plant, then the scenario's [plant] keys and
   // the plant options (plant_for_stage: model, noise, error set, floor), at
   // the servo rate; false: *why says why.
-  const auto plant_of = [&o, sc, &controller](std::uint16_t index, double rate, StagePlant* out, std::string* why,
-                                              const char** name) {
+  const auto plant_of = [sc, &controller](std::uint16_t index, double rate, const PlantOptions& options,
+                                          StagePlant* out, std::string* why, const char** name) {
     static stage_profile::StageProfile profile;  // ~4 kB
     hil::PlantConfig base = hil::PlantConfig::Default();
     *name = "the default stage";
@@ -253,7 +253,7 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
       *name = profile.name;
     }
     std::vector<ScenarioError> errs;
-    if (!plant_for_stage(base, controller->config(), sc, o.plant, out, &errs)) {
+    if (!plant_for_stage(base, controller->config(), sc, options, out, &errs)) {
       why->clear();
       for (const ScenarioError& e : errs) *why += (why->empty() ? "" : "\n") + e.message;
       return false;
@@ -289,7 +289,7 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
   {
     std::string why;
     const char* name = "";
-    if (!plant_of(static_cast<std::uint16_t>(plant_stage), rate_Hz, &stage_plant, &why, &name)) {
+    if (!plant_of(static_cast<std::uint16_t>(plant_stage), rate_Hz, o.plant, &stage_plant, &why, &name)) {
       std::fprintf(stderr, "maglev-hil serve: the bench cannot build the plant of stage.profile %d: %s\n", plant_stage,
                    why.c_str());
       return 2;
@@ -422,7 +422,24 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
       std::string why;
       const char* name = "";
       StagePlant next;
-      if (!plant_of(static_cast<std::uint16_t>(now_stage), rate_Hz, &next, &why, &name)) {
+      bool built = plant_of(static_cast<std::uint16_t>(now_stage), rate_Hz, o.plant, &next, &why, &name);
+      if (!built) {
+        // A stage the kernel took but whose plant the bench cannot build as
+        // asked -- the as-built error set is modelled for the cross and square
+        // layouts only -- runs on its nominal plant, said loudly, rather than
+        // a Modbus write stopping the bench (it did, with --plant as-built
+        // and the triangle stage selected).
+        PlantOptions nominal = o.plant;
+        nominal.model = hil::PlantModel::kNominal;
+        nominal.error_seed.reset();
+        std::string why_nominal;
+        built = plant_of(static_cast<std::uint16_t>(now_stage), rate_Hz, nominal, &next, &why_nominal, &name);
+        if (built) {
+          std::fprintf(stderr, "maglev-hil serve: stage.profile %d: %s; its plant is the nominal model instead\n",
+                       now_stage, why.c_str());
+        }
+      }
+      if (!built) {
         std::fprintf(stderr, "maglev-hil serve: stage.profile is now %d, whose plant the bench cannot build (%s): stopping\n",
                      now_stage, why.c_str());
         break;
@@ -431,14 +448,27 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
       // carry over (the interferometers read on; the counters jumped by the
       // 1 mm a session had moved, and the supervisor latched CounterJump);
       // height and tilt are the new stage's rest.
+      // The platen's centre -- where its sensors are -- stays where it lies.
+      // An as-built plant's body position is its centre of mass,
+      // com_offset_m from the centre (body frame): carrying the CoM over
+      // moved the platen by the difference of the two plants' offsets (2-5
+      // mm from an as-built plant to a nominal one: CounterJump, and the
+      // triangle, which lifts only near its centre, then hit its tilt
+      // envelope).
+      const auto com_offset = [](const hil::PlantConfig& pc) {
+        return pc.as_built.active ? Eigen::Vector3d(pc.as_built.com_offset_m[0], pc.as_built.com_offset_m[1], 0.0)
+                                  : Eigen::Vector3d::Zero();
+      };
       const hil::BodyState was = plant->body_state();
+      const Eigen::Vector3d centre = was.position_m - was.attitude * com_offset(plant->config());
       plant = std::make_unique<hil::Plant>(next.plant, seed);
       hil::BodyState rest = plant->body_state();
       const Eigen::Quaterniond& q = was.attitude;
       const double yaw = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
-      rest.position_m.x() = was.position_m.x();
-      rest.position_m.y() = was.position_m.y();
       rest.attitude = Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())) * rest.attitude;
+      const Eigen::Vector3d com = centre + rest.attitude * com_offset(next.plant);
+      rest.position_m.x() = com.x();
+      rest.position_m.y() = com.y();
       plant->set_body_state(rest);
       watchdog = lockstep::ActuatorWatchdog{};
       plant_stage = now_stage;
