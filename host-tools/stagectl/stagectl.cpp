@@ -370,13 +370,18 @@ int wait_state(Client& c, std::uint16_t want, double seconds, const char* what, 
   die(kTimeout, std::string("timed out waiting for state '") + state_name(want) + "'");
 }
 
-int run_command(Client& c, HostCommandCode code, std::uint16_t axis, float value, const Options& o) {
+// Sends a host command; exit 7 with the kernel's reason when cmd.result is not 0.
+void command_or_die(Client& c, HostCommandCode code, std::uint16_t axis, float value) {
   const std::uint16_t r = c.command(code, axis, value);
   if (r != 0) {
     die(kCommandRejected, std::string("command rejected: ") +
                               (r <= 255 ? maglev::kernel::to_string(static_cast<maglev::kernel::CommandResult>(r))
                                         : "code " + std::to_string(r)));
   }
+}
+
+int run_command(Client& c, HostCommandCode code, std::uint16_t axis, float value, const Options& o) {
+  command_or_die(c, code, axis, value);
   if (o.wait_s <= 0.0) return kOk;
   switch (code) {
     case HostCommandCode::kHome: return wait_state(c, 0, o.wait_s, "home", 0.2);
@@ -413,12 +418,7 @@ int run_command(Client& c, HostCommandCode code, std::uint16_t axis, float value
 // once this run was seen running, or after 0.2 s (a refusal never runs).
 int do_calibrate(Client& c, const Options& o) {
   using maglev::kernel::CouplingCalibrationResult;
-  const std::uint16_t r = c.command(HostCommandCode::kCalibrateCoupling, 0, 0.0f);
-  if (r != 0) {
-    die(kCommandRejected, std::string("command rejected: ") +
-                              (r <= 255 ? maglev::kernel::to_string(static_cast<maglev::kernel::CommandResult>(r))
-                                        : "code " + std::to_string(r)));
-  }
+  command_or_die(c, HostCommandCode::kCalibrateCoupling, 0, 0.0f);
   if (o.wait_s <= 0.0) {
     std::cout << "calibration started (status.calibration, status.calibration_step; stagectl --wait S calibrate waits)\n";
     return kOk;

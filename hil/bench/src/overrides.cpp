@@ -332,14 +332,15 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     else if (k == "current_noise_scale") num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_scale);
     else if (k == "current_noise_density_A_per_rtHz")
       num("plant", k, v, Dim::kNumber, &p.amplifier.current_noise_density_A_per_rtHz);
-    else if (k == "interferometer_noise_m") {  // one figure for every beam
-      double n = p.interferometer.noise_m;
-      num("plant", k, v, Dim::kLength, &n);
-      p.interferometer.set_noise_m(n);
-    } else if (k == "displacement_noise_m") {  // and for every height
-      double n = p.displacement.noise_m;
-      num("plant", k, v, Dim::kLength, &n);
-      p.displacement.set_noise_m(n);
+    else if (k == "interferometer_noise_m" || k == "displacement_noise_m") {
+      // One figure for every sensor of the kind: each beam, or each height.
+      const auto one_figure = [&](auto& kind) {
+        double n = kind.noise_m;
+        num("plant", k, v, Dim::kLength, &n);
+        kind.set_noise_m(n);
+      };
+      if (k == "interferometer_noise_m") one_figure(p.interferometer);
+      else one_figure(p.displacement);
     }
     else if (k == "sensor_noise") flag("plant", k, v, &p.sensor_noise_enabled);
     else if (k == "initial_x_m" || k == "initial_y_m") {
