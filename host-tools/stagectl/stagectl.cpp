@@ -395,7 +395,10 @@ int run_command(Client& c, HostCommandCode code, std::uint16_t axis, float value
       double next_report_s = 0.0;
       while (std::chrono::steady_clock::now() < deadline) {
         const double to_go = static_cast<double>(value) - c.read(def(kPoseReg[axis]));
-        const bool done = std::fabs(to_go) < tol;
+        // There, and the move's profile ended: within the tolerance the
+        // profile's last ticks may still run, and a command sent then was
+        // refused busy (a calibration right after `--wait move`).
+        const bool done = std::fabs(to_go) < tol && c.read(def(RegId::status_moving)) == 0.0;
         if (done || progress.elapsed_s() >= next_report_s) {
           char text[64];
           std::snprintf(text, sizeof text, "%.3f%s to go%s", to_go * 1e6, unit, done ? " (done)" : "");

@@ -90,7 +90,10 @@ check "calibrate while landed: exit 7 (got $rc)" [ "$rc" -eq 7 ]
 check "... with the kernel's reason" grep -qi "not ready" "$WORK/landed.out"
 result=$(ctl get status.calibration | sed 's/.*= *\([^ ]*\).*/\1/')
 check "... and status.calibration = 3 (RefusedNotReady; got $result)" [ "$result" = 3 ]
-ctl --wait 20 levitate >/dev/null 2>&1
+ctl --wait 20 levitate >"$WORK/levitate.out" 2>&1
+state=$(ctl get status.state | sed 's/.*= *\([^ ]*\).*/\1/')
+check "the cross stage levitates again (state $state)" [ "$state" = 6 ]
+[ "$state" = 6 ] || { cat "$WORK/levitate.out"; ctl status; }
 # Level the platen first, as the ccq scenarios do (a CoM offset tilts it).
 ctl --wait 5 move theta_x 0 >/dev/null 2>&1
 ctl --wait 5 move theta_y 0 >/dev/null 2>&1
