@@ -18,6 +18,8 @@ import statistics
 import subprocess
 import sys
 
+import ranking
+
 AXES = ["theta_x", "theta_y", "theta_z", "x", "y", "z"]
 CCQ = ["ccq_theta_y_step", "ccq_theta_x_trapezoid", "ccq_theta_z_steps", "ccq_y_step_2um", "ccq_x_move_14mm"]
 OTHER = {  # scenario: metrics that must not get worse
@@ -82,7 +84,7 @@ def main():
         for k, m in enumerate(cal, 1):
             cal_info.append((sc, k, m["calibration_result"], m["calibration_coupling_before"],
                              m["calibration_coupling_after"], m["calibration_inconsistency"]))
-        keys = sorted(k for k in base[0] if "_ccq_" in k and "rest_noise" not in k)
+        keys = sorted(k for k in base[0] if ranking.is_ccq(k))
         for key in keys:
             prefix, axis_unit = key.split("_ccq_")
             axis = next(ax for ax in AXES if axis_unit.startswith(ax + "_"))
@@ -91,7 +93,7 @@ def main():
             pp_b = med(base, pp[0]) if pp else float("nan")
             pp_c = med(cal, pp[0]) if pp else float("nan")
             rest_b = med(base, rest[0]) if rest else float("nan")
-            above = pp_b >= 2.0 * rest_b
+            above = ranking.above_noise(pp_b, rest_b)
             b, c = med(base, key), med(cal, key)
             ratio = b / c if c > 0 else float("inf")
             faults = sum(1 for r in base + cal if r.get("fault_code", 0) != 0)
