@@ -84,7 +84,7 @@ def main():
         for k, m in enumerate(cal, 1):
             cal_info.append((sc, k, m["calibration_result"], m["calibration_coupling_before"],
                              m["calibration_coupling_after"], m["calibration_inconsistency"]))
-        keys = sorted(k for k in base[0] if ranking.is_ccq(k))
+        keys = sorted(k for k in base[0] if ranking.is_ccq(k) and "_sensor_mean_" not in k)  # z at the centre: ours
         for key in keys:
             prefix, axis_unit = key.split("_ccq_")
             axis = next(ax for ax in AXES if axis_unit.startswith(ax + "_"))

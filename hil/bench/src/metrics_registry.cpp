@@ -110,6 +110,34 @@ void step_or_ccq(const MetricSpec& s, const metrics::Window&, Context& c) {
   M[s.name + "_peak_time_s"] = tp;
   M[s.name + "_primary_" + u] = size;
   const auto kind = [](Axis a) { return is_rotation(a) ? metrics::AxisKind::kRotational : metrics::AxisKind::kTranslational; };
+  // z as the mean of the three height sensors (MetricInputs::
+  // height_sensor_centroid_m): the measured plane's z at their centroid. A
+  // controller that averages its height sensors reports this as z, and a
+  // tilt then reads as z: (x_c, y_c) = (-20.5, 20.5) mm on the seed stage.
+  const double xc = c.in.height_sensor_centroid_m[0], yc = c.in.height_sensor_centroid_m[1];
+  if (s.axis != Axis::kZ && std::isfinite(xc) && std::isfinite(yc)) {
+    const std::vector<double>& z = pose(c, Axis::kZ);
+    const std::vector<double>& tx = pose(c, Axis::kThetaX);
+    const std::vector<double>& ty = pose(c, Axis::kThetaY);
+    std::vector<double> zm(z.size());
+    for (std::size_t i = 0; i < z.size(); ++i) zm[i] = z[i] + yc * tx[i] - xc * ty[i];
+    const double pp = metrics::peak_to_peak(metrics::slice(zm, metrics::window(c.t, t_cmd, s.t1)));
+    const metrics::Ccq cq =
+        metrics::cross_coupling_quantity(tp, pp, size, kind(s.axis), metrics::AxisKind::kTranslational);
+    const std::string suffix = ccq_suffix(cq.unit);
+    M[s.name + "_pp_z_sensor_mean_m"] = pp;
+    M[s.name + "_ccq_z_sensor_mean_" + suffix] = cq.value;
+    if (c.rest_end > c.rest_begin) {
+      const double len = std::min(s.t1 - t_cmd, c.rest_end - c.rest_begin);
+      const auto rq = metrics::slice(zm, metrics::window(c.t, c.rest_end - len, c.rest_end));
+      if (rq.size() > 2) {
+        const double rpp = metrics::peak_to_peak(rq);
+        M[s.name + "_rest_pp_z_sensor_mean_m"] = rpp;
+        M[s.name + "_ccq_rest_noise_z_sensor_mean_" + suffix] =
+            metrics::cross_coupling_quantity(tp, rpp, size, kind(s.axis), metrics::AxisKind::kTranslational).value;
+      }
+    }
+  }
   for (Axis q : kDisplayOrder) {
     if (q == s.axis) continue;
     const auto yq = metrics::slice(pose(c, q), metrics::window(c.t, t_cmd, s.t1));

@@ -416,14 +416,26 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
       }
       continue;
     }
+    // A key that takes one of two words, each a value of a kernel field.
+    const auto one_of_two = [&](const char* a, std::uint8_t value_a, const char* b, std::uint8_t value_b,
+                                std::uint8_t* field) {
+      if (v == a || v == b) {
+        *field = v == a ? value_a : value_b;
+      } else {
+        fail("[controller] " + k + " = " + v + ": expected " + a + " or " + b);
+      }
+    };
     if (k == "lds_target_steps") {
       // repair (the kernel's default) | off (the paper's stage: its loops
       // saw every block step of the magnet array).
-      if (v == "off" || v == "repair") {
-        c.measurement.lds_target_repair = v == "repair" ? 1 : 0;
-      } else {
-        fail("[controller] lds_target_steps = " + v + ": expected repair or off");
-      }
+      one_of_two("repair", 1, "off", 0, &c.measurement.lds_target_repair);
+      continue;
+    }
+    if (k == "z_point") {
+      // centre (the kernel's default) | sensor_centroid: z = the mean of the
+      // three height sensors, as a controller that averages them measures
+      // and regulates it (docs/KERNEL.md "Where z is measured").
+      one_of_two("centre", 0, "sensor_centroid", 1, &c.measurement.lds_z_point);
       continue;
     }
     if (k == "lds_target_step_min" || k == "lds_target_window") {
@@ -451,7 +463,7 @@ bool apply_overrides(const scenario::Scenario& sc, Overrides* o, std::vector<Sce
     Axis p{};
     if (dot == std::string::npos || !parse_axis(k.substr(0, dot), &p)) {
       fail("[controller] unknown key '" + k +
-           "' (preset, payload_kg, servo_rate_Hz, lds_target_steps, lds_target_step_min, lds_target_window, AXIS.kp|ki|kd|b|derivative_filter_Hz|loop, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
+           "' (preset, payload_kg, servo_rate_Hz, lds_target_steps, lds_target_step_min, lds_target_window, z_point, AXIS.kp|ki|kd|b|derivative_filter_Hz|loop, or AXIS.filterN.type|frequency_Hz|q|depth_dB|pole_Hz)");
       continue;
     }
     const std::string field = k.substr(dot + 1);

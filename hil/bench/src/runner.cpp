@@ -270,8 +270,9 @@ std::optional<RunResult> run(const scenario::Scenario& sc, const RunOptions& opt
     }
   }
   internal::mark_refused_actions(R.commands, &actions);
-  compute_metrics(sc, MetricInputs{actions, tr, excitations, levitate_t, ready_t, sc.duration_s(), rate_Hz},
-                  &R.metrics, &R.warnings);
+  MetricInputs mi{actions, tr, excitations, levitate_t, ready_t, sc.duration_s(), rate_Hz};
+  internal::height_sensor_centroid_m(ov.controller, mi.height_sensor_centroid_m);
+  compute_metrics(sc, mi, &R.metrics, &R.warnings);
   return R;
 }
 

@@ -262,8 +262,9 @@ std::optional<RunResult> run_plant_process(const scenario::Scenario& sc, const R
   if (homed_seen) internal::add_homing_metrics(homed_pose_m, homed_centre_m, &M);
   if (paced) internal::add_realtime_metrics(timer, &M);
   internal::mark_refused_actions(R.commands, &actions);
-  compute_metrics(sc, MetricInputs{actions, tr, {}, levitate_t, ready_t, sc.duration_s(), rate_Hz},
-                  &M, &R.warnings);
+  MetricInputs mi{actions, tr, {}, levitate_t, ready_t, sc.duration_s(), rate_Hz};
+  internal::height_sensor_centroid_m(ov.controller, mi.height_sensor_centroid_m);
+  compute_metrics(sc, mi, &M, &R.warnings);
   if (!pending.empty()) R.warnings.push_back(std::to_string(pending.size()) + " host command(s) never acknowledged");
   return R;
 }

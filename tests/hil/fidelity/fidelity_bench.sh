@@ -90,6 +90,32 @@ assert on.get("lds_target_steps_repaired", 0) >= 1, "repair on: no target step r
 assert off["fault_code"] != 0 and "lds_target_steps_repaired" not in off, "repair off: the move did not fault on the target steps"
 print(f"LDS target steps: repaired {on['lds_target_steps_repaired']:.0f}, Ready; off: fault {off['fault_code']:.0f}")
 PYEOF
+# z as the mean of the three height sensors (paper 003 Table 5): reported
+# beside the kernel's z, equal to the trace's z + y_c theta_x - x_c theta_y;
+# a kernel regulating that mean ([controller] z_point) pulls it back.
+sc="$DIR/../../../hil/scenarios/ccq_theta_x_trapezoid.scenario"
+sed 's/^\[timeline\]$/[controller]\nz_point = sensor_centroid\n\n[timeline]/' "$sc" > "$OUT/zmean.scenario"
+sed 's/^\[timeline\]$/[controller]\nz_point = middle\n\n[timeline]/' "$sc" > "$OUT/zbad.scenario"
+out=$("$HIL" check "$OUT/zbad.scenario" 2>&1) && fail "z_point = middle accepted"
+echo "$out" | grep -q "z_point = middle: expected centre or sensor_centroid" || { echo "$out"; fail "z_point refusal"; }
+"$HIL" run "$sc" --error-seed 1 --out "$OUT/zc" --no-plots --quiet > "$OUT/zc.log" 2>&1 || { cat "$OUT/zc.log"; fail "run zc"; }
+"$HIL" run "$OUT/zmean.scenario" --error-seed 1 --out "$OUT/zm" --no-plots --quiet > "$OUT/zm.log" 2>&1 ||
+  { cat "$OUT/zm.log"; fail "run zm"; }
+"$PY" - "$OUT" <<'PYEOF' || exit 1
+import csv, json, sys
+out = sys.argv[1]
+c, k = (json.load(open(f"{out}/{n}/metrics.json")) for n in ("zc", "zm"))
+xc, yc = -0.0615 / 3, 0.0615 / 3  # nk2017-cross: sensors at (a, a), (-a, a), (-a, -a), a = 61.5 mm
+rows = [r for r in csv.DictReader(open(f"{out}/zc/trace.csv")) if 6.0 <= float(r["t_s"]) <= 7.3]
+zm = [float(r["z_m"]) + yc * float(r["theta_x_rad"]) - xc * float(r["theta_y_rad"]) for r in rows]
+pp = c["theta_x_move1_pp_z_sensor_mean_m"]
+assert abs((max(zm) - min(zm)) - pp) < 2e-9, f"sensor mean p-p {pp} vs trace {max(zm) - min(zm)}"
+assert 0.8 * 148e-6 * yc < pp < 1.2 * 148e-6 * yc, f"sensor mean p-p {pp}: not 20.5 mm x 148 urad"
+assert c["theta_x_move1_pp_z_m"] < 0.05 * pp, "the kernel's z (centre) moved with the tilt"
+assert k["theta_x_move1_pp_z_sensor_mean_m"] == k["theta_x_move1_pp_z_m"], "z_point = sensor_centroid: offset counted twice"
+assert k["theta_x_move1_pp_z_m"] < 0.2 * pp, f"a kernel regulating the mean left {k['theta_x_move1_pp_z_m']}"
+print(f"z as the sensors' mean: p-p {pp:.3g} m (kernel z {c['theta_x_move1_pp_z_m']:.3g}); regulated: {k['theta_x_move1_pp_z_m']:.3g}")
+PYEOF
 # Verdicts against the paper are a ratio with a band, never "<= paper"; a
 # rest noise from the fitted density says so (the default plant's).
 sc="$DIR/../../../hil/scenarios/x_steps_10nm.scenario"

@@ -321,6 +321,47 @@ TEST(SensorsToPose, DisplacementPlaneFit) {
   CHECK_EQUAL(0, pm.pose[maglev::kernel::Axis::kThetaY]);
 }
 
+// lds_z_point = 1: z is the mean of the three heights (the plane at the
+// sensors' centroid), the tilts are the same plane's; 2 is refused.
+TEST(SensorsToPose, ZAtTheSensorsCentroidIsTheMeanOfTheThreeHeights) {
+  SensorsToPoseConfig cfg = DefaultSensorsToPoseConfig();
+  SensorsToPoseConfig mean_cfg = cfg;
+  mean_cfg.lds_z_point = 1;
+  SensorsToPoseState& centre = FreshState(cfg);
+  static SensorsToPoseState at_mean{};
+  CHECK(ApplySensorsToPoseConfig(mean_cfg, &at_mean) == SensorsToPoseError::kOk);
+  const double gain = 20e-6 * 10.0 / 32768.0;  // m per code
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> code(-30000, 30000);
+  double xc = 0.0, yc = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    xc += cfg.displacement_sensor_x_m[i] / 3.0;
+    yc += cfg.displacement_sensor_y_m[i] / 3.0;
+  }
+  for (int n = 0; n < 2000; ++n) {
+    io::SensorSample s = ZeroSample();
+    double sum = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      s.displacement_adc[i] = static_cast<std::int16_t>(code(rng));
+      sum += cfg.displacement_zero_height_m + s.displacement_adc[i] * gain;
+    }
+    const PoseMeasurement c = SensorsToPoseStep(s, &centre);
+    const PoseMeasurement m = SensorsToPoseStep(s, &at_mean);
+    DOUBLES_EQUAL(sum / 3.0, static_cast<double>(m.pose[maglev::kernel::Axis::kZ]) * 1e-12, 2e-12);
+    CHECK_EQUAL(c.pose[maglev::kernel::Axis::kThetaX], m.pose[maglev::kernel::Axis::kThetaX]);
+    CHECK_EQUAL(c.pose[maglev::kernel::Axis::kThetaY], m.pose[maglev::kernel::Axis::kThetaY]);
+    // The same plane: the centre's z moved to the centroid.
+    const double tx = static_cast<double>(c.pose[maglev::kernel::Axis::kThetaX]) * 1e-12;
+    const double ty = static_cast<double>(c.pose[maglev::kernel::Axis::kThetaY]) * 1e-12;
+    DOUBLES_EQUAL(static_cast<double>(c.pose[maglev::kernel::Axis::kZ]) * 1e-12 + yc * tx - xc * ty,
+                  static_cast<double>(m.pose[maglev::kernel::Axis::kZ]) * 1e-12, 3e-12);
+  }
+  SensorsToPoseState other{};
+  mean_cfg.lds_z_point = 2;
+  CHECK(ApplySensorsToPoseConfig(mean_cfg, &other) == SensorsToPoseError::kBadZPoint);
+  LONGS_EQUAL(0, other.lsb_den);
+}
+
 TEST(SensorsToPose, ValidityFlags) {
   SensorsToPoseState& st = FreshState(DefaultSensorsToPoseConfig());
   io::SensorSample s = ZeroSample();

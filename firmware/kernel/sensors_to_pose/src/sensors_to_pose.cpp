@@ -278,6 +278,18 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
     p[i][2] = -config.displacement_sensor_x_m[i];
   }
   if (!Invert3(p, inv)) return SensorsToPoseError::kSingularDisplacementLayout;
+  if (config.lds_z_point > 1) return SensorsToPoseError::kBadZPoint;
+  if (config.lds_z_point == 1) {
+    // z at the sensors' centroid (xc, yc): z + theta_x yc - theta_y xc of
+    // the plane, one row of weights (1/3 each up to rounding: the plane
+    // passes through the three heights).
+    double xc = 0.0, yc = 0.0;
+    for (int i = 0; i < io::kDisplacementSensors; ++i) {
+      xc += config.displacement_sensor_x_m[i] / io::kDisplacementSensors;
+      yc += config.displacement_sensor_y_m[i] / io::kDisplacementSensors;
+    }
+    for (int c = 0; c < 3; ++c) inv[0][c] = inv[0][c] + yc * inv[1][c] - xc * inv[2][c];
+  }
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) s.inv_plane[r][c] = inv[r][c];
   s.adc_rail_code = config.adc_rail_code;

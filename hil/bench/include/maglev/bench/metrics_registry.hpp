@@ -3,6 +3,7 @@
 // flat, SI-named results. One function per kind; adding a kind is one entry.
 #pragma once
 
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -37,6 +38,12 @@ struct MetricInputs {
   double ready_t = -1.0;     // first tick in Ready (-1: never)
   double duration_s = 0.0;
   double servo_rate_Hz = 0.0;
+  // The laser displacement sensors' centroid in the platen frame (m): the
+  // ccq metrics also report z as the mean of the three heights, z + y_c
+  // theta_x - x_c theta_y of the measured plane (paper 003 Tables 4-6; the
+  // kernel's z is the plane's at the platen centre). NaN: not reported.
+  double height_sensor_centroid_m[2] = {std::numeric_limits<double>::quiet_NaN(),
+                                        std::numeric_limits<double>::quiet_NaN()};
 };
 
 // Every metric of the scenario into *out (flat names, SI suffixes);

@@ -154,8 +154,18 @@ struct SensorsToPoseConfig {
   // stage) and keeps the cell, so turning it back on needs no stage data.
   // Repair acts when this is 1 and lds_target_cell_m > 0.
   std::uint8_t lds_target_repair = 1;
+  // Where the laser displacement sensors' plane gives z (register
+  // lds.z_point): 0 at the platen's centre, the point the force allocation
+  // and the tilt axes use (the kernel's design: a tilt moves no z); 1 at the
+  // sensors' centroid, i.e. z = the mean of the three heights. A stage whose
+  // controller averages its height sensors measures (and regulates) z there:
+  // with three sensors at three corners of a square of side a, the centroid
+  // is a/6 off both tilt axes, so a tilt d reads as a z change of (a/6) d
+  // (20.5 nm/urad on the seed stage; docs/PERFORMANCE.md, paper 003 Table 5).
+  // Configuration-time only: the tick's plane fit is the same product.
+  std::uint8_t lds_z_point = 0;
   // Explicit, always zero (configurations compare byte by byte).
-  std::uint8_t reserved_lds[7] = {};
+  std::uint8_t reserved_lds[6] = {};
 };
 
 // The laser displacement sensors' target, the magnet array's top, is made of
@@ -200,6 +210,7 @@ enum class SensorsToPoseError : std::uint8_t {
   kBadPitch,
   kBadHallConfig,
   kBadTargetStepRepair,      // lds_target_*: cell < 0, or threshold / window out of range
+  kBadZPoint,                // lds_z_point neither 0 (platen centre) nor 1 (sensors' centroid)
 };
 
 // ---------------------------------------------------------------------------
