@@ -66,13 +66,13 @@ struct LinkTotals {
 // The run metrics both modes report (R's timing and completed already set).
 void add_run_metrics(RunResult* R, const can::BusLoadMeter& meter, double sim_s, const LinkTotals& l);
 
-// The platen's centre in x and y (the plant's position is its centre of
-// mass, which an as-built platen carries off the centre; theta_z is urad
-// where it is asked: the offset's rotation is below 1e-8 m).
 // The kernel's laser displacement sensors' centroid (platen frame, m)
 // relative to the point where it measures z, for the ccq metrics' z as the
 // mean of the heights (MetricInputs): (0, 0) when that is where it measures.
 void height_sensor_centroid_m(const kernel::KernelConfig& config, double out[2]);
+// The platen's centre in x and y (the plant's position is its centre of
+// mass, which an as-built platen carries off the centre; theta_z is urad
+// where it is asked: the offset's rotation is below 1e-8 m).
 void platen_centre_m(const hil::Plant& plant, double out[2]);
 // homing_error_x_m / _y_m: the kernel's homed x, y on the first InPlaneLock
 // tick minus the platen's centre then (in process and over CAN alike).

@@ -154,8 +154,9 @@ struct SensorsToPoseConfig {
   // stage) and keeps the cell, so turning it back on needs no stage data.
   // Repair acts when this is 1 and lds_target_cell_m > 0.
   std::uint8_t lds_target_repair = 1;
-  // Where the laser displacement sensors' plane gives z (register
-  // lds.z_point): 0 at the platen's centre, the point the force allocation
+  // Where the laser displacement sensors' plane gives z (the bench's
+  // [controller] z_point; no register: the shipped controller measures z at
+  // the centre): 0 at the platen's centre, the point the force allocation
   // and the tilt axes use (the kernel's design: a tilt moves no z); 1 at the
   // sensors' centroid, i.e. z = the mean of the three heights. A stage whose
   // controller averages its height sensors measures (and regulates) z there:
