@@ -372,6 +372,28 @@ int run_seeds(const maglev::scenario::Scenario& sc, const Args& a) {
     js << ",\n  \"" << key << "_paper\": " << paper << ",\n  \"" << key << "_median\": " << med << ",\n  \"" << key
        << "_min\": " << lo << ",\n  \"" << key << "_max\": " << hi << ",\n  \"" << key << "_ratio\": " << ratio;
   }
+  // The paper's z entries once more with its z read as the mean of the three
+  // height sensors (the ccq metrics' *_z_sensor_mean_*: a hypothesis about
+  // the paper's measurement, docs/PERFORMANCE.md "Tables 4-8"). The count
+  // above stays the kernel's z; this one swaps in the mean.
+  int in_band_mean = in_band, z_entries = 0;
+  for (const auto& [key, paper] : sc.paper) {
+    const std::size_t at = key.find("_ccq_z_");
+    if (at == std::string::npos || values.count(key) == 0) continue;
+    const std::string mean_key = key.substr(0, at) + "_ccq_z_sensor_mean_" + key.substr(at + 7);
+    const auto it = values.find(mean_key);
+    if (it == values.end()) continue;
+    double med = 0, lo = 0, hi = 0, med_c = 0, lo_c = 0, hi_c = 0;
+    stats(it->second, &med, &lo, &hi);
+    stats(values.at(key), &med_c, &lo_c, &hi_c);
+    const auto within = [](double r) { return r >= maglev::report::kPaperBandLow && r <= maglev::report::kPaperBandHigh; };
+    const double ratio = paper != 0.0 ? med / paper : 0.0;
+    in_band_mean += static_cast<int>(within(ratio)) - static_cast<int>(within(paper != 0.0 ? med_c / paper : 0.0));
+    ++z_entries;
+    std::printf("  %-44s %12.4g %10.4g [%.3g, %.3g] %8.3g  %s  (z as the height sensors' mean)\n", key.c_str(), paper,
+                med, lo, hi, ratio, within(ratio) ? "within" : "OUTSIDE");
+    js << ",\n  \"" << mean_key << "_median\": " << med << ",\n  \"" << mean_key << "_ratio\": " << ratio;
+  }
   // Peak times and p-p perturbations, reported separately (paper 003 Sec. 3.3).
   for (const auto& [key, v] : values) {
     if (key.find("_peak_time_s") == std::string::npos && key.find("_pp_") == std::string::npos) continue;
@@ -384,6 +406,10 @@ int run_seeds(const maglev::scenario::Scenario& sc, const Args& a) {
   }
   js << "\n}\n";
   std::printf("  %d of %d paper figures within 0.5-2x (median of %d error seeds)\n", in_band, total, a.seeds);
+  if (z_entries != 0) {
+    std::printf("  %d of %d with the paper's z read as the mean of its three height sensors (a hypothesis: "
+                "docs/PERFORMANCE.md)\n", in_band_mean, total);
+  }
   return rc;
 }
 

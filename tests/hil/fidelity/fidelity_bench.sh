@@ -116,6 +116,12 @@ assert k["theta_x_move1_pp_z_sensor_mean_m"] == k["theta_x_move1_pp_z_m"], "z_po
 assert k["theta_x_move1_pp_z_m"] < 0.2 * pp, f"a kernel regulating the mean left {k['theta_x_move1_pp_z_m']}"
 print(f"z as the sensors' mean: p-p {pp:.3g} m (kernel z {c['theta_x_move1_pp_z_m']:.3g}); regulated: {k['theta_x_move1_pp_z_m']:.3g}")
 PYEOF
+# run --seeds prints the z entries with the paper's z read as the sensors' mean, and both counts.
+"$HIL" run "$sc" --seeds 2 --out "$OUT/zs" --no-plots > "$OUT/zs.log" 2>&1 || { cat "$OUT/zs.log"; fail "run zs"; }
+grep -Eq "theta_x_move1_ccq_z_m_s_per_rad .* within  \(z as the height sensors' mean\)" "$OUT/zs.log" ||
+  { cat "$OUT/zs.log"; fail "run --seeds: no sensor-mean z line"; }
+grep -Eq "^  [0-9]+ of 10 with the paper's z read as the mean of its three height sensors" "$OUT/zs.log" ||
+  { cat "$OUT/zs.log"; fail "run --seeds: no sensor-mean count"; }
 # Verdicts against the paper are a ratio with a band, never "<= paper"; a
 # rest noise from the fitted density says so (the default plant's).
 sc="$DIR/../../../hil/scenarios/x_steps_10nm.scenario"
