@@ -110,6 +110,28 @@ void step_or_ccq(const MetricSpec& s, const metrics::Window&, Context& c) {
   M[s.name + "_peak_time_s"] = tp;
   M[s.name + "_primary_" + u] = size;
   const auto kind = [](Axis a) { return is_rotation(a) ? metrics::AxisKind::kRotational : metrics::AxisKind::kTranslational; };
+  // One perturbed series: its p-p over the motion and its CCQ, and the same
+  // from the REST p-p over an equally long window before the first motion
+  // (a CCQ close to that is noise, not coupling). `label` names it in the
+  // keys: the axis, or z_sensor_mean below.
+  const auto perturbed = [&](const std::string& label, const char* unit, const std::vector<double>& y,
+                             metrics::AxisKind perturbed_kind) {
+    const double pp = metrics::peak_to_peak(metrics::slice(y, metrics::window(c.t, t_cmd, s.t1)));
+    const metrics::Ccq cq = metrics::cross_coupling_quantity(tp, pp, size, kind(s.axis), perturbed_kind);
+    const std::string suffix = ccq_suffix(cq.unit);
+    M[s.name + "_pp_" + label + "_" + unit] = pp;
+    M[s.name + "_ccq_" + label + "_" + suffix] = cq.value;
+    if (c.rest_end > c.rest_begin) {
+      const double len = std::min(s.t1 - t_cmd, c.rest_end - c.rest_begin);
+      const auto rq = metrics::slice(y, metrics::window(c.t, c.rest_end - len, c.rest_end));
+      if (rq.size() > 2) {
+        const double rpp = metrics::peak_to_peak(rq);
+        M[s.name + "_rest_pp_" + label + "_" + unit] = rpp;
+        M[s.name + "_ccq_rest_noise_" + label + "_" + suffix] =
+            metrics::cross_coupling_quantity(tp, rpp, size, kind(s.axis), perturbed_kind).value;
+      }
+    }
+  };
   // z as the mean of the three height sensors (MetricInputs::
   // height_sensor_centroid_m): the measured plane's z at their centroid. A
   // controller that averages its height sensors reports this as z, and a
@@ -121,43 +143,10 @@ void step_or_ccq(const MetricSpec& s, const metrics::Window&, Context& c) {
     const std::vector<double>& ty = pose(c, Axis::kThetaY);
     std::vector<double> zm(z.size());
     for (std::size_t i = 0; i < z.size(); ++i) zm[i] = z[i] + yc * tx[i] - xc * ty[i];
-    const double pp = metrics::peak_to_peak(metrics::slice(zm, metrics::window(c.t, t_cmd, s.t1)));
-    const metrics::Ccq cq =
-        metrics::cross_coupling_quantity(tp, pp, size, kind(s.axis), metrics::AxisKind::kTranslational);
-    const std::string suffix = ccq_suffix(cq.unit);
-    M[s.name + "_pp_z_sensor_mean_m"] = pp;
-    M[s.name + "_ccq_z_sensor_mean_" + suffix] = cq.value;
-    if (c.rest_end > c.rest_begin) {
-      const double len = std::min(s.t1 - t_cmd, c.rest_end - c.rest_begin);
-      const auto rq = metrics::slice(zm, metrics::window(c.t, c.rest_end - len, c.rest_end));
-      if (rq.size() > 2) {
-        const double rpp = metrics::peak_to_peak(rq);
-        M[s.name + "_rest_pp_z_sensor_mean_m"] = rpp;
-        M[s.name + "_ccq_rest_noise_z_sensor_mean_" + suffix] =
-            metrics::cross_coupling_quantity(tp, rpp, size, kind(s.axis), metrics::AxisKind::kTranslational).value;
-      }
-    }
+    perturbed(kZSensorMeanLabel, "m", zm, metrics::AxisKind::kTranslational);
   }
   for (Axis q : kDisplayOrder) {
-    if (q == s.axis) continue;
-    const auto yq = metrics::slice(pose(c, q), metrics::window(c.t, t_cmd, s.t1));
-    const double pp = metrics::peak_to_peak(yq);
-    const metrics::Ccq cq = metrics::cross_coupling_quantity(tp, pp, size, kind(s.axis), kind(q));
-    const std::string suffix = ccq_suffix(cq.unit);
-    M[s.name + "_pp_" + axis_name(q) + "_" + si_unit(q)] = pp;
-    M[s.name + "_ccq_" + axis_name(q) + "_" + suffix] = cq.value;
-    // The same quantity from the REST p-p of this axis over an equally long
-    // window before the first motion: a CCQ close to it is noise, not coupling.
-    if (c.rest_end > c.rest_begin) {
-      const double len = std::min(s.t1 - t_cmd, c.rest_end - c.rest_begin);
-      const auto rq = metrics::slice(pose(c, q), metrics::window(c.t, c.rest_end - len, c.rest_end));
-      if (rq.size() > 2) {
-        const double rpp = metrics::peak_to_peak(rq);
-        M[s.name + "_rest_pp_" + axis_name(q) + "_" + si_unit(q)] = rpp;
-        M[s.name + "_ccq_rest_noise_" + axis_name(q) + "_" + suffix] =
-            metrics::cross_coupling_quantity(tp, rpp, size, kind(s.axis), kind(q)).value;
-      }
-    }
+    if (q != s.axis) perturbed(axis_name(q), si_unit(q), pose(c, q), kind(q));
   }
 }
 

@@ -170,10 +170,7 @@ void height_sensor_centroid_m(const kernel::KernelConfig& config, double out[2])
   // Relative to the point where the kernel measures z: with lds_z_point = 1
   // its z already is the sensors' mean.
   if (config.measurement.lds_z_point == 1) return;
-  for (int i = 0; i < io::kDisplacementSensors; ++i) {
-    out[0] += config.measurement.displacement_sensor_x_m[i] / io::kDisplacementSensors;
-    out[1] += config.measurement.displacement_sensor_y_m[i] / io::kDisplacementSensors;
-  }
+  kernel::HeightSensorCentroid(config.measurement, &out[0], &out[1]);
 }
 
 void platen_centre_m(const hil::Plant& plant, double out[2]) {

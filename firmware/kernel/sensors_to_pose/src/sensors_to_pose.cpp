@@ -160,6 +160,14 @@ MAGLEV_CONFIG_CODE SensorsToPoseConfig DefaultSensorsToPoseConfig() {
   return c;
 }
 
+MAGLEV_CONFIG_CODE void HeightSensorCentroid(const SensorsToPoseConfig& c, double* x_m, double* y_m) {
+  *x_m = *y_m = 0.0;
+  for (int i = 0; i < io::kDisplacementSensors; ++i) {
+    *x_m += c.displacement_sensor_x_m[i] / io::kDisplacementSensors;
+    *y_m += c.displacement_sensor_y_m[i] / io::kDisplacementSensors;
+  }
+}
+
 MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPoseConfig& config,
                                             SensorsToPoseState* state) {
   SensorsToPoseState s{};
@@ -284,10 +292,7 @@ MAGLEV_CONFIG_CODE SensorsToPoseError ApplySensorsToPoseConfig(const SensorsToPo
     // the plane, one row of weights (1/3 each up to rounding: the plane
     // passes through the three heights).
     double xc = 0.0, yc = 0.0;
-    for (int i = 0; i < io::kDisplacementSensors; ++i) {
-      xc += config.displacement_sensor_x_m[i] / io::kDisplacementSensors;
-      yc += config.displacement_sensor_y_m[i] / io::kDisplacementSensors;
-    }
+    HeightSensorCentroid(config, &xc, &yc);
     for (int c = 0; c < 3; ++c) inv[0][c] = inv[0][c] + yc * inv[1][c] - xc * inv[2][c];
   }
   for (int r = 0; r < 3; ++r)

@@ -46,6 +46,16 @@ struct MetricInputs {
                                         std::numeric_limits<double>::quiet_NaN()};
 };
 
+// The label of z read as the height sensors' mean in the ccq metric names
+// (NAME_ccq_z_sensor_mean_*, NAME_pp_z_sensor_mean_m, ...).
+inline constexpr const char* kZSensorMeanLabel = "z_sensor_mean";
+// NAME_ccq_z_UNIT -> NAME_ccq_z_sensor_mean_UNIT; "" for a key that is not a z CCQ.
+inline std::string ZSensorMeanKey(const std::string& ccq_key) {
+  const std::size_t at = ccq_key.find("_ccq_z_");
+  if (at == std::string::npos) return {};
+  return ccq_key.substr(0, at) + "_ccq_" + kZSensorMeanLabel + ccq_key.substr(at + 6);
+}
+
 // Every metric of the scenario into *out (flat names, SI suffixes);
 // *warnings for the ones that could not be computed.
 void compute_metrics(const scenario::Scenario& sc, const MetricInputs& in, std::map<std::string, double>* out,

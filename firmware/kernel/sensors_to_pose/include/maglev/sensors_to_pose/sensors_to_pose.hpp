@@ -174,6 +174,10 @@ struct SensorsToPoseConfig {
 // pitch): lds_target_cell_m of a stage with this pitch.
 constexpr double MagnetBlockWidth_m(double pitch_m) { return pitch_m / 4.0; }
 
+// The laser displacement sensors' centroid in the platen frame (m), where
+// lds_z_point = 1 measures z: the mean of the three sensors' x and y.
+void HeightSensorCentroid(const SensorsToPoseConfig& c, double* x_m, double* y_m);
+
 // Defaults from io/stage_parameters.hpp. Not constexpr (uses std::exp).
 SensorsToPoseConfig DefaultSensorsToPoseConfig();
 
