@@ -457,6 +457,16 @@ TEST(Saturation, OneTestSaturationsEqualTheTwoSidedForms) {
   std::vector<double> values = {0.0, -0.0, m, -m, std::nextafter(m, 0.0), std::nextafter(m, 1e300),
                                 -std::nextafter(m, 0.0), -std::nextafter(m, 1e300), 1e300, -1e300,
                                 INFINITY, -INFINITY, std::nan(""), -std::nan(""), 5e-324, -5e-324};
+  // from_double rounds to float first and compares that with 128.0f, the
+  // float nearest to m = 128 - 2^-24: the doubles between m and the floats
+  // either side of 128, which round onto 128.0f from both sides.
+  for (double v : {128.0, std::nextafter(128.0, 0.0), std::nextafter(128.0, 1e300), 128.0 - 0x1.0p-18,
+                   128.0 - 0x1.0p-17, 128.0 - 0x1.0p-16, 128.0 + 0x1.0p-18, 128.0 + 0x1.0p-17, 128.0 + 0x1.0p-16,
+                   m + 0x1.0p-30, m - 0x1.0p-30, static_cast<double>(std::nextafter(128.0f, 0.0f)),
+                   static_cast<double>(std::nextafter(128.0f, 1e30f))}) {
+    values.push_back(v);
+    values.push_back(-v);
+  }
   for (float l : limits) {
     for (float v : {l, -l, std::nextafter(l, 0.0f), std::nextafter(l, 1e30f)}) {
       values.push_back(v);
