@@ -38,6 +38,7 @@
 #include "exit_codes.hpp"
 #include "maglev/io/axis.hpp"
 #include "maglev/lab_tools/signals.hpp"
+#include "maglev/lab_tools/wave_generator.hpp"
 #include "maglev/metrics/metrics.hpp"
 #include "maglev/register_schema/register_map.hpp"
 
@@ -445,8 +446,18 @@ int frf(Lab& lab, const std::vector<std::string>& args) {
   }
   if (axis < 0) fail(kUsage, "frf: unknown axis '" + args[1] + "' (x y theta_z z theta_x theta_y)");
   std::string dir;
-  double amplitude = 0.1, f_min = 5, f_max = 400, settle_s = 1.0;
-  long tones = 28, periods = 4;
+  // The default peak: 0.1 A on x, y and z; 0.01 A on the tilts and theta_z,
+  // whose unit of effort drives the coils ~10x harder (a 0.1 A multisine at
+  // theta_z or theta_x put the default stage into FollowingError within 4 ms,
+  // 2026-11-29; 0.02 A measured theta_z at 83.3 Hz / 47.1 deg, as the bench).
+  using kernel::Axis;
+  const bool rotation = axis == kernel::axis_index(Axis::kThetaZ) || axis == kernel::axis_index(Axis::kThetaX) ||
+                        axis == kernel::axis_index(Axis::kThetaY);
+  constexpr lab::WaveConfig kDefault = lab::LoopResponseMultisine();
+  double amplitude = static_cast<double>(kDefault.amplitude) * (rotation ? 0.1 : 1.0);
+  double f_min = static_cast<double>(kDefault.f_start_Hz), f_max = static_cast<double>(kDefault.f_end_Hz);
+  double settle_s = 1.0;
+  long tones = kDefault.tones, periods = 4;
   for (std::size_t i = 2; i < args.size(); ++i) {
     const std::string& a = args[i];
     auto next = [&]() -> std::string {
@@ -527,8 +538,15 @@ int frf(Lab& lab, const std::vector<std::string>& args) {
   // lines, found in the data: one-period DFT of d).
   std::vector<double> freqs;
   {
+    // Up to f_max only: above 4096 Hz the generator holds its table samples
+    // (lab::MultisineHoldTicks), whose images around multiples of
+    // servo_rate / hold (>= 2500 Hz) would otherwise be taken for tones.
     std::vector<double> grid;
-    for (long k = 1; k < period / 2; ++k) grid.push_back(static_cast<double>(k) * fs / static_cast<double>(period));
+    for (long k = 1; k < period / 2; ++k) {
+      const double f = static_cast<double>(k) * fs / static_cast<double>(period);
+      if (f > f_max + 1.0) break;  // tones are f_max rounded to the 1 Hz grid at most
+      grid.push_back(f);
+    }
     // |D| of one period at each grid line; the tones are the lines above 5 % of the largest.
     std::vector<double> mag(grid.size());
     double peak = 0;

@@ -124,7 +124,11 @@ TEST(KernelBinding, RefusedWritesLeaveTheKernelConfigUnchanged) {
   const kernel::KernelConfig before = st.config();
   std::uint16_t w[4];
   // Out of the map's range: 03.
-  set_f32(5000.0f, w);
+  set_f32(20000.0f, w);
+  EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::gain_x_derivative_filter), 2, w), 3);
+  // In the map's range (which reaches the 20 kHz rate's Nyquist) but at or
+  // above this rate's (2.5 kHz: 1250 Hz): refused by the kernel, 03.
+  set_f32(1250.0f, w);
   EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::gain_x_derivative_filter), 2, w), 3);
   // In the map's range but refused by the kernel: the travel window would no
   // longer contain the reference limits (ConfigError::kReferenceLimits) -> 03.
@@ -607,6 +611,42 @@ TEST(KernelBinding, TheServoRateIsPersistedRedesignsTheLoopsAndIsRefusedOffRest)
   std::uint16_t flags = 0;
   LONGS_EQUAL(1, modbus_read_registers(rebooted.ctx, addr(RegId::persist_flags), 1, &flags));
   CHECK((flags & kLoadedDefaults) == 0);  // the record, not the defaults
+}
+
+// The derivative corner's register reaches the highest rate's Nyquist; the
+// kernel bounds it by the configured rate's, so a rate change that would put
+// a corner at or above the new Nyquist is refused too (issue 16).
+TEST(KernelBinding, TheDerivativeCornerMayRiseWithTheServoRateAndBoundsItsFall) {
+  Stage st(flash);
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::access_key), kEngineerKey));
+  std::uint16_t w[2];
+  set_f32(4000.0f, w);
+  const kernel::KernelConfig at_2500 = st.config();
+  EXPECT_EXCEPTION(modbus_write_registers(st.ctx, addr(RegId::gain_x_derivative_filter), 2, w), 3);
+  CHECK(same_config(at_2500, st.config()));
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::servo_rate), 10000));
+  LONGS_EQUAL(2, modbus_write_registers(st.ctx, addr(RegId::gain_x_derivative_filter), 2, w));
+  const kernel::KernelConfig c = st.config();
+  DOUBLES_EQUAL(4000.0, static_cast<double>(c.axis[0].pid.derivative_filter_hz), 0.0);
+  {
+    std::lock_guard<std::mutex> lock(st.m);
+    kernel::Pid2DofCoefficients<float> want{};
+    CHECK(kernel::design_pid2dof(c.axis[0].pid, 10000.0, &want) == kernel::LoopDesignError::kOk);
+    const kernel::Pid2DofCoefficients<float>& got = st.controller->pid_coefficients(0);
+    CHECK(want.a_d == got.a_d && want.b_d == got.b_d && want.kp == got.kp);
+  }
+  // Back to 2.5 kHz would leave x's corner above 1250 Hz: 03, nothing changed.
+  EXPECT_EXCEPTION(modbus_write_register(st.ctx, addr(RegId::servo_rate), 2500), 3);
+  CHECK(same_config(c, st.config()));
+  LONGS_EQUAL(10000, read_u16(st.ctx, RegId::servo_rate));
+  std::uint16_t err = 0;
+  LONGS_EQUAL(1, modbus_read_registers(st.ctx, addr(RegId::status_config_error), 1, &err));
+  CHECK(err != 0);
+  // With the corner back below 1250 Hz the rate may fall again.
+  set_f32(1000.0f, w);
+  LONGS_EQUAL(2, modbus_write_registers(st.ctx, addr(RegId::gain_x_derivative_filter), 2, w));
+  LONGS_EQUAL(1, modbus_write_register(st.ctx, addr(RegId::servo_rate), 2500));
+  CHECK(same_config(at_2500, st.config()));
 }
 
 TEST(KernelBinding, TheLdsTargetRepairSwitchIsPersistedAndItsCountIsServed) {

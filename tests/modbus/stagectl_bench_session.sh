@@ -6,7 +6,8 @@
 # "not moving" rule: exception 06 -> stagectl exit 5), wait for the move to
 # end, check x moved 1 mm (+-1 um) and status says ready, `save` again (now
 # allowed: 0), land (wait for Idle), select the square stage and levitate it
-# (the bench rebuilds its plant), land, stop the server (SIGTERM, exit 0).
+# (the bench rebuilds its plant), land, set servo.rate 10 kHz (the bench
+# re-times), levitate and land at it, stop the server (SIGTERM, exit 0).
 # Any deviation fails the test and prints the server's log.
 # usage: stagectl_bench_session.sh STAGECTL MAGLEV_HIL WORKDIR
 set -u
@@ -88,6 +89,18 @@ grep -q "stage.profile 1 (nk2020-square) selected: the bench's plant rebuilt" "$
   pass "the bench says it rebuilt the plant" || fail "no plant rebuild line"
 expect 5 "switching the stage while levitated is busy (06)" --engineer set stage.profile 0
 expect 0 "land the square stage" --wait 20 land
+
+# The servo rate written landed: the kernel re-designs its loops and the bench
+# re-times with it (the plant steps at 10 kHz, the loop is paced at it), as the
+# board re-times its tick timer; until 2026-11-29 serve stopped here.
+expect 0 "servo.rate 10 kHz (landed)" --engineer set servo.rate 10000
+sleep 0.3
+grep -q "servo.rate 10000 Hz: the bench's plant steps and its loop is paced at it" "$WORK/hil.log" &&
+  pass "the bench says it re-timed" || fail "no re-time line"
+kill -0 "$HIL_PID" 2>/dev/null && pass "serve still running after the rate change" || fail "serve stopped at the rate change"
+expect 0 "levitate at 10 kHz, wait for ready" --wait 30 levitate
+[ "$(val status.state)" = 6 ] && pass "ready at 10 kHz" || fail "state $(val status.state), fault $(val status.fault) at 10 kHz"
+expect 0 "land at 10 kHz" --wait 30 land
 
 kill -TERM "$HIL_PID"; wait "$HIL_PID"; rc=$?; trap - EXIT
 [ "$rc" = 0 ] && pass "server stops on SIGTERM (exit 0)" || fail "server exit $rc on SIGTERM"

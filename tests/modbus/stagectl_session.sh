@@ -112,8 +112,11 @@ rtu 0 "get over RTU" -- get gain.z.kp
 contains "$WORK/out" "gain.z.kp = 41000  # A/m" "RTU reads the saved gain"
 rtu 0 "set over RTU" -- --engineer set gain.x.ki 2.5e6
 contains "$WORK/out" "gain.x.ki = 2500000  # A/(m*s)" "RTU write"
-rtu 3 "range over RTU" -- --engineer set gain.x.derivative_filter 2kHz
-contains "$WORK/err" "gain.x.derivative_filter: value 2kHz is out of range [1, 1250] Hz" "RTU range message"
+rtu 3 "range over RTU" -- --engineer set gain.x.derivative_filter 20kHz
+contains "$WORK/err" "gain.x.derivative_filter: value 20kHz is out of range [1, 10000] Hz" "RTU range message"
+# In the map's range, at or above this servo rate's Nyquist (2.5 kHz: 1250 Hz): the kernel refuses it.
+rtu 4 "above the rate's Nyquist over RTU" -- --engineer set gain.x.derivative_filter 2kHz
+contains "$WORK/err" "status.config_error 3 AxisLoop" "RTU Nyquist refusal"
 rtu 7 "move over RTU" -- move y 1mm
 rtu 0 "status over RTU" -- status
 contains "$WORK/out" "state      = Idle (0)" "RTU status"

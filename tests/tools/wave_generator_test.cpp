@@ -63,13 +63,7 @@ TEST(Wave, SineHasItsAmplitudeAndFrequency) {
 }
 
 TEST(Wave, MultisineIsPeriodicWithItsPeakAndItsTones) {
-  WaveConfig c{};
-  c.shape = WaveShape::kMultisine;
-  c.amplitude = 0.1f;
-  c.f_start_Hz = 5.0f;
-  c.f_end_Hz = 400.0f;
-  c.tones = 28;
-  CHECK(w->start(c, k) == WaveError::kOk);
+  CHECK(w->start(LoopResponseMultisine(), k) == WaveError::kOk);
   CHECK_EQUAL(2500u, w->period());
   CHECK_EQUAL(28, w->tones_generated());  // 5..400 Hz log-spaced: 28 distinct 1 Hz lines
   DOUBLES_EQUAL(5.0, w->tone_Hz(0), 1e-6);
@@ -84,6 +78,45 @@ TEST(Wave, MultisineIsPeriodicWithItsPeakAndItsTones) {
   CHECK(a0 > 0.1 / 28);  // peak / tones: a crest factor below the tone count
   for (int t = 0; t < w->tones_generated(); ++t) DOUBLES_EQUAL(a0, dft_mag(v, 0, 2500, w->tone_Hz(static_cast<std::uint16_t>(t)), 2500.0), 1e-5);
   DOUBLES_EQUAL(0.0, dft_mag(v, 0, 2500, 100.0, 2500.0), 1e-5);  // not a tone (93, 109 are)
+}
+
+// Above 4096 Hz one period of the 1 Hz grid no longer fits the table sample
+// by sample: the table is played with each sample held (issue 16: until
+// 2026-11-29 the multisine, and so `stagectl frf`, was refused at 5, 10 and
+// 20 kHz with kTable). Same tones, same peak; each tone scaled by the hold's
+// Dirichlet kernel sin(pi f h / fs) / (h sin(pi f / fs)); nothing between
+// the tones below the held table's Nyquist.
+TEST(Wave, MultisineAboveTheTableHoldsItsSamplesAndKeepsItsTones) {
+  struct Case {
+    float rate_Hz;
+    std::uint32_t hold, period;
+  };
+  for (const Case rc : {Case{5000.0f, 2u, 2500u}, Case{10000.0f, 4u, 2500u}, Case{20000.0f, 5u, 4000u}}) {
+    k.servo_rate_Hz = rc.rate_Hz;
+    w = std::make_unique<WaveGenerator>(g_table, kWaveTableLen);
+    CHECK(w->start(LoopResponseMultisine(), k) == WaveError::kOk);
+    CHECK_EQUAL(rc.hold, w->hold_ticks());
+    CHECK_EQUAL(rc.period, w->period());
+    CHECK_EQUAL(28, w->tones_generated());
+    const auto n = static_cast<std::size_t>(rc.rate_Hz);  // one period: 1 s
+    const auto v = generate(*w, static_cast<int>(2 * n));
+    double peak = 0;
+    for (float x : v) peak = std::max(peak, std::fabs(static_cast<double>(x)));
+    DOUBLES_EQUAL(0.1, peak, 1e-6);
+    for (std::size_t i = 0; i < n; ++i) {
+      DOUBLES_EQUAL(v[i], v[i + n], 0.0);                  // periodic in 1 s
+      DOUBLES_EQUAL(v[i], v[i - i % rc.hold], 0.0);        // held for `hold` ticks
+    }
+    const double fs = rc.rate_Hz, h = rc.hold;
+    const auto held = [&](double f) { return std::sin(std::numbers::pi * f * h / fs) / (h * std::sin(std::numbers::pi * f / fs)); };
+    const double a0 = dft_mag(v, 0, n, w->tone_Hz(0), fs) / held(w->tone_Hz(0));
+    CHECK(a0 > 0.1 / 28);
+    for (int t = 0; t < w->tones_generated(); ++t) {
+      const double f = w->tone_Hz(static_cast<std::uint16_t>(t));
+      DOUBLES_EQUAL(a0, dft_mag(v, 0, n, f, fs) / held(f), 1e-5);
+    }
+    for (double f : {100.0, 500.0, 1000.0}) DOUBLES_EQUAL(0.0, dft_mag(v, 0, n, f, fs), 1e-5);  // not tones
+  }
 }
 
 TEST(Wave, SweepEndsAfterItsDurationAtItsEndFrequency) {

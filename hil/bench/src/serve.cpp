@@ -281,10 +281,12 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
   };
   // The servo rate the flash's configuration selects (servo.rate): the
   // plant steps at it and the loop is paced at it. A later servo.rate write
-  // (landed) re-designs the kernel; the bench then stops and asks for a
-  // restart, because its plant and pacing were built for the boot rate.
-  const double rate_Hz = static_cast<double>(controller->config().servo_rate_Hz);
+  // (landed) re-designs the kernel; the bench then re-steps its plant and
+  // re-paces its loop at the new rate, as the board re-times its tick timer
+  // (firmware/board/stm32h743/src/main.cpp).
+  double rate_Hz = static_cast<double>(controller->config().servo_rate_Hz);
   int plant_stage = selected_stage();
+  PlantOptions plant_options = o.plant;  // what the running plant was built with (a stage swap may fall back)
   StagePlant stage_plant;
   {
     std::string why;
@@ -339,11 +341,14 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
   // default stage's serve (tests/faults/hostile_levitated.py).
   report_plant(stage_plant, seed);
 
-  const double dt = 1.0 / rate_Hz;
-  const auto ticks_per_second = static_cast<std::uint64_t>(std::llround(rate_Hz));
-  const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 * dt));
-  const std::uint64_t end_tick =
+  double dt = 1.0 / rate_Hz;
+  auto ticks_per_second = static_cast<std::uint64_t>(std::llround(rate_Hz));
+  auto period_ns = static_cast<std::int64_t>(std::llround(1e9 * dt));
+  std::uint64_t end_tick =
       o.duration_s > 0.0 ? static_cast<std::uint64_t>(std::llround(o.duration_s / dt)) : ~std::uint64_t{0};
+  // Simulated time: ticks at the rates they ran at (the rate may change).
+  double t_at_retime = 0.0;
+  std::uint64_t n_at_retime = 0;
   can::LinkReceiver prx;
   lockstep::ActuatorWatchdog watchdog;  // the amplifier board's command watchdog
   std::uint8_t cm_counter = 0, hb_counter = 0;
@@ -353,7 +358,7 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
 
   for (std::uint64_t n = 0; n < end_tick && g_stop == 0; ++n) {
     const std::int64_t start = now_ns();
-    const double t = static_cast<double>(n) * dt;
+    const double t = t_at_retime + static_cast<double>(n - n_at_retime) * dt;
     // --- plant endpoint: sensors -> CAN.
     const io::SensorSample s = plant->sample();
     can::CanFrame f{};
@@ -423,6 +428,7 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
       const char* name = "";
       StagePlant next;
       bool built = plant_of(static_cast<std::uint16_t>(now_stage), rate_Hz, o.plant, &next, &why, &name);
+      if (built) plant_options = o.plant;
       if (!built) {
         // A stage the kernel took but whose plant the bench cannot build as
         // asked -- the as-built error set is modelled for the cross and square
@@ -435,6 +441,7 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
         std::string why_nominal;
         built = plant_of(static_cast<std::uint16_t>(now_stage), rate_Hz, nominal, &next, &why_nominal, &name);
         if (built) {
+          plant_options = nominal;
           std::fprintf(stderr, "maglev-hil serve: stage.profile %d: %s; its plant is the nominal model instead\n",
                        now_stage, why.c_str());
         }
@@ -478,14 +485,44 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
       std::fflush(stdout);
       deadline = now_ns() + period_ns;  // the rebuild is not a missed tick
     }
-    if (static_cast<double>(controller->config().servo_rate_Hz) != rate_Hz) {
-      std::fprintf(stderr,
-                   "maglev-hil serve: servo.rate is now %.0f Hz (the bench runs its plant at the boot rate %.0f Hz): "
-                   "stopping; config.save and start maglev-hil serve again to run at the new rate\n",
-                   static_cast<double>(controller->config().servo_rate_Hz), rate_Hz);
-      break;
+    if (const double now_rate = static_cast<double>(controller->config().servo_rate_Hz); now_rate != rate_Hz) {
+      // servo.rate written (the binding takes it landed only): the kernel
+      // has re-designed its loops. The plant steps at the new rate from the
+      // state it is in (the same stage and plant options; its noise streams
+      // restart from the seed), the sensor frames carry the new period, and
+      // the loop is paced at it. Until 2026-11-29 the bench stopped here and
+      // asked for a save and a restart, which it no longer answered.
+      StagePlant next;
+      std::string why;
+      const char* name = "";
+      if (!plant_of(static_cast<std::uint16_t>(plant_stage), now_rate, plant_options,
+                    &next, &why, &name)) {
+        std::fprintf(stderr, "maglev-hil serve: servo.rate is now %.0f Hz, at which the bench cannot build its plant (%s): "
+                     "stopping\n", now_rate, why.c_str());
+        break;
+      }
+      const double t_now = t + dt;
+      const hil::BodyState was = plant->body_state();
+      plant = std::make_unique<hil::Plant>(next.plant, seed);
+      plant->set_body_state(was);
+      watchdog = lockstep::ActuatorWatchdog{};
+      sensors.set_period_us(static_cast<std::uint32_t>(std::lround(1e6 / now_rate)));
+      t_at_retime = t_now;
+      n_at_retime = n + 1;
+      rate_Hz = now_rate;
+      dt = 1.0 / rate_Hz;
+      ticks_per_second = static_cast<std::uint64_t>(std::llround(rate_Hz));
+      period_ns = static_cast<std::int64_t>(std::llround(1e9 * dt));
+      if (o.duration_s > 0.0) {
+        const double left_s = o.duration_s - t_now;
+        end_tick = n + 1 + (left_s > 0.0 ? static_cast<std::uint64_t>(std::llround(left_s / dt)) : 0u);
+      }
+      std::printf("maglev-hil serve: servo.rate %.0f Hz: the bench's plant steps and its loop is paced at it from %.4f s\n",
+                  rate_Hz, t_now);
+      std::fflush(stdout);
+      deadline = now_ns() + period_ns;  // the rebuild is not a missed tick
     }
-    if ((n + 1) % ticks_per_second == 0) {
+    if ((n + 1 - n_at_retime) % ticks_per_second == 0) {
       const kernel::ControllerStatus& st = controller->status();
       std::fprintf(stderr,
                    "t=%8.1f s  state=%-9s fault=%u moving=%d  x=%+.9f y=%+.9f z=%+.9f m  "
@@ -498,7 +535,7 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
     }
   }
   const double wall_s = static_cast<double>(now_ns() - wall0) * 1e-9;
-  const double sim_s = static_cast<double>(c.ticks) * dt;
+  const double sim_s = t_at_retime + static_cast<double>(c.ticks - n_at_retime) * dt;
   std::fprintf(stderr,
                "maglev-hil serve: stopped after %llu ticks (%.2f s simulated, %.2f s wall, real-time factor %.3f); "
                "deadline misses %llu (max late %lld us, resyncs %llu), tick work mean %.1f us max %lld us, missed "

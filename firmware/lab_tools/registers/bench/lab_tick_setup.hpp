@@ -22,12 +22,7 @@ inline bool setup_lab_tick_scenario(Recorder& recorder, WaveGenerator& multisine
   c.level = 1.0f;  // never reached: the armed steady state
   if (recorder.configure(c) != RecorderError::kOk || recorder.arm() != RecorderError::kOk) return false;
   const kernel::KernelConfig k = kernel::default_kernel_config();
-  WaveConfig w{};
-  w.shape = WaveShape::kMultisine;
-  w.amplitude = 0.1f;
-  w.f_start_Hz = 5.0f;
-  w.f_end_Hz = 400.0f;
-  w.tones = 28;
+  WaveConfig w = LoopResponseMultisine();
   if (multisine.start(w, k) != WaveError::kOk) return false;
   w.shape = WaveShape::kSine;
   if (sine.start(w, k) != WaveError::kOk) return false;

@@ -44,8 +44,11 @@ WaveError WaveGenerator::check(const WaveConfig& c, const kernel::KernelConfig& 
   if (c.shape == WaveShape::kSweep && !(c.duration_s > 0.0f)) return WaveError::kDuration;
   if (c.shape == WaveShape::kMultisine) {
     if (c.tones < 1 || c.tones > kMaxTones) return WaveError::kTones;
-    const auto period = static_cast<std::uint32_t>(std::lround(k.servo_rate_Hz / kMultisineGrid_Hz));
-    if (period > table_len_ || period < 2) return WaveError::kTable;
+    const auto period_ticks = static_cast<std::uint32_t>(std::lround(k.servo_rate_Hz / kMultisineGrid_Hz));
+    const std::uint32_t hold = MultisineHoldTicks(period_ticks, table_len_);
+    if (hold == 0 || period_ticks / hold < 2) return WaveError::kTable;
+    // Every tone below the held table's own Nyquist (else it would alias).
+    if (c.f_end_Hz >= k.servo_rate_Hz / static_cast<float>(2 * hold)) return WaveError::kTable;
   }
   return WaveError::kOk;
 }
@@ -80,8 +83,11 @@ WaveError WaveGenerator::start(const WaveConfig& c, const kernel::KernelConfig& 
       break;
     }
     case WaveShape::kMultisine: {
-      period_ = static_cast<std::uint32_t>(std::lround(fs / static_cast<double>(kMultisineGrid_Hz)));
-      const double df = fs / static_cast<double>(period_);
+      const auto period_ticks = static_cast<std::uint32_t>(std::lround(fs / static_cast<double>(kMultisineGrid_Hz)));
+      hold_ = MultisineHoldTicks(period_ticks, table_len_);  // >= 1: check() passed
+      hold_left_ = hold_;
+      period_ = period_ticks / hold_;
+      const double df = fs / static_cast<double>(period_ticks);
       // Log-spaced tones rounded to the grid, duplicates dropped.
       std::uint32_t bins[kMaxTones];
       for (std::uint16_t t = 0; t < c.tones; ++t) {
@@ -155,7 +161,10 @@ kernel::Injection WaveGenerator::step(bool motion_allowed) {
     }
     case WaveShape::kMultisine:
       v = table_[index_];
-      index_ = index_ + 1u == period_ ? 0u : index_ + 1u;
+      if (--hold_left_ == 0) {
+        hold_left_ = hold_;
+        index_ = index_ + 1u == period_ ? 0u : index_ + 1u;
+      }
       break;
     case WaveShape::kNoise: {
       std::uint32_t x = noise_;

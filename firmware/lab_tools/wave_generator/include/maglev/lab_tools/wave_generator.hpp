@@ -57,10 +57,28 @@ enum class WaveError : std::uint8_t {
 };
 
 inline constexpr std::uint16_t kMaxTones = 200;
-// The multisine grid: one period = servo_rate / kMultisineGrid_Hz samples.
+// The multisine grid: one period = servo_rate / kMultisineGrid_Hz ticks.
 inline constexpr float kMultisineGrid_Hz = 1.0f;
-// Table length for one multisine period at servo rates up to 4096 Hz.
+// Table length: one multisine period at servo rates up to 4096 Hz sample by
+// sample; above, the period's table is played with each sample held for
+// MultisineHoldTicks ticks (5 and 10 kHz: 2500 samples, 20 kHz: 4000).
 inline constexpr std::size_t kWaveTableLen = 4096;
+
+// The ticks each multisine table sample is held for: the smallest h that
+// divides the period (period_ticks = servo_rate / grid) into at most
+// table_len samples; 0 if none up to kMaxMultisineHold does. A held sample is
+// a zero-order hold at servo_rate / h: the tones keep their frequencies and
+// the table's peak (so the amplitude limit holds), each is scaled by
+// sinc(f h / servo_rate) (0.958 at 400 Hz, h = 4 at 10 kHz), and images
+// appear only around multiples of servo_rate / h (>= 2500 Hz), above every
+// tone the kernel's excitation limit (1 kHz) allows.
+inline constexpr std::uint32_t kMaxMultisineHold = 16;
+constexpr std::uint32_t MultisineHoldTicks(std::uint32_t period_ticks, std::uint32_t table_len) {
+  for (std::uint32_t h = 1; h <= kMaxMultisineHold; ++h) {
+    if (period_ticks % h == 0 && period_ticks / h <= table_len) return h;
+  }
+  return 0;
+}
 
 struct WaveConfig {
   std::uint16_t axis = 0;  // kernel Axis index
@@ -72,6 +90,20 @@ struct WaveConfig {
   float duration_s = 0.0f;   // 0: until stopped (not for a sweep)
   std::uint16_t tones = 1;   // multisine
 };
+
+// The loop-response multisine: the bench's loop_response lines (28 tones
+// log-spaced 5..400 Hz), 0.1 A peak at the effort of axis 0 (x). stagectl
+// frf's default (a tenth of the amplitude on the rotations), the lab tick's
+// measured setup (lab_tick_setup.hpp) and the tests start from it.
+constexpr WaveConfig LoopResponseMultisine() {
+  WaveConfig c{};
+  c.shape = WaveShape::kMultisine;
+  c.amplitude = 0.1f;
+  c.f_start_Hz = 5.0f;
+  c.f_end_Hz = 400.0f;
+  c.tones = 28;
+  return c;
+}
 
 // The amplitude limit of an axis at a point, from the kernel's configuration.
 float amplitude_limit(const kernel::KernelConfig& k, std::uint16_t axis, InjectionPoint point);
@@ -93,9 +125,12 @@ class WaveGenerator {
   WaveState state() const { return state_; }
   const WaveConfig& config() const { return config_; }
   std::uint32_t tick() const { return tick_; }
-  // Multisine: tones actually generated (after rounding to the grid) and the period.
+  // Multisine: tones actually generated (after rounding to the grid), the
+  // table's samples per period and the ticks each is held for (period() x
+  // hold_ticks() ticks = one period of the 1 Hz grid).
   std::uint16_t tones_generated() const { return tones_generated_; }
   std::uint32_t period() const { return period_; }
+  std::uint32_t hold_ticks() const { return hold_; }
   float tone_Hz(std::uint16_t i) const { return i < tones_generated_ ? tone_Hz_[i] : 0.0f; }
 
  private:
@@ -112,6 +147,8 @@ class WaveGenerator {
   double sweep_ratio_ = 1.0;       // increment growth per tick
   std::uint32_t period_ = 0;
   std::uint32_t index_ = 0;
+  std::uint32_t hold_ = 1;       // ticks per table sample
+  std::uint32_t hold_left_ = 0;  // ticks of the current sample still to come
   std::uint32_t noise_ = 0x12345678u;
   std::uint16_t tones_generated_ = 0;
   float tone_Hz_[kMaxTones] = {};
