@@ -272,6 +272,47 @@ TEST(Pid2Dof, FloatAndFixedAgreeOnTheSameInputs) {
   }
 }
 
+// An error at the Scalar's limit (+-128 um / urad: pico_to_micro clips it
+// there) holds the integrator: the clipped error no longer measures the
+// position, and integrating it only ramped the effort (a theta_z fault landing
+// oscillated, growing, until the currents went off; 2026-11-29). One step
+// below the limit it integrates as before; the proportional and derivative
+// terms act on the clipped error either way.
+template <typename Scalar>
+void CheckIntegratorHeldAtTheErrorLimit() {
+  using Tr = ScalarTraits<Scalar>;
+  Pid2DofCoefficients<Scalar> c;
+  CHECK(design_pid2dof<Scalar>(default_axis_loop_config(Axis::kThetaZ).pid, kFs, &c) == LoopDesignError::kOk);
+  for (const double sign : {1.0, -1.0}) {
+    Pid2DofState<Scalar> st{};
+    Pid2Dof<Scalar> pid(&c, &st);
+    const Scalar at_limit = sign > 0 ? Tr::max() : -Tr::max();
+    pid.reset(Tr::zero(), at_limit);
+    const auto held = st.integrator;
+    double last = 0.0;
+    for (int k = 0; k < 100; ++k) last = Tr::to_double(pid.update(at_limit, Tr::zero(), Tr::zero()));
+    CHECK(st.integrator == held);                                        // not one MAC in 100 ticks
+    DOUBLES_EQUAL(sign * Tr::acc_coeff_to_double(c.kp) * 128.0, last, 1e-4);  // kp x 128 urad: the stuck P
+    // Just inside: the integrator ramps, ki T/2 (e + e_prev) a tick.
+    const Scalar inside = Tr::from_double(sign * 127.0);
+    pid.reset(Tr::zero(), inside);
+    for (int k = 0; k < 100; ++k) (void)pid.update(inside, Tr::zero(), Tr::zero());
+    DOUBLES_EQUAL(sign * 100.0 * 2.0 * 127.0 * Tr::acc_coeff_to_double(c.ki_half_T), Tr::acc_to_double(st.integrator),
+                  1e-6);
+  }
+}
+
+TEST(Pid2Dof, TheIntegratorIsHeldWhileTheErrorIsAtTheScalarsLimit) {
+  CheckIntegratorHeldAtTheErrorLimit<float>();
+  CheckIntegratorHeldAtTheErrorLimit<Q7_24>();
+  using TrF = ScalarTraits<float>;
+  using TrQ = ScalarTraits<Q7_24>;
+  CHECK(TrF::inside_limit(0.0f) && TrF::inside_limit(std::nextafter(128.0f, 0.0f)) && !TrF::inside_limit(128.0f) &&
+        !TrF::inside_limit(-128.0f) && !TrF::inside_limit(NAN));
+  for (const std::int32_t raw : {0, 1, -1, INT32_MAX - 1, -(INT32_MAX - 1)}) CHECK(TrQ::inside_limit(Q7_24::from_raw(raw)));
+  for (const std::int32_t raw : {INT32_MAX, -INT32_MAX}) CHECK_FALSE(TrQ::inside_limit(Q7_24::from_raw(raw)));
+}
+
 TEST(Pid2Dof, DesignRejectsInvalidConfigs) {
   Pid2DofCoefficients<Q7_24> c;
   const Pid2DofConfig good = default_axis_loop_config(Axis::kX).pid;

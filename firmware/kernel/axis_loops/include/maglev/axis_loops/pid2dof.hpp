@@ -164,8 +164,15 @@ class Pid2Dof {
     const Scalar e = error_um;
     // Setpoint weighting of the step (see header comment).
     Terms::weight_step(s.integrator, s.prev_d_input, c.one_minus_b_kp, c.c, reference_step_um);
-    // Integral: Tustin.
-    Traits::mac_sum(s.integrator, c.ki_half_T, e, s.prev_error);
+    // Integral: Tustin, held while the error is at the Scalar's limit
+    // (+-128 um / urad, pico_to_micro): there the error no longer grows with
+    // the position, the proportional term is stuck and the derivative sees no
+    // motion, and an integrator fed the clipped error only ramps -- a loop
+    // the supervisor's following-error limits (above 128) let run; a 0.1 A
+    // theta_z excitation's fault landing oscillated with growing amplitude
+    // until the currents went off (2026-11-29, docs/PERFORMANCE.md "Lab tools").
+    // Below the limit (every tick of a normal run) the same MAC as before.
+    if (Traits::inside_limit(e)) Traits::mac_sum(s.integrator, c.ki_half_T, e, s.prev_error);
     s.prev_error = e;
     // Derivative, first-order filtered, on e minus the (1-c) part of steps.
     Terms::filtered_derivative(s.derivative, s.prev_d_input, c.a_d, c.b_d, e);

@@ -48,6 +48,9 @@ struct ScalarTraits<float> {
     return __builtin_fabsf(f) > kMaxMagnitudeFloat ? (f > 0.0f ? kMaxMagnitudeFloat : -kMaxMagnitudeFloat) : f;
   }
   static constexpr Scalar from_float(float v) { return from_double(static_cast<double>(v)); }
+  // |v| below the saturation limit (one VABS and one compare on the M7; a NaN
+  // is not inside).
+  static constexpr bool inside_limit(Scalar v) { return __builtin_fabsf(v) < kMaxMagnitudeFloat; }
   static constexpr float to_float(Scalar v) { return v; }
   static constexpr double to_double(Scalar v) { return static_cast<double>(v); }
   static constexpr Scalar zero() { return 0.0f; }
@@ -125,6 +128,13 @@ struct ScalarTraits<Fixed<F>> {
 
   static constexpr Scalar from_double(double v) { return Scalar::from_double(v); }
   static constexpr Scalar from_float(float v) { return Scalar::from_float(v); }
+  // |v| below the saturation limit: raw in [-(INT32_MAX - 1), INT32_MAX - 1],
+  // one add and one unsigned compare: raw + (INT32_MAX - 1) taken mod 2^32
+  // maps that interval onto [0, 2^32 - 4] and +-INT32_MAX (and INT32_MIN)
+  // above it (test Pid2Dof.TheIntegratorIsHeldWhileTheErrorIsAtTheScalarsLimit).
+  static constexpr bool inside_limit(Scalar v) {
+    return static_cast<std::uint32_t>(v.raw()) + 0x7FFFFFFEu < 0xFFFFFFFDu;
+  }
   static constexpr float to_float(Scalar v) { return v.to_float(); }
   static constexpr double to_double(Scalar v) { return v.to_double(); }
   static constexpr Scalar zero() { return Scalar::zero(); }
