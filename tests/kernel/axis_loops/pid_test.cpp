@@ -309,8 +309,11 @@ TEST(Pid2Dof, TheIntegratorIsHeldWhileTheErrorIsAtTheScalarsLimit) {
   using TrQ = ScalarTraits<Q7_24>;
   CHECK(TrF::inside_limit(0.0f) && TrF::inside_limit(std::nextafter(128.0f, 0.0f)) && !TrF::inside_limit(128.0f) &&
         !TrF::inside_limit(-128.0f) && !TrF::inside_limit(NAN));
-  for (const std::int32_t raw : {0, 1, -1, INT32_MAX - 1, -(INT32_MAX - 1)}) CHECK(TrQ::inside_limit(Q7_24::from_raw(raw)));
-  for (const std::int32_t raw : {INT32_MAX, -INT32_MAX}) CHECK_FALSE(TrQ::inside_limit(Q7_24::from_raw(raw)));
+  constexpr std::int32_t kRawMax = INT32_MAX;  // int32_t is long on the M7, int on the host
+  for (const std::int32_t raw : {std::int32_t{0}, std::int32_t{1}, std::int32_t{-1}, kRawMax - 1, -(kRawMax - 1)}) {
+    CHECK(TrQ::inside_limit(Q7_24::from_raw(raw)));
+  }
+  for (const std::int32_t raw : {kRawMax, -kRawMax}) CHECK_FALSE(TrQ::inside_limit(Q7_24::from_raw(raw)));
 }
 
 TEST(Pid2Dof, DesignRejectsInvalidConfigs) {
