@@ -458,6 +458,7 @@ int frf(Lab& lab, const std::vector<std::string>& args) {
   double f_min = static_cast<double>(kDefault.f_start_Hz), f_max = static_cast<double>(kDefault.f_end_Hz);
   double settle_s = 1.0;
   long tones = kDefault.tones, periods = 4;
+  bool periods_given = false;
   for (std::size_t i = 2; i < args.size(); ++i) {
     const std::string& a = args[i];
     auto next = [&]() -> std::string {
@@ -469,7 +470,10 @@ int frf(Lab& lab, const std::vector<std::string>& args) {
     else if (a == "--f-min") f_min = number(a, next());
     else if (a == "--f-max") f_max = number(a, next());
     else if (a == "--tones") tones = std::lround(number(a, next()));
-    else if (a == "--periods") periods = std::lround(number(a, next()));
+    else if (a == "--periods") {
+      periods = std::lround(number(a, next()));
+      periods_given = true;
+    }
     else if (a == "--settle") settle_s = number(a, next());
     else fail(kUsage, "frf: unknown option '" + a + "'");
   }
@@ -482,6 +486,22 @@ int frf(Lab& lab, const std::vector<std::string>& args) {
   lab.set(RegId::wave_control, 2);
   const double fs = lab.get(RegId::rec_sample_rate) * lab.get(RegId::rec_decimation);
   const auto period = static_cast<long>(std::lround(fs));  // the generator's 1 Hz grid: one period = 1 s
+  // What the recorder holds of three channels: its memory is rec.capacity x
+  // rec.channel_count samples now (floored: at most one sample a channel
+  // short). At 20 kHz the default 4 periods (80 000 samples) do not fit the
+  // board's 43 690; without --periods, as many as fit (at least 2).
+  const auto pool = static_cast<long>(lab.get(RegId::rec_capacity)) * static_cast<long>(lab.get(RegId::rec_channel_count));
+  const long fit = pool / 3 / period;
+  if (periods > fit) {
+    if (periods_given || fit < 2) {
+      fail(kUsage, "frf: " + std::to_string(periods) + " periods of " + std::to_string(period) +
+                       " samples do not fit the recorder (" + std::to_string(pool / 3) + " samples of 3 channels): --periods " +
+                       std::to_string(fit < 2 ? 2 : fit) + (fit < 2 ? " does not fit either" : ""));
+    }
+    std::fprintf(stderr, "frf %s: %ld periods of %ld samples fit the recorder (%ld samples of 3 channels): measuring %ld\n",
+                 kernel::kAxisNames[axis], fit, period, pool / 3, fit);
+    periods = fit;
+  }
   Lab::Block r = lab.block(RegId::rec_control, RegId::rec_trigger_level);
   const std::uint16_t ch[3] = {lab::find_signal((ax + ".excitation").c_str()), lab::find_signal((ax + ".loop_effort").c_str()),
                                lab::find_signal((ax + ".effort").c_str())};
