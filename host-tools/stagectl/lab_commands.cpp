@@ -450,9 +450,7 @@ int frf(Lab& lab, const std::vector<std::string>& args) {
   // whose unit of effort drives the coils ~10x harder (a 0.1 A multisine at
   // theta_z or theta_x put the default stage into FollowingError within 4 ms,
   // 2026-11-29; 0.02 A measured theta_z at 83.3 Hz / 47.1 deg, as the bench).
-  using kernel::Axis;
-  const bool rotation = axis == kernel::axis_index(Axis::kThetaZ) || axis == kernel::axis_index(Axis::kThetaX) ||
-                        axis == kernel::axis_index(Axis::kThetaY);
+  const bool rotation = kernel::is_rotation(kernel::kAllAxes[axis]);
   constexpr lab::WaveConfig kDefault = lab::LoopResponseMultisine();
   double amplitude = static_cast<double>(kDefault.amplitude) * (rotation ? 0.1 : 1.0);
   double f_min = static_cast<double>(kDefault.f_start_Hz), f_max = static_cast<double>(kDefault.f_end_Hz);

@@ -341,14 +341,23 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
   // default stage's serve (tests/faults/hostile_levitated.py).
   report_plant(stage_plant, seed);
 
-  double dt = 1.0 / rate_Hz;
-  auto ticks_per_second = static_cast<std::uint64_t>(std::llround(rate_Hz));
-  auto period_ns = static_cast<std::int64_t>(std::llround(1e9 * dt));
+  // The loop's pacing at a rate: its tick, ticks per status line, wall period.
+  double dt = 0.0;
+  std::uint64_t ticks_per_second = 0;
+  std::int64_t period_ns = 0;
+  const auto pace_at = [&](double rate) {
+    rate_Hz = rate;
+    dt = 1.0 / rate;
+    ticks_per_second = static_cast<std::uint64_t>(std::llround(rate));
+    period_ns = static_cast<std::int64_t>(std::llround(1e9 * dt));
+  };
+  pace_at(rate_Hz);
   std::uint64_t end_tick =
       o.duration_s > 0.0 ? static_cast<std::uint64_t>(std::llround(o.duration_s / dt)) : ~std::uint64_t{0};
   // Simulated time: ticks at the rates they ran at (the rate may change).
   double t_at_retime = 0.0;
   std::uint64_t n_at_retime = 0;
+  const auto sim_time = [&](std::uint64_t ticks) { return t_at_retime + static_cast<double>(ticks - n_at_retime) * dt; };
   can::LinkReceiver prx;
   lockstep::ActuatorWatchdog watchdog;  // the amplifier board's command watchdog
   std::uint8_t cm_counter = 0, hb_counter = 0;
@@ -358,7 +367,7 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
 
   for (std::uint64_t n = 0; n < end_tick && g_stop == 0; ++n) {
     const std::int64_t start = now_ns();
-    const double t = t_at_retime + static_cast<double>(n - n_at_retime) * dt;
+    const double t = sim_time(n);
     // --- plant endpoint: sensors -> CAN.
     const io::SensorSample s = plant->sample();
     can::CanFrame f{};
@@ -509,10 +518,7 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
       sensors.set_period_us(static_cast<std::uint32_t>(std::lround(1e6 / now_rate)));
       t_at_retime = t_now;
       n_at_retime = n + 1;
-      rate_Hz = now_rate;
-      dt = 1.0 / rate_Hz;
-      ticks_per_second = static_cast<std::uint64_t>(std::llround(rate_Hz));
-      period_ns = static_cast<std::int64_t>(std::llround(1e9 * dt));
+      pace_at(now_rate);
       if (o.duration_s > 0.0) {
         const double left_s = o.duration_s - t_now;
         end_tick = n + 1 + (left_s > 0.0 ? static_cast<std::uint64_t>(std::llround(left_s / dt)) : 0u);
@@ -535,7 +541,7 @@ int serve(const ServeOptions& o, const scenario::Scenario* sc) {
     }
   }
   const double wall_s = static_cast<double>(now_ns() - wall0) * 1e-9;
-  const double sim_s = t_at_retime + static_cast<double>(c.ticks - n_at_retime) * dt;
+  const double sim_s = sim_time(c.ticks);
   std::fprintf(stderr,
                "maglev-hil serve: stopped after %llu ticks (%.2f s simulated, %.2f s wall, real-time factor %.3f); "
                "deadline misses %llu (max late %lld us, resyncs %llu), tick work mean %.1f us max %lld us, missed "
